@@ -1,0 +1,1 @@
+//! f64 references for texsat's host tests.

@@ -1,0 +1,116 @@
+//! Cost counting: what a hardware texture unit would spend per sample.
+//!
+//! Every lookup takes a `&mut impl Counter`. [`NoCount`] is a zero-sized type whose methods are
+//! empty and inline, so a build that does not count compiles to the same code as one that had no
+//! counting at all. [`Tally`] adds the operations up.
+//!
+//! What is counted follows Crow §2.2: the operations on *table values* and the area multiply and
+//! the divide of the mean. A *read* is one table entry fetched, all channels together; a read of
+//! the zero row or column of the corner function (`x = 0` or `y = 0`) and the cached whole-table
+//! sum cost no read. *Additive* operations are adds and subtracts; *multiplicative* operations are
+//! multiplies (`muls`) plus divides (`divs`). Shifts by the constant `F` (a scale by `2^F`) are
+//! wiring in hardware and are not counted. Coordinate arithmetic (splitting a corner into integer
+//! and fraction, side lengths, addresses, comparisons) belongs to the address unit and is not
+//! counted either, as in Crow's table. Arithmetic on values is counted once per channel; reads
+//! are not multiplied by the channel count.
+
+/// Receives the operations a lookup performs.
+pub trait Counter {
+    /// `n` entries of `bits` bits each (all channels) were read.
+    fn reads(&mut self, n: u32, bits: u32);
+    /// `n` multiplies.
+    fn muls(&mut self, n: u32);
+    /// `n` divides.
+    fn divs(&mut self, n: u32);
+    /// `n` additive operations (adds or subtracts).
+    fn adds(&mut self, n: u32);
+}
+
+/// The counter that counts nothing: a zero-sized type that compiles away.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NoCount;
+
+impl Counter for NoCount {
+    #[inline(always)]
+    fn reads(&mut self, _n: u32, _bits: u32) {}
+    #[inline(always)]
+    fn muls(&mut self, _n: u32) {}
+    #[inline(always)]
+    fn divs(&mut self, _n: u32) {}
+    #[inline(always)]
+    fn adds(&mut self, _n: u32) {}
+}
+
+/// A running total of the operations of one or more lookups.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Tally {
+    /// Table entries read (one per entry, all channels together).
+    pub reads: u64,
+    /// Bits read: the sum over reads of bits per entry times channels.
+    pub bits_read: u64,
+    /// Multiplies.
+    pub muls: u64,
+    /// Divides.
+    pub divs: u64,
+    /// Additive operations (adds and subtracts).
+    pub adds: u64,
+}
+
+impl Tally {
+    /// An empty tally.
+    pub const fn new() -> Self {
+        Tally {
+            reads: 0,
+            bits_read: 0,
+            muls: 0,
+            divs: 0,
+            adds: 0,
+        }
+    }
+
+    /// Multiplicative operations as Crow counts them: multiplies plus divides.
+    pub const fn multiplicative(&self) -> u64 {
+        self.muls + self.divs
+    }
+}
+
+impl Counter for Tally {
+    #[inline]
+    fn reads(&mut self, n: u32, bits: u32) {
+        self.reads += n as u64;
+        self.bits_read += n as u64 * bits as u64;
+    }
+    #[inline]
+    fn muls(&mut self, n: u32) {
+        self.muls += n as u64;
+    }
+    #[inline]
+    fn divs(&mut self, n: u32) {
+        self.divs += n as u64;
+    }
+    #[inline]
+    fn adds(&mut self, n: u32) {
+        self.adds += n as u64;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_count_is_zero_sized() {
+        assert_eq!(core::mem::size_of::<NoCount>(), 0);
+    }
+
+    #[test]
+    fn tally_adds_up() {
+        let mut t = Tally::new();
+        t.reads(4, 32);
+        t.muls(1);
+        t.divs(1);
+        t.adds(3);
+        assert_eq!((t.reads, t.bits_read, t.multiplicative(), t.adds), (4, 128, 2, 3));
+    }
+}

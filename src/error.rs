@@ -1,0 +1,164 @@
+//! The one error type of the crate: every refusal says what was wrong, with the numbers.
+
+use core::fmt;
+
+/// What a width error is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Quantity {
+    /// A table entry (the largest is the whole-texture sum).
+    Entry,
+    /// The accumulator of a lookup (corner values scaled by `2^2F`, or sums over whole periods).
+    LookupAccumulator,
+    /// The mean's numerator, the sum scaled by the requested output fraction bits.
+    MeanNumerator,
+}
+
+/// Why a build or a lookup was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Error {
+    /// Width or height is zero.
+    EmptyTexture,
+    /// Width or height exceeds `2^31 - 1` texels (coordinates must fit `i32`-like arithmetic).
+    TextureTooLarge {
+        /// the offending dimension
+        dimension: usize,
+    },
+    /// The row stride (in elements) is shorter than `width * channels`.
+    StrideTooSmall {
+        /// elements per row given
+        stride: usize,
+        /// `width * channels`
+        needed: usize,
+    },
+    /// The texel slice is shorter than `stride * (height - 1) + width * channels`.
+    TextureDataTooShort {
+        /// elements needed
+        needed: usize,
+        /// elements given
+        got: usize,
+    },
+    /// The table storage is shorter than `width * height * channels` entries.
+    StorageTooSmall {
+        /// entries needed
+        needed: usize,
+        /// entries given
+        got: usize,
+    },
+    /// A quantity needs more bits than its type has. Carries both numbers.
+    TooWide {
+        /// which quantity
+        what: Quantity,
+        /// bits the worst case (or the actual data) needs
+        bits_needed: u32,
+        /// bits the chosen type holds
+        bits_available: u32,
+    },
+    /// The fixed-point corner type has more fractional bits than the lookups support.
+    FracBitsUnsupported {
+        /// `F` of the corner type
+        frac_bits: u32,
+        /// the largest `F` supported
+        max: u32,
+    },
+    /// `x1 < x0` or `y1 < y0`.
+    InvertedBox,
+    /// The box has zero area, so it has no mean (its sum is 0).
+    ZeroArea,
+    /// An integer-corner box reaches outside the coordinate range the mode supports.
+    CoordinateOutOfRange,
+    /// A float coordinate is NaN or infinite.
+    NotFinite,
+    /// A table given to [`crate::Sat::from_table`] is not the SAT of any texture with the stated
+    /// texel width: the texel it implies at `(x, y)` (channel `channel`) is negative or too large.
+    InvalidTable {
+        /// column of the offending texel
+        x: usize,
+        /// row of the offending texel
+        y: usize,
+        /// channel of the offending texel
+        channel: usize,
+    },
+    /// A streamed row has the wrong number of elements.
+    RowLength {
+        /// `width * channels`
+        expected: usize,
+        /// elements given
+        got: usize,
+    },
+    /// More rows were pushed than the texture has.
+    TooManyRows,
+    /// The streaming build was finished before every row arrived.
+    MissingRows {
+        /// rows pushed
+        got: usize,
+        /// rows expected
+        expected: usize,
+    },
+    /// The channel index is not below the channel count.
+    NoSuchChannel,
+}
+
+impl fmt::Display for Quantity {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Quantity::Entry => "table entry",
+            Quantity::LookupAccumulator => "lookup accumulator",
+            Quantity::MeanNumerator => "mean numerator",
+        })
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Error::EmptyTexture => write!(f, "texture has zero width or height"),
+            Error::TextureTooLarge { dimension } => {
+                write!(f, "texture dimension {dimension} exceeds 2^31 - 1")
+            }
+            Error::StrideTooSmall { stride, needed } => write!(
+                f,
+                "row stride {stride} is shorter than width x channels = {needed}"
+            ),
+            Error::TextureDataTooShort { needed, got } => {
+                write!(f, "texture data has {got} elements, needs {needed}")
+            }
+            Error::StorageTooSmall { needed, got } => {
+                write!(f, "table storage has {got} entries, needs {needed}")
+            }
+            Error::TooWide {
+                what,
+                bits_needed,
+                bits_available,
+            } => write!(
+                f,
+                "{what} needs {bits_needed} bits but only {bits_available} are available"
+            ),
+            Error::FracBitsUnsupported { frac_bits, max } => write!(
+                f,
+                "corner type has {frac_bits} fractional bits; at most {max} are supported"
+            ),
+            Error::InvertedBox => write!(f, "box is inverted (x1 < x0 or y1 < y0)"),
+            Error::ZeroArea => write!(f, "box has zero area, so it has no mean"),
+            Error::CoordinateOutOfRange => write!(f, "box coordinate out of the supported range"),
+            Error::NotFinite => write!(f, "coordinate is NaN or infinite"),
+            Error::InvalidTable { x, y, channel } => write!(
+                f,
+                "table is not a summed-area table: texel ({x}, {y}) channel {channel} would be out of range"
+            ),
+            Error::RowLength { expected, got } => {
+                write!(f, "row has {got} elements, expected {expected}")
+            }
+            Error::TooManyRows => write!(f, "more rows pushed than the texture has"),
+            Error::MissingRows { got, expected } => {
+                write!(f, "build finished after {got} of {expected} rows")
+            }
+            Error::NoSuchChannel => write!(f, "channel index out of range"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}

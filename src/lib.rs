@@ -1,0 +1,70 @@
+//! # texsat — exact summed-area tables for firmware and hardware models
+//!
+//! A reference implementation of Crow's summed-area table (SAT, SIGGRAPH 1984) in integer and
+//! fixed-point arithmetic, for `no_std` firmware, FPGA models and the host test benches that
+//! check them.
+//!
+//! * [`Sat::build`] turns a texture ([`Texture`]: `u8` or `u16` texels, 1–4 interleaved channels,
+//!   any row stride) into a table in caller-provided storage (`&mut [E]`, `E` = `u16`, `u32` or
+//!   `u64`) with Crow's two additions per entry (§3.0). Before it writes anything it proves that
+//!   no entry can overflow ([`width`]); [`Sat::build_checked`] accepts any table whose *actual*
+//!   values fit. [`RowStreamBuilder`] builds from one row at a time, bit-identically.
+//! * [`Sat::box_sum_int`] sums a box with integer corners from 4 reads; [`Sat::box_sum`] sums a
+//!   box with fixed-point corners (any [`fixed`] type, `F` fractional bits) from 16 reads, *exactly*
+//!   (the result is an integer multiple of `2^-2F`). Two formulations: [`Paper`] (Crow §2.1:
+//!   bilinear interpolation at each corner) and [`Stable`] (differences first; multiplier operands
+//!   bounded by the box's edge strips). [`Sat::box_mean_shortcut`] is Crow's 4-read shortcut for
+//!   large footprints with a proven error bound.
+//! * Boundary modes ([`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`], Crow §2.4) are
+//!   zero-sized type parameters: a build that uses one mode compiles no code for the others.
+//! * Every lookup takes a [`Counter`]: [`NoCount`] compiles away, [`Tally`] counts reads,
+//!   multiplies, divides and additive operations the way Crow §2.2 counts them.
+//!
+//! Conventions (see `docs/design.md`): x to the right, y down; texel `(i, j)` covers
+//! `[i, i+1) x [j, j+1)`; a box is `[x0, x1) x [y0, y1)`. The stored table is *inclusive*:
+//! entry `(i, j)` holds the sum of texels `(i', j')` with `i' <= i`, `j' <= j`, so the corner
+//! function `S(x, y)` (the integral over `[0, x) x [0, y)`) is entry `(x-1, y-1)` and zero on the
+//! row `y = 0` and column `x = 0`, which cost no read.
+//!
+//! ```
+//! use texsat::{Sat, Texture, Rect, Paper, Border, NoCount, Tally};
+//! use fixed::types::I24F8;
+//!
+//! let texels: [u8; 12] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]; // 4 x 3
+//! let texture = Texture::<u8>::new(&texels, 4, 3).unwrap();
+//! let mut storage = [0u32; 12];
+//! let sat = Sat::build(&texture, &mut storage).unwrap();
+//!
+//! // Integer corners: the 2 x 2 box at (1, 1): 6 + 7 + 10 + 11.
+//! let sum = sat.box_sum_int(&Rect::new(1, 1, 3, 3), Border, &mut NoCount).unwrap();
+//! assert_eq!(sum.sum(), 34);
+//!
+//! // Fractional corners: [0.5, 1.5) x [0, 1) covers half of texel 1 and half of texel 2.
+//! let r = Rect::new(I24F8::from_num(0.5), I24F8::ZERO, I24F8::from_num(1.5), I24F8::ONE);
+//! let mut tally = Tally::new();
+//! let s = sat.box_sum(&r, Paper, Border, &mut tally).unwrap();
+//! assert_eq!(s.scaled_sum(0), (1 + 2) * 128 * 256); // (0.5 * 1 + 0.5 * 2) * 2^16
+//! assert_eq!(s.mean_rounded(0, 1, &mut tally).unwrap(), 3); // mean 1.5 = 3 / 2^1
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod cost;
+pub mod edge;
+mod error;
+pub mod lookup;
+mod rect;
+pub mod table;
+pub mod texel;
+mod texture;
+pub mod width;
+
+pub use cost::{Counter, NoCount, Tally};
+pub use edge::{Border, ClampToEdge, EdgeMode, MirroredRepeat, Repeat};
+pub use error::Error;
+pub use lookup::{BoxSum, Form, Paper, Shortcut, Stable};
+pub use rect::{Coord, Rect};
+pub use table::{RowStreamBuilder, Sat};
+pub use texel::{Entry, Texel};
+pub use texture::Texture;

@@ -1,0 +1,146 @@
+//! Crow's large-footprint shortcut (§2.2): "where the texture is highly compressed ... the effect
+//! of interpolation at the corners [is] negligible", so 4 reads replace 16.
+//!
+//! ## The bound
+//! Round each corner to the nearest integer (ties up), giving the box `R` for the true box `B`.
+//! Let `I = B ∩ R`, `m = 2^b - 1` the largest texel, and `W, H >= 2` the sides of `B`. Each edge
+//! moves by at most 1/2, so `I` has sides at least `W - 1` and `H - 1`, and
+//! `|B \ I| / |B| <= 1/W + 1/H`, `|R \ I| / |R| <= 1/(W-1) + 1/(H-1)` (as `R`'s sides are at least
+//! `W - 1`, `H - 1`). Writing both means as convex combinations of the mean over `I` (`c`) and of
+//! their own remainders, `mean_B - mean_R = wB (u - c) - wR (v - c)` with all means in `[0, m]`,
+//! which is at most `m * max(wB, wR)` in magnitude. Hence
+//!
+//! `|mean_B - mean_R| <= m * (1/(W-1) + 1/(H-1)) <= 2m / (s - 1)` when `W, H >= s`,
+//!
+//! plus the output rounding of the mean (`2^-(g+1)`). The bound is reached up to a factor
+//! `(s-1)/s`: a box whose four edges all round inward by 1/2 over a texture that is `m` exactly
+//! under the lost strips and 0 elsewhere (tested in `host-tests`).
+
+use super::{BoxSum, Form};
+use crate::cost::Counter;
+use crate::edge::EdgeMode;
+use crate::error::Error;
+use crate::rect::{Coord, RawBox, Rect};
+use crate::table::Sat;
+use crate::texel::Entry;
+use crate::width::{self, max_texel};
+
+/// When to take the 4-read shortcut: boxes whose sides are both at least `min_side` texels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Shortcut {
+    min_side: u64,
+}
+
+impl Shortcut {
+    /// Shortcut for sides of at least `min_side` texels (at least 2).
+    pub const fn with_min_side(min_side: u64) -> Self {
+        Shortcut {
+            min_side: if min_side < 2 { 2 } else { min_side },
+        }
+    }
+
+    /// The smallest side length for which the shortcut's mean error is at most
+    /// `tol_num / tol_den` texel units (excluding the output rounding), for `texel_bits`-bit
+    /// texels: `s = ceil(2 m tol_den / tol_num) + 1`. A zero tolerance never takes the shortcut.
+    pub const fn for_tolerance(texel_bits: u32, tol_num: u64, tol_den: u64) -> Self {
+        if tol_num == 0 {
+            return Shortcut { min_side: u64::MAX };
+        }
+        let need = 2 * max_texel(texel_bits) * tol_den as u128;
+        let s = need.div_ceil(tol_num as u128) + 1;
+        Shortcut {
+            min_side: if s > u64::MAX as u128 {
+                u64::MAX
+            } else if s < 2 {
+                2
+            } else {
+                s as u64
+            },
+        }
+    }
+
+    /// The side length from which the shortcut is taken.
+    pub const fn min_side(&self) -> u64 {
+        self.min_side
+    }
+
+    /// The proven bound `m (1/(W-1) + 1/(H-1))` on the shortcut's mean error for a box of sides
+    /// `W, H >= 2` texels, as `f64` (for reports and tests).
+    pub fn error_bound(texel_bits: u32, w: f64, h: f64) -> f64 {
+        max_texel(texel_bits) as f64 * (1.0 / (w - 1.0) + 1.0 / (h - 1.0))
+    }
+}
+
+/// A mean from [`Sat::box_mean_shortcut`], and whether the shortcut answered it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShortcutMean<const C: usize> {
+    /// Per channel, the mean times `2^g`, rounded to nearest (ties up).
+    pub means: [u128; C],
+    /// True if the 4-read shortcut was taken.
+    pub shortcut: bool,
+}
+
+/// Rounds a raw coordinate to the nearest integer, ties up (toward +infinity).
+fn round_raw(x: i128, f: u32) -> i128 {
+    if f == 0 {
+        x
+    } else {
+        (x + (1i128 << (f - 1))) >> f
+    }
+}
+
+impl<E: Entry, const C: usize> Sat<'_, E, C> {
+    /// The mean over the box with `out_frac_bits` fractional bits, by the 4-read shortcut when
+    /// both sides are at least `shortcut.min_side()` texels (then within the bound in the
+    /// module docs of the exact mean), else by the exact 16-read lookup in form `Fm`.
+    ///
+    /// Shortcut cost: 4 reads, 3 additive, 1 multiply (area), 1 divide per channel: Crow's
+    /// "4 texture accesses, two multiplicative operations and 3 additive operations".
+    pub fn box_mean_shortcut<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<X>,
+        form: Fm,
+        mode: M,
+        shortcut: &Shortcut,
+        out_frac_bits: u32,
+        k: &mut K,
+    ) -> Result<ShortcutMean<C>, Error> {
+        let f = X::FRAC_BITS;
+        if f > width::MAX_FRAC_BITS {
+            return Err(Error::FracBitsUnsupported {
+                frac_bits: f,
+                max: width::MAX_FRAC_BITS,
+            });
+        }
+        let (x0, y0, x1, y1) = (
+            r.x0.raw() as i128,
+            r.y0.raw() as i128,
+            r.x1.raw() as i128,
+            r.y1.raw() as i128,
+        );
+        if x1 < x0 || y1 < y0 {
+            return Err(Error::InvertedBox);
+        }
+        let min_raw = (shortcut.min_side as i128).saturating_mul(1i128 << f);
+        if x1 - x0 >= min_raw && y1 - y0 >= min_raw {
+            let b = RawBox {
+                x0: round_raw(x0, f),
+                y0: round_raw(y0, f),
+                x1: round_raw(x1, f),
+                y1: round_raw(y1, f),
+            };
+            let sum: BoxSum<C> = self.sum_raw::<super::corners4::Corners4, M, K>(b, 0, k)?;
+            let means = sum.means_rounded(out_frac_bits, k)?;
+            return Ok(ShortcutMean {
+                means,
+                shortcut: true,
+            });
+        }
+        let sum = self.box_sum(r, form, mode, k)?;
+        Ok(ShortcutMean {
+            means: sum.means_rounded(out_frac_bits, k)?,
+            shortcut: false,
+        })
+    }
+}

@@ -1,0 +1,75 @@
+//! Boxes and their corner coordinates.
+
+use crate::error::Error;
+use fixed::traits::Fixed;
+
+/// The box `[x0, x1) x [y0, y1)` in texel units (x to the right, y down).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Rect<T> {
+    /// Left edge (inclusive).
+    pub x0: T,
+    /// Top edge (inclusive).
+    pub y0: T,
+    /// Right edge (exclusive).
+    pub x1: T,
+    /// Bottom edge (exclusive).
+    pub y1: T,
+}
+
+impl<T> Rect<T> {
+    /// The box `[x0, x1) x [y0, y1)`.
+    pub const fn new(x0: T, y0: T, x1: T, y1: T) -> Self {
+        Rect { x0, y0, x1, y1 }
+    }
+}
+
+/// A fixed-point corner coordinate: any [`fixed`] type whose raw bits fit `i64`
+/// (`FixedI8`..`FixedI64`, `FixedU8`..`FixedU32`). `F = FRAC_BITS`; the value is `raw / 2^F`.
+pub trait Coord: Copy {
+    /// Fractional bits `F`.
+    const FRAC_BITS: u32;
+    /// The raw integer `value * 2^F`.
+    fn raw(self) -> i64;
+}
+
+impl<X: Fixed> Coord for X
+where
+    X::Bits: Into<i64>,
+{
+    const FRAC_BITS: u32 = X::FRAC_NBITS;
+    #[inline(always)]
+    fn raw(self) -> i64 {
+        self.to_bits().into()
+    }
+}
+
+impl<X: Fixed> Rect<X> {
+    /// Converts float corners to the fixed-point type `X`, rounding to nearest. NaN or infinite
+    /// input is [`Error::NotFinite`]; a value outside `X`'s range is
+    /// [`Error::CoordinateOutOfRange`].
+    pub fn from_f64(x0: f64, y0: f64, x1: f64, y1: f64) -> Result<Self, Error> {
+        let conv = |v: f64| -> Result<X, Error> {
+            if !v.is_finite() {
+                return Err(Error::NotFinite);
+            }
+            X::checked_from_num(v).ok_or(Error::CoordinateOutOfRange)
+        };
+        Ok(Rect::new(conv(x0)?, conv(y0)?, conv(x1)?, conv(y1)?))
+    }
+
+    /// [`Rect::from_f64`] for `f32` corners.
+    pub fn from_f32(x0: f32, y0: f32, x1: f32, y1: f32) -> Result<Self, Error> {
+        Self::from_f64(x0 as f64, y0 as f64, x1 as f64, y1 as f64)
+    }
+}
+
+/// (Crate-internal; unnameable outside.) A box in raw fixed-point units (`value * 2^F`), wide enough that shifts by whole periods and
+/// reflections cannot overflow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawBox {
+    pub x0: i128,
+    pub y0: i128,
+    pub x1: i128,
+    pub y1: i128,
+}

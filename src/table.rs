@@ -1,0 +1,391 @@
+//! Building and holding a summed-area table (Crow §3.0).
+//!
+//! Entry `(i, j)` of the stored (inclusive) table is the sum of texels `(i', j')` with
+//! `i' <= i` and `j' <= j`, per channel. The build keeps a running sum `r` along the row and adds
+//! the entry above: `entry(i, j) = r(i, j) + entry(i, j - 1)`, `r(i, j) = r(i - 1, j) + t(i, j)`:
+//! two additions per entry and channel, as Crow counts.
+
+use crate::error::{Error, Quantity};
+use crate::texel::{Entry, Texel};
+use crate::texture::{Texture, MAX_DIMENSION};
+use crate::width::{self, bits_of};
+
+/// A summed-area table over borrowed storage.
+///
+/// `E` is the entry type (`u16`, `u32`, `u64`); `C` the number of interleaved channels. Once
+/// built (or validated by [`Sat::from_table`]) the table is monotone and its largest entry per
+/// channel is the whole-texture sum, which the lookups' width checks rely on.
+#[derive(Debug, Clone, Copy)]
+pub struct Sat<'a, E: Entry, const C: usize = 1> {
+    table: &'a [E],
+    width: usize,
+    height: usize,
+    texel_bits: u32,
+    total: [E; C],
+}
+
+/// One addition of the build: plain where the width proof covers it, checked otherwise.
+#[inline(always)]
+fn add<E: Entry, const CHECKED: bool>(a: E, b: E) -> Result<E, ()> {
+    if CHECKED {
+        a.checked_add(b).ok_or(())
+    } else {
+        Ok(a + b)
+    }
+}
+
+/// One row of the build: `out = prefix sums of texels (per channel) + above`.
+///
+/// With `CHECKED = false` the caller has proved (worst-case analysis) that no sum can exceed
+/// `E`; with `CHECKED = true` every addition is checked and an overflow is an error.
+#[inline]
+fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
+    texels: &[T],
+    above: Option<&[E]>,
+    out: &mut [E],
+) -> Result<(), ()> {
+    let mut run = [E::ZERO; C];
+    match above {
+        None => {
+            for (o, t) in out.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+                for c in 0..C {
+                    run[c] = add::<E, CHECKED>(run[c], E::from(t[c].to_u16()))?;
+                    o[c] = run[c];
+                }
+            }
+        }
+        Some(above) => {
+            for ((o, t), a) in out
+                .chunks_exact_mut(C)
+                .zip(texels.chunks_exact(C))
+                .zip(above.chunks_exact(C))
+            {
+                for c in 0..C {
+                    run[c] = add::<E, CHECKED>(run[c], E::from(t[c].to_u16()))?;
+                    o[c] = add::<E, CHECKED>(run[c], a[c])?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Exact bits of the largest channel total of a texture (the error path of the checked build).
+fn actual_total_bits<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> u32 {
+    let mut totals = [0u128; C];
+    for y in 0..texture.height() {
+        if let Some(row) = texture.row(y) {
+            for px in row.chunks_exact(C) {
+                for c in 0..C {
+                    totals[c] += px[c].to_u16() as u128;
+                }
+            }
+        }
+    }
+    totals.iter().map(|&t| bits_of(t)).max().unwrap_or(0)
+}
+
+impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
+    /// Builds the table of `texture` into `storage` (its first `w * h * C` entries), after
+    /// proving from the texel width alone that no entry can overflow `E`
+    /// ([`width::check_entry_worst_case`]). Nothing is written if the proof fails.
+    pub fn build<T: Texel>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+    ) -> Result<Self, Error> {
+        width::check_entry_worst_case(T::BITS, texture.width(), texture.height(), E::BITS)?;
+        Self::build_impl::<T, false>(texture, storage)
+    }
+
+    /// Builds the table with every addition checked, so a texture whose *actual* sums fit `E`
+    /// is accepted even where the worst case is refused. On overflow the error names the exact
+    /// bits the data needs; the storage then holds a partial table and no `Sat` is returned.
+    pub fn build_checked<T: Texel>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+    ) -> Result<Self, Error> {
+        Self::build_impl::<T, true>(texture, storage).map_err(|e| match e {
+            Error::TooWide {
+                what: Quantity::Entry,
+                ..
+            } => Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: actual_total_bits(texture),
+                bits_available: E::BITS,
+            },
+            other => other,
+        })
+    }
+
+    fn build_impl<T: Texel, const CHECKED: bool>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+    ) -> Result<Self, Error> {
+        let (w, h) = (texture.width(), texture.height());
+        let row_len = w * C;
+        let needed = row_len * h;
+        if storage.len() < needed {
+            return Err(Error::StorageTooSmall {
+                needed,
+                got: storage.len(),
+            });
+        }
+        let table = &mut storage[..needed];
+        let overflow = Error::TooWide {
+            what: Quantity::Entry,
+            bits_needed: E::BITS + 1,
+            bits_available: E::BITS,
+        };
+        let mut above: Option<&[E]> = None;
+        let mut rest: &mut [E] = table;
+        for y in 0..h {
+            let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
+            let (out, tail) = rest.split_at_mut(row_len);
+            build_row::<T, E, C, CHECKED>(texels, above, out).map_err(|_| overflow)?;
+            above = Some(out);
+            rest = tail;
+        }
+        let table: &'a [E] = &storage[..needed];
+        Ok(Self::from_parts(table, w, h, T::BITS))
+    }
+
+    fn from_parts(table: &'a [E], width: usize, height: usize, texel_bits: u32) -> Self {
+        let mut total = [E::ZERO; C];
+        let last = (width * height - 1) * C;
+        total.copy_from_slice(&table[last..last + C]);
+        Sat {
+            table,
+            width,
+            height,
+            texel_bits,
+            total,
+        }
+    }
+
+    /// Wraps a table built elsewhere (in flash, by [`RowStreamBuilder`], by an RTL model),
+    /// after checking that it is the SAT of some texture of `texel_bits`-bit texels: every texel
+    /// it implies, `S(i,j) - S(i-1,j) - S(i,j-1) + S(i-1,j-1)`, must lie in `[0, 2^b - 1]`.
+    /// This check (`O(w h)`) is what lets the lookups rely on monotonicity.
+    pub fn from_table(
+        table: &'a [E],
+        width: usize,
+        height: usize,
+        texel_bits: u32,
+    ) -> Result<Self, Error> {
+        if width == 0 || height == 0 || C == 0 {
+            return Err(Error::EmptyTexture);
+        }
+        if width > MAX_DIMENSION || height > MAX_DIMENSION {
+            return Err(Error::TextureTooLarge {
+                dimension: width.max(height),
+            });
+        }
+        if texel_bits == 0 || texel_bits > 16 {
+            return Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: texel_bits,
+                bits_available: 16,
+            });
+        }
+        let needed = width * height * C;
+        if table.len() < needed {
+            return Err(Error::StorageTooSmall {
+                needed,
+                got: table.len(),
+            });
+        }
+        let max = width::max_texel(texel_bits) as i128;
+        let at = |x: usize, y: usize, c: usize| -> i128 {
+            if x == 0 || y == 0 {
+                0
+            } else {
+                table[((y - 1) * width + (x - 1)) * C + c].to_u128() as i128
+            }
+        };
+        for y in 1..=height {
+            for x in 1..=width {
+                for c in 0..C {
+                    let t = at(x, y, c) - at(x - 1, y, c) - at(x, y - 1, c) + at(x - 1, y - 1, c);
+                    if t < 0 || t > max {
+                        return Err(Error::InvalidTable {
+                            x: x - 1,
+                            y: y - 1,
+                            channel: c,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(Self::from_parts(&table[..needed], width, height, texel_bits))
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Bits per texel of the source texture.
+    pub fn texel_bits(&self) -> u32 {
+        self.texel_bits
+    }
+
+    /// The stored entries, row-major, channels interleaved (`w * h * C`).
+    pub fn entries(&self) -> &'a [E] {
+        self.table
+    }
+
+    /// The whole-texture sum per channel (the last entry).
+    pub fn total(&self) -> [E; C] {
+        self.total
+    }
+
+    /// Bits of the largest whole-texture sum over the channels: what the lookups' accumulators
+    /// must hold (see [`crate::width`]).
+    pub fn total_bits(&self) -> u32 {
+        self.total
+            .iter()
+            .map(|t| bits_of(t.to_u128()))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Table bytes as stored (`w * h * C * size_of::<E>()`).
+    pub fn table_bytes(&self) -> usize {
+        core::mem::size_of_val(self.table)
+    }
+
+    /// The corner function `S(x, y)` (integral over `[0, x) x [0, y)`) for `x <= w`, `y <= h`;
+    /// `None` outside. Zero on the row `y = 0` and the column `x = 0`.
+    pub fn corner(&self, x: usize, y: usize) -> Option<[E; C]> {
+        if x > self.width || y > self.height {
+            None
+        } else {
+            Some(self.s(x, y))
+        }
+    }
+
+    /// `S(x, y)` for `x <= w`, `y <= h` (callers guarantee the range).
+    #[inline(always)]
+    pub(crate) fn s(&self, x: usize, y: usize) -> [E; C] {
+        let mut out = [E::ZERO; C];
+        if x != 0 && y != 0 {
+            let base = ((y - 1) * self.width + (x - 1)) * C;
+            out.copy_from_slice(&self.table[base..base + C]);
+        }
+        out
+    }
+
+    /// `S(x, y)` with its read counted (reads of the zero row and column are free).
+    #[inline(always)]
+    pub(crate) fn read<K: crate::Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
+        if x != 0 && y != 0 {
+            k.reads(1, E::BITS * C as u32);
+        }
+        self.s(x, y)
+    }
+}
+
+/// Builds a table one texture row at a time, holding only the previous table row.
+///
+/// For sources larger than RAM (a sensor, a flash image): push each texture row; each call
+/// returns the finished table row, which the caller stores wherever the table lives (external
+/// RAM, flash, an RTL test vector file). The rows are bit-identical to [`Sat::build`]'s, since
+/// both run the same row kernel. The width check runs in [`RowStreamBuilder::new`].
+#[derive(Debug)]
+pub struct RowStreamBuilder<'a, E: Entry, const C: usize = 1> {
+    row: &'a mut [E],
+    width: usize,
+    height: usize,
+    rows_done: usize,
+}
+
+impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
+    /// A builder for a `width x height` texture of `texel_bits`-bit texels; `row_storage` must
+    /// hold at least `width * C` entries. Refuses sizes whose worst case overflows `E`.
+    pub fn new(
+        width: usize,
+        height: usize,
+        texel_bits: u32,
+        row_storage: &'a mut [E],
+    ) -> Result<Self, Error> {
+        if width == 0 || height == 0 || C == 0 {
+            return Err(Error::EmptyTexture);
+        }
+        if width > MAX_DIMENSION || height > MAX_DIMENSION {
+            return Err(Error::TextureTooLarge {
+                dimension: width.max(height),
+            });
+        }
+        width::check_entry_worst_case(texel_bits, width, height, E::BITS)?;
+        let needed = width * C;
+        if row_storage.len() < needed {
+            return Err(Error::StorageTooSmall {
+                needed,
+                got: row_storage.len(),
+            });
+        }
+        Ok(RowStreamBuilder {
+            row: &mut row_storage[..needed],
+            width,
+            height,
+            rows_done: 0,
+        })
+    }
+
+    /// Consumes the next texture row (`width * C` texels) and returns the table row it yields.
+    /// The texel type must have the bits given to [`RowStreamBuilder::new`] or fewer.
+    pub fn push_row<T: Texel>(&mut self, texels: &[T]) -> Result<&[E], Error> {
+        if self.rows_done >= self.height {
+            return Err(Error::TooManyRows);
+        }
+        if texels.len() != self.width * C {
+            return Err(Error::RowLength {
+                expected: self.width * C,
+                got: texels.len(),
+            });
+        }
+        // The kernel reads the row above and writes the new row; with one buffer the new row
+        // overwrites the old in place, which is safe because entry i only needs above[i].
+        let overflow = Error::TooWide {
+            what: Quantity::Entry,
+            bits_needed: E::BITS + 1,
+            bits_available: E::BITS,
+        };
+        if self.rows_done == 0 {
+            build_row::<T, E, C, true>(texels, None, self.row).map_err(|_| overflow)?;
+        } else {
+            // Same additions as `build_row` (running sum, then plus the entry above).
+            let mut run = [E::ZERO; C];
+            for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+                for c in 0..C {
+                    run[c] = add::<E, true>(run[c], E::from(t[c].to_u16())).map_err(|_| overflow)?;
+                    o[c] = add::<E, true>(run[c], o[c]).map_err(|_| overflow)?;
+                }
+            }
+        }
+        self.rows_done += 1;
+        Ok(self.row)
+    }
+
+    /// Rows pushed so far.
+    pub fn rows_done(&self) -> usize {
+        self.rows_done
+    }
+
+    /// Checks that every row arrived and returns the last table row (its last entry per channel
+    /// is the whole-texture sum).
+    pub fn finish(self) -> Result<&'a [E], Error> {
+        if self.rows_done != self.height {
+            return Err(Error::MissingRows {
+                got: self.rows_done,
+                expected: self.height,
+            });
+        }
+        Ok(self.row)
+    }
+}

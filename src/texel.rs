@@ -1,0 +1,125 @@
+//! Texel and table-entry types.
+//!
+//! A [`Texel`] is an unsigned integer sample (`u8`, `u16`). An [`Entry`] is the unsigned integer a
+//! table stores per channel (`u16`, `u32`, `u64`); each entry type names a signed accumulator
+//! ([`Entry::Acc`]) wide enough for the lookups the width analysis accepts (`i64` for `u16` and
+//! `u32`, `i128` for `u64`).
+
+use core::ops::{Add, Mul, Shl, Sub};
+
+/// An unsigned texel sample.
+pub trait Texel: Copy + 'static {
+    /// Bits per texel; the largest texel is `2^BITS - 1`.
+    const BITS: u32;
+    /// The texel as `u16` (lossless: texels have at most 16 bits).
+    fn to_u16(self) -> u16;
+}
+
+impl Texel for u8 {
+    const BITS: u32 = 8;
+    #[inline(always)]
+    fn to_u16(self) -> u16 {
+        self as u16
+    }
+}
+
+impl Texel for u16 {
+    const BITS: u32 = 16;
+    #[inline(always)]
+    fn to_u16(self) -> u16 {
+        self as u16
+    }
+}
+
+/// The signed accumulator of the lookups: `i64` or `i128`.
+///
+/// Only the ring operations are used; the width analysis proves before each lookup that no
+/// intermediate leaves the type's range (see `docs/design.md`, "Lookup widths").
+pub trait Acc:
+    Copy
+    + Ord
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Shl<u32, Output = Self>
+    + 'static
+{
+    /// Value bits (the sign bit excluded): 63 or 127.
+    const VALUE_BITS: u32;
+    /// Zero.
+    const ZERO: Self;
+    /// A small non-negative integer (a fraction numerator, at most `2^24`).
+    fn from_u32(v: u32) -> Self;
+    /// Widen to `i128`.
+    fn to_i128(self) -> i128;
+}
+
+impl Acc for i64 {
+    const VALUE_BITS: u32 = 63;
+    const ZERO: Self = 0;
+    #[inline(always)]
+    fn from_u32(v: u32) -> Self {
+        v as i64
+    }
+    #[inline(always)]
+    fn to_i128(self) -> i128 {
+        self as i128
+    }
+}
+
+impl Acc for i128 {
+    const VALUE_BITS: u32 = 127;
+    const ZERO: Self = 0;
+    #[inline(always)]
+    fn from_u32(v: u32) -> Self {
+        v as i128
+    }
+    #[inline(always)]
+    fn to_i128(self) -> i128 {
+        self
+    }
+}
+
+/// An unsigned table entry.
+pub trait Entry:
+    Copy + Default + Ord + Add<Output = Self> + Sub<Output = Self> + From<u16> + 'static
+{
+    /// Bits per entry and channel.
+    const BITS: u32;
+    /// The zero entry.
+    const ZERO: Self;
+    /// The signed accumulator the lookups use for this entry type.
+    type Acc: Acc;
+    /// Checked addition (the data-dependent build).
+    fn checked_add(self, other: Self) -> Option<Self>;
+    /// The entry in the accumulator type (always lossless).
+    fn to_acc(self) -> Self::Acc;
+    /// The entry as `u128` (always lossless).
+    fn to_u128(self) -> u128;
+}
+
+macro_rules! impl_entry {
+    ($t:ty, $acc:ty) => {
+        impl Entry for $t {
+            const BITS: u32 = <$t>::BITS;
+            const ZERO: Self = 0;
+            type Acc = $acc;
+            #[inline(always)]
+            fn checked_add(self, other: Self) -> Option<Self> {
+                <$t>::checked_add(self, other)
+            }
+            #[inline(always)]
+            fn to_acc(self) -> $acc {
+                self as $acc
+            }
+            #[inline(always)]
+            fn to_u128(self) -> u128 {
+                self as u128
+            }
+        }
+    };
+}
+
+impl_entry!(u16, i64);
+impl_entry!(u32, i64);
+impl_entry!(u64, i128);

@@ -1,0 +1,88 @@
+//! A borrowed view of a texture: texels in rows, `C` interleaved channels, any row stride.
+
+use crate::error::Error;
+use crate::texel::Texel;
+
+/// Largest width or height accepted (coordinates stay far inside `i64`/`i128` arithmetic).
+pub(crate) const MAX_DIMENSION: usize = (1 << 31) - 1;
+
+/// A texture of `width x height` texels with `C` interleaved channels (`1..=4` in practice).
+///
+/// Texel `(x, y)` channel `c` is `data[y * stride + x * C + c]`; `stride` is in elements and at
+/// least `width * C`. Row 0 is the top row (image-file order).
+#[derive(Debug, Clone, Copy)]
+pub struct Texture<'a, T: Texel, const C: usize = 1> {
+    data: &'a [T],
+    width: usize,
+    height: usize,
+    stride: usize,
+}
+
+impl<'a, T: Texel, const C: usize> Texture<'a, T, C> {
+    /// A tightly packed texture (`stride = width * C`).
+    pub fn new(data: &'a [T], width: usize, height: usize) -> Result<Self, Error> {
+        Self::with_stride(data, width, height, width.saturating_mul(C))
+    }
+
+    /// A texture whose rows start `stride` elements apart.
+    pub fn with_stride(
+        data: &'a [T],
+        width: usize,
+        height: usize,
+        stride: usize,
+    ) -> Result<Self, Error> {
+        if width == 0 || height == 0 || C == 0 {
+            return Err(Error::EmptyTexture);
+        }
+        if width > MAX_DIMENSION || height > MAX_DIMENSION {
+            return Err(Error::TextureTooLarge {
+                dimension: width.max(height),
+            });
+        }
+        let row = width * C;
+        if stride < row {
+            return Err(Error::StrideTooSmall {
+                stride,
+                needed: row,
+            });
+        }
+        let needed = stride
+            .checked_mul(height - 1)
+            .and_then(|v| v.checked_add(row))
+            .ok_or(Error::TextureDataTooShort {
+                needed: usize::MAX,
+                got: data.len(),
+            })?;
+        if data.len() < needed {
+            return Err(Error::TextureDataTooShort {
+                needed,
+                got: data.len(),
+            });
+        }
+        Ok(Texture {
+            data,
+            width,
+            height,
+            stride,
+        })
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Row `y` (`width * C` elements), or `None` if `y` is not below the height.
+    pub fn row(&self, y: usize) -> Option<&'a [T]> {
+        if y >= self.height {
+            return None;
+        }
+        let start = y * self.stride;
+        self.data.get(start..start + self.width * C)
+    }
+}

@@ -1,0 +1,212 @@
+//! Width analysis: how many bits each entry and each lookup intermediate needs, proved before a
+//! table is written or a lookup is made.
+//!
+//! All functions are `const fn`, so a firmware build can check its texture sizes at compile time:
+//!
+//! ```
+//! use texsat::width;
+//! // 8-bit texels, u32 entries: 4104 x 4104 fits (255 * 4104^2 < 2^32), 4105 x 4105 does not.
+//! const _: () = assert!(width::entry_bits_worst_case(8, 4104, 4104) == 32);
+//! const _: () = assert!(width::entry_bits_worst_case(8, 4105, 4105) == 33);
+//! ```
+//!
+//! ## Entries (proof)
+//! Texels are unsigned, so the table is monotone in both coordinates and its largest entry is the
+//! whole-texture sum `T <= m * w * h` with `m = 2^b - 1` the largest texel. Every intermediate of
+//! the two-addition build (§3.0: running row sum `r`, then `r + entry above`) is a sum of texels of
+//! a sub-rectangle, hence `<= T`. An entry type of `k` bits is therefore safe iff
+//! `m * w * h < 2^k`, i.e. `bits_of(m * w * h) <= k`, where `bits_of(v)` is the position of the
+//! highest set bit of `v`. This is exact: the all-`m` texture reaches it.
+//!
+//! The often-quoted `b + ceil(log2(w * h))` is only an upper bound (it rounds `m = 2^b - 1` up to
+//! `2^b`): it would refuse 4104 x 4104 in `u32` (33 bits) although every entry fits; see
+//! [`entry_bits_naive`].
+//!
+//! ## Lookups
+//! With `F` fractional corner bits the box integral is a multiple of `2^-2F`; lookups compute it
+//! scaled by `2^2F`. See [`paper_acc_bits`], [`stable_acc_bits`], and `docs/design.md` for the
+//! multiplier operand widths of each formulation.
+
+use crate::error::{Error, Quantity};
+
+/// Number of bits needed to hold `v`: `0` for `0`, else `floor(log2(v)) + 1`.
+pub const fn bits_of(v: u128) -> u32 {
+    128 - v.leading_zeros()
+}
+
+/// `ceil(log2(v))` for `v >= 1` (and `0` for `v <= 1`).
+pub const fn ceil_log2(v: u128) -> u32 {
+    if v <= 1 {
+        0
+    } else {
+        bits_of(v - 1)
+    }
+}
+
+/// The largest texel of `texel_bits` bits: `2^b - 1`.
+pub const fn max_texel(texel_bits: u32) -> u128 {
+    (1u128 << texel_bits) - 1
+}
+
+/// The largest possible whole-table sum: `(2^b - 1) * w * h`.
+pub const fn worst_case_total(texel_bits: u32, width: usize, height: usize) -> u128 {
+    max_texel(texel_bits) * width as u128 * height as u128
+}
+
+/// Exact bits per entry (and channel) the worst case needs: `bits_of((2^b - 1) * w * h)`.
+pub const fn entry_bits_worst_case(texel_bits: u32, width: usize, height: usize) -> u32 {
+    bits_of(worst_case_total(texel_bits, width, height))
+}
+
+/// The conservative textbook bound `b + ceil(log2(w * h))`. Never smaller than
+/// [`entry_bits_worst_case`], sometimes one larger; kept to document the difference.
+pub const fn entry_bits_naive(texel_bits: u32, width: usize, height: usize) -> u32 {
+    texel_bits + ceil_log2(width as u128 * height as u128)
+}
+
+/// Refuses a table whose worst case does not fit `entry_bits`.
+pub const fn check_entry_worst_case(
+    texel_bits: u32,
+    width: usize,
+    height: usize,
+    entry_bits: u32,
+) -> Result<(), Error> {
+    let needed = entry_bits_worst_case(texel_bits, width, height);
+    if needed > entry_bits {
+        Err(Error::TooWide {
+            what: Quantity::Entry,
+            bits_needed: needed,
+            bits_available: entry_bits,
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// Largest `F` the fixed-point lookups accept. Keeps `w * 2^F` and the coordinate arithmetic far
+/// inside `i128` and the fraction numerators inside `u32`.
+pub const MAX_FRAC_BITS: u32 = 24;
+
+/// Accumulator bits (sign excluded) of the [`crate::Paper`] lookup for a table whose entries are
+/// at most `total` (`total_bits = bits_of(total)`): `total_bits + 2F`.
+///
+/// Proof: every corner value is a bilinear interpolation `v = r0 * 2^F + (r1 - r0) * B` with
+/// `r = S0 * 2^F + (S1 - S0) * A`, `0 <= A, B <= 2^F`; the table is monotone, so every
+/// difference is non-negative and every partial result lies in `[0, total * 2^2F]`; the final
+/// `(V11 - V10) - (V01 - V00)` is a difference of non-negative, ordered values.
+pub const fn paper_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
+    total_bits + 2 * frac_bits
+}
+
+/// Accumulator bits (sign excluded) of the [`crate::Stable`] lookup: `total_bits + 2F + 1`.
+///
+/// `total_bits` may be the bits of the largest *box* sum the caller will ask for (the width of
+/// the accumulator depends on the box, not on the table), but this crate checks against the
+/// table's total. Proof: the integral is `Bint * 2^2F + 2^F (A1 Rt - A0 L + B1 Bm - B0 T)
+/// + A1 B1 t11 - A1 B0 t10 - A0 B1 t01 + A0 B0 t00`; the positive terms together are at most
+/// the sum over the box grown by one texel to the right and down plus one texel, i.e.
+/// `< 2 * total * 2^2F`, and so is every partial sum.
+pub const fn stable_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
+    total_bits + 2 * frac_bits + 1
+}
+
+/// Refuses a lookup whose accumulator needs more than `available` value bits.
+pub const fn check_acc(needed: u32, available: u32) -> Result<(), Error> {
+    if needed > available {
+        Err(Error::TooWide {
+            what: Quantity::LookupAccumulator,
+            bits_needed: needed,
+            bits_available: available,
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// Multiplier operand widths (unsigned bits) of one lookup formulation, for sizing hardware
+/// multipliers (an FPGA DSP block is typically 18 x 18 or 18 x 25 signed, i.e. 17 x 17 or
+/// 17 x 24 unsigned).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MulOperands {
+    /// The wider data operand of any multiply.
+    pub data_bits: u32,
+    /// The fraction operand (`F + 1` bits, since a fraction may equal `2^F` at the right or
+    /// bottom edge; `2F + 1` for a product of two fractions).
+    pub frac_bits: u32,
+}
+
+/// Operand widths of [`crate::Paper`]: the first lerp multiplies a column strip
+/// `S[i+1, j] - S[i, j] <= m * h` by `A`; the second multiplies `r1 - r0 <= m * w * 2^F` by `B`.
+/// Data operand: `max(bits_of(m h), bits_of(m w) + F)`, growing with the *table* size.
+pub const fn paper_operands(texel_bits: u32, width: usize, height: usize, frac_bits: u32) -> MulOperands {
+    let m = max_texel(texel_bits);
+    let a = bits_of(m * height as u128);
+    let b = bits_of(m * width as u128) + frac_bits;
+    MulOperands {
+        data_bits: if a > b { a } else { b },
+        frac_bits: frac_bits + 1,
+    }
+}
+
+/// Operand widths of [`crate::Stable`] for boxes of at most `max_side` texels per side: edge
+/// strips `<= m * (max_side + 1)` times a fraction (`F + 1` bits), and corner texels (`b` bits)
+/// times a product of two fractions (`2F + 1` bits). Bounded by the *box*, not the table.
+pub const fn stable_operands(texel_bits: u32, max_side: usize, frac_bits: u32) -> MulOperands {
+    let strip = bits_of(max_texel(texel_bits) * (max_side as u128 + 1));
+    MulOperands {
+        data_bits: if strip > texel_bits { strip } else { texel_bits },
+        frac_bits: 2 * frac_bits + 1,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crow_example_4104() {
+        assert!(check_entry_worst_case(8, 4104, 4104, 32).is_ok());
+        assert_eq!(
+            check_entry_worst_case(8, 4105, 4105, 32),
+            Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: 33,
+                bits_available: 32
+            })
+        );
+        assert_eq!(entry_bits_naive(8, 4104, 4104), 33);
+    }
+
+    #[test]
+    fn crow_28_bits_at_1024() {
+        // Crow §3.0: "a 1024 by 1024 entry table could require entries as long as 28 bits".
+        assert_eq!(entry_bits_worst_case(8, 1024, 1024), 28);
+        // "as little as 24 bits per entry by restricting texture images to 256 by 256".
+        assert_eq!(entry_bits_worst_case(8, 256, 256), 24);
+    }
+
+    #[test]
+    fn bits_and_logs() {
+        assert_eq!(bits_of(0), 0);
+        assert_eq!(bits_of(1), 1);
+        assert_eq!(bits_of(255), 8);
+        assert_eq!(bits_of(256), 9);
+        assert_eq!(ceil_log2(1), 0);
+        assert_eq!(ceil_log2(2), 1);
+        assert_eq!(ceil_log2(3), 2);
+        assert_eq!(ceil_log2(4), 2);
+    }
+
+    #[test]
+    fn naive_never_below_exact() {
+        for b in [1u32, 8, 16] {
+            for w in 1..70usize {
+                for h in [1usize, 2, 3, 7, 64, 65, 1000] {
+                    let exact = entry_bits_worst_case(b, w, h);
+                    let naive = entry_bits_naive(b, w, h);
+                    assert!(naive >= exact && naive <= exact + 1, "{b} {w} {h}");
+                }
+            }
+        }
+    }
+}
