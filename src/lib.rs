@@ -62,8 +62,8 @@ pub mod width;
 
 pub use cost::{Counter, NoCount, Tally};
 pub use edge::{Border, ClampToEdge, EdgeMode, MirroredRepeat, Repeat};
-pub use error::Error;
-pub use lookup::{BoxSum, Form, Paper, Shortcut, Stable};
+pub use error::{Error, Quantity};
+pub use lookup::{BoxSum, Form, Paper, Shortcut, ShortcutMean, Stable};
 pub use rect::{Coord, Rect};
 pub use table::{RowStreamBuilder, Sat};
 pub use texel::{Entry, Texel};
