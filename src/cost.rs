@@ -111,6 +111,9 @@ mod tests {
         t.muls(1);
         t.divs(1);
         t.adds(3);
-        assert_eq!((t.reads, t.bits_read, t.multiplicative(), t.adds), (4, 128, 2, 3));
+        assert_eq!(
+            (t.reads, t.bits_read, t.multiplicative(), t.adds),
+            (4, 128, 2, 3)
+        );
     }
 }

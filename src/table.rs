@@ -216,7 +216,12 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
                 }
             }
         }
-        Ok(Self::from_parts(&table[..needed], width, height, texel_bits))
+        Ok(Self::from_parts(
+            &table[..needed],
+            width,
+            height,
+            texel_bits,
+        ))
     }
 
     /// Width in texels.
@@ -363,7 +368,8 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             let mut run = [E::ZERO; C];
             for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
                 for c in 0..C {
-                    run[c] = add::<E, true>(run[c], E::from(t[c].to_u16())).map_err(|_| overflow)?;
+                    run[c] =
+                        add::<E, true>(run[c], E::from(t[c].to_u16())).map_err(|_| overflow)?;
                     o[c] = add::<E, true>(run[c], o[c]).map_err(|_| overflow)?;
                 }
             }

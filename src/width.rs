@@ -102,10 +102,12 @@ pub const fn paper_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
 ///
 /// `total_bits` may be the bits of the largest *box* sum the caller will ask for (the width of
 /// the accumulator depends on the box, not on the table), but this crate checks against the
-/// table's total. Proof: the integral is `Bint * 2^2F + 2^F (A1 Rt - A0 L + B1 Bm - B0 T)
-/// + A1 B1 t11 - A1 B0 t10 - A0 B1 t01 + A0 B0 t00`; the positive terms together are at most
-/// the sum over the box grown by one texel to the right and down plus one texel, i.e.
-/// `< 2 * total * 2^2F`, and so is every partial sum.
+/// table's total. Proof: the lookup evaluates `(Bint << 2F) + (E << F) + K` with
+/// `E = (A1 Rt - A0 L) + (B1 Bm - B0 T)` and `K = (A1 B1 t11 - A1 B0 t10) - (A0 B1 t01 - A0 B0 t00)`.
+/// `Bint`, `Rt` (column `i1`), `Bm` (row `j1`) cover disjoint parts of the box grown by one
+/// texel, so `Bint + Rt + Bm <= total`; `L + T <= total + t00`; each product of a fraction and a
+/// strip lies in `[0, 2^F strip]`. So `E << F` lies in `[-(L + T) 2^2F, (Rt + Bm) 2^2F]`, every
+/// partial sum in `(-2 total 2^2F, 2 total 2^2F)`, and `|K| <= 2 m 2^2F`.
 pub const fn stable_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
     total_bits + 2 * frac_bits + 1
 }
@@ -123,40 +125,66 @@ pub const fn check_acc(needed: u32, available: u32) -> Result<(), Error> {
     }
 }
 
-/// Multiplier operand widths (unsigned bits) of one lookup formulation, for sizing hardware
-/// multipliers (an FPGA DSP block is typically 18 x 18 or 18 x 25 signed, i.e. 17 x 17 or
-/// 17 x 24 unsigned).
+/// The unsigned operand widths of one kind of multiply in a lookup, for sizing hardware
+/// multipliers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct MulOperands {
-    /// The wider data operand of any multiply.
+pub struct MulShape {
+    /// Bits of the data operand (a table difference, a strip sum or a texel).
     pub data_bits: u32,
-    /// The fraction operand (`F + 1` bits, since a fraction may equal `2^F` at the right or
-    /// bottom edge; `2F + 1` for a product of two fractions).
+    /// Bits of the fraction operand: `F + 1` for one fraction (it may equal `2^F` at the right or
+    /// bottom edge of the table), `2F + 1` for a product of two.
     pub frac_bits: u32,
 }
 
-/// Operand widths of [`crate::Paper`]: the first lerp multiplies a column strip
-/// `S[i+1, j] - S[i, j] <= m * h` by `A`; the second multiplies `r1 - r0 <= m * w * 2^F` by `B`.
-/// Data operand: `max(bits_of(m h), bits_of(m w) + F)`, growing with the *table* size.
-pub const fn paper_operands(texel_bits: u32, width: usize, height: usize, frac_bits: u32) -> MulOperands {
-    let m = max_texel(texel_bits);
-    let a = bits_of(m * height as u128);
-    let b = bits_of(m * width as u128) + frac_bits;
-    MulOperands {
-        data_bits: if a > b { a } else { b },
-        frac_bits: frac_bits + 1,
+impl MulShape {
+    /// Whether this multiply fits a signed `p x q` hardware multiplier (e.g. an FPGA DSP block,
+    /// 18 x 18 or 18 x 25): unsigned operands need one extra bit each, in either orientation.
+    pub const fn fits_signed(&self, p: u32, q: u32) -> bool {
+        let (a, b) = (self.data_bits + 1, self.frac_bits + 1);
+        (a <= p && b <= q) || (a <= q && b <= p)
     }
 }
 
-/// Operand widths of [`crate::Stable`] for boxes of at most `max_side` texels per side: edge
-/// strips `<= m * (max_side + 1)` times a fraction (`F + 1` bits), and corner texels (`b` bits)
-/// times a product of two fractions (`2F + 1` bits). Bounded by the *box*, not the table.
-pub const fn stable_operands(texel_bits: u32, max_side: usize, frac_bits: u32) -> MulOperands {
-    let strip = bits_of(max_texel(texel_bits) * (max_side as u128 + 1));
-    MulOperands {
-        data_bits: if strip > texel_bits { strip } else { texel_bits },
-        frac_bits: 2 * frac_bits + 1,
-    }
+/// The multiplies of [`crate::Paper`] for a `w x h` table of `b`-bit texels at `F` bits:
+/// the first lerps multiply a column strip `S(i+1, j) - S(i, j) <= m h` by `A`; the second lerp
+/// multiplies `r1 - r0 = 2^F (row strip) + A t <= m w 2^F` by `B`. Both grow with the *table*.
+pub const fn paper_multiplies(
+    texel_bits: u32,
+    width: usize,
+    height: usize,
+    frac_bits: u32,
+) -> [MulShape; 2] {
+    let m = max_texel(texel_bits);
+    [
+        MulShape {
+            data_bits: bits_of(m * height as u128),
+            frac_bits: frac_bits + 1,
+        },
+        MulShape {
+            data_bits: bits_of(m * width as u128) + frac_bits,
+            frac_bits: frac_bits + 1,
+        },
+    ]
+}
+
+/// The multiplies of [`crate::Stable`] for boxes of at most `max_side` texels per side: edge
+/// strips `<= m (max_side + 1)` times one fraction, corner texels (`b` bits) times a product of
+/// two fractions, and the fraction products themselves. All bounded by the *box*.
+pub const fn stable_multiplies(texel_bits: u32, max_side: usize, frac_bits: u32) -> [MulShape; 3] {
+    [
+        MulShape {
+            data_bits: bits_of(max_texel(texel_bits) * (max_side as u128 + 1)),
+            frac_bits: frac_bits + 1,
+        },
+        MulShape {
+            data_bits: texel_bits,
+            frac_bits: 2 * frac_bits + 1,
+        },
+        MulShape {
+            data_bits: frac_bits + 1,
+            frac_bits: frac_bits + 1,
+        },
+    ]
 }
 
 #[cfg(test)]
@@ -175,6 +203,26 @@ mod tests {
             })
         );
         assert_eq!(entry_bits_naive(8, 4104, 4104), 33);
+    }
+
+    #[test]
+    fn multiplier_shapes() {
+        // 8-bit texels, F = 8: Paper at 256 x 256 needs a 24 x 9 multiply (fits 18 x 25 signed),
+        // at 1024 x 1024 a 26 x 9 one (does not); Stable for boxes up to 255 texels fits 18 x 18.
+        let p256 = paper_multiplies(8, 256, 256, 8);
+        assert_eq!(
+            p256[1],
+            MulShape {
+                data_bits: 24,
+                frac_bits: 9
+            }
+        );
+        assert!(p256.iter().all(|m| m.fits_signed(18, 25)));
+        let p1024 = paper_multiplies(8, 1024, 1024, 8);
+        assert_eq!(p1024[1].data_bits, 26);
+        assert!(!p1024[1].fits_signed(18, 25));
+        let s = stable_multiplies(8, 255, 8);
+        assert!(s.iter().all(|m| m.fits_signed(18, 18)), "{s:?}");
     }
 
     #[test]

@@ -51,7 +51,7 @@ pub trait Form: Copy + Default {
 ///
 /// Per box: 16 reads, 12 multiplies and 27 additive operations; the mean adds the area multiply
 /// and the divide: 14 multiplicative operations, Crow's count. Multiplier data operands grow with
-/// the *table*: see [`width::paper_operands`].
+/// the *table*: see [`width::paper_multiplies`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Paper;
 
@@ -64,7 +64,7 @@ pub struct Paper;
 /// where `Bint` is the sum over the integer box `[i0, i1) x [j0, j1)`, `L`/`Rt` the columns
 /// `i0`/`i1` and `T`/`Bm` the rows `j0`/`j1` restricted to the box, `t..` the corner texels and
 /// `A0, A1, B0, B1` the corner fractions. Multiplier data operands are bounded by the box's edge
-/// strips, not the table ([`width::stable_operands`]), and the accumulator by the box sum.
+/// strips, not the table ([`width::stable_multiplies`]), and the accumulator by the box sum.
 /// Per box: 16 reads, 12 multiplies, 31 additive operations (mean: 14 multiplicative).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stable;

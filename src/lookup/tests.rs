@@ -1,6 +1,8 @@
 //! Unit tests of the lookups against a direct sum (the full f64 comparisons live in host-tests).
 
-use crate::{Border, ClampToEdge, MirroredRepeat, NoCount, Paper, Rect, Repeat, Sat, Stable, Tally, Texture};
+use crate::{
+    Border, ClampToEdge, MirroredRepeat, NoCount, Paper, Rect, Repeat, Sat, Stable, Tally, Texture,
+};
 use fixed::types::I24F8;
 
 const W: usize = 5;
@@ -46,7 +48,9 @@ fn crow_counts() {
     let mut st = [0u32; W * H];
     let sat = Sat::build(&t, &mut st).unwrap();
     let mut k = Tally::new();
-    let s = sat.box_sum_int(&Rect::new(1, 1, 3, 3), Border, &mut k).unwrap();
+    let s = sat
+        .box_sum_int(&Rect::new(1, 1, 3, 3), Border, &mut k)
+        .unwrap();
     s.mean_rounded(0, 0, &mut k).unwrap();
     assert_eq!((k.reads, k.multiplicative(), k.adds), (4, 2, 3));
 
