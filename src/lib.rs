@@ -68,3 +68,13 @@ pub use rect::{Coord, Rect};
 pub use table::{RowStreamBuilder, Sat};
 pub use texel::{Entry, Texel};
 pub use texture::Texture;
+
+/// The default corner type: `F = 8` fractional bits, like a GPU's sub-texel precision
+/// (`fixed::types::I24F8`, range about +-8.4 million texels). Any `fixed` type whose raw bits fit
+/// `i64` works; its `FRAC_NBITS` is the `F` of the lookup.
+pub type DefaultCoord = fixed::types::I24F8;
+
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
