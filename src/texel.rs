@@ -27,7 +27,7 @@ impl Texel for u16 {
     const BITS: u32 = 16;
     #[inline(always)]
     fn to_u16(self) -> u16 {
-        self as u16
+        self
     }
 }
 

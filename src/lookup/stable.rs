@@ -80,7 +80,7 @@ impl Form for Stable {
         k.adds(15 * C as u32);
         k.muls(8 * C as u32);
         let mut out = [0u128; C];
-        for c in 0..C {
+        for (c, o) in out.iter_mut().enumerate() {
             let bint = (p11.s[c] - p10.s[c]) - (p01.s[c] - p00.s[c]);
             let right = p11.col[c] - p10.col[c];
             let left = p01.col[c] - p00.col[c];
@@ -89,7 +89,7 @@ impl Form for Stable {
             let edges = (a1 * right - a0 * left) + (b1 * bottom - b0 * top);
             let corners = (w11 * p11.texel[c] - w10 * p10.texel[c])
                 - (w01 * p01.texel[c] - w00 * p00.texel[c]);
-            out[c] = ((bint << (2 * f)) + (edges << f) + corners).to_i128() as u128;
+            *o = ((bint << (2 * f)) + (edges << f) + corners).to_i128() as u128;
         }
         out
     }
