@@ -100,6 +100,11 @@ pub enum Error {
     },
     /// The channel index is not below the channel count.
     NoSuchChannel,
+    /// Texel widths must be 1 to 16 bits.
+    InvalidTexelBits {
+        /// the width given
+        bits: u32,
+    },
 }
 
 impl fmt::Display for Quantity {
@@ -157,6 +162,9 @@ impl fmt::Display for Error {
                 write!(f, "build finished after {got} of {expected} rows")
             }
             Error::NoSuchChannel => write!(f, "channel index out of range"),
+            Error::InvalidTexelBits { bits } => {
+                write!(f, "texel width {bits} bits is outside 1..=16")
+            }
         }
     }
 }
