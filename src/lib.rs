@@ -52,6 +52,7 @@
 
 pub mod cost;
 pub mod edge;
+pub mod layouts;
 mod error;
 pub mod lookup;
 mod rect;
@@ -63,7 +64,8 @@ pub mod width;
 pub use cost::{Counter, NoCount, Tally};
 pub use edge::{Border, ClampToEdge, EdgeMode, MirroredRepeat, Repeat};
 pub use error::{Error, Quantity};
-pub use lookup::{BoxSum, Form, Paper, Shortcut, ShortcutMean, Stable};
+pub use layouts::Layout;
+pub use lookup::{BoxLookup, BoxSum, Form, Paper, Shortcut, ShortcutMean, Stable};
 pub use rect::{Coord, Rect};
 pub use table::{RowStreamBuilder, Sat};
 pub use texel::{Entry, Texel};

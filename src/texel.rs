@@ -27,7 +27,7 @@ impl Texel for u16 {
     const BITS: u32 = 16;
     #[inline(always)]
     fn to_u16(self) -> u16 {
-        self as u16
+        self
     }
 }
 
@@ -52,6 +52,15 @@ pub trait Acc:
     fn from_u32(v: u32) -> Self;
     /// Widen to `i128`.
     fn to_i128(self) -> i128;
+    /// Wrapping addition (used only where the width proof rules out wrapping, or where the
+    /// arithmetic is modular on purpose).
+    fn wrapping_add(self, o: Self) -> Self;
+    /// Wrapping subtraction (see [`Acc::wrapping_add`]).
+    fn wrapping_sub(self, o: Self) -> Self;
+    /// Wrapping multiplication (see [`Acc::wrapping_add`]).
+    fn wrapping_mul(self, o: Self) -> Self;
+    /// The low `k` bits, as a non-negative value (`k` below the type's width).
+    fn low_bits(self, k: u32) -> Self;
 }
 
 impl Acc for i64 {
@@ -65,6 +74,22 @@ impl Acc for i64 {
     fn to_i128(self) -> i128 {
         self as i128
     }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        i64::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        i64::wrapping_sub(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        i64::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn low_bits(self, k: u32) -> Self {
+        self & ((1 << k) - 1)
+    }
 }
 
 impl Acc for i128 {
@@ -77,6 +102,22 @@ impl Acc for i128 {
     #[inline(always)]
     fn to_i128(self) -> i128 {
         self
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        i128::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        i128::wrapping_sub(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        i128::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn low_bits(self, k: u32) -> Self {
+        self & ((1 << k) - 1)
     }
 }
 
@@ -96,6 +137,16 @@ pub trait Entry:
     fn to_acc(self) -> Self::Acc;
     /// The entry as `u128` (always lossless).
     fn to_u128(self) -> u128;
+    /// The low bits of a `u64` (a packed field of at most `BITS` bits).
+    fn from_u64_truncating(v: u64) -> Self;
+    /// The entry as `u64` (lossless for `u16`, `u32`, `u64`).
+    fn to_u64(self) -> u64;
+    /// Wrapping subtraction (modular layouts; elsewhere only where no wrap is possible).
+    fn wrapping_sub(self, o: Self) -> Self;
+    /// Wrapping addition (modular layouts).
+    fn wrapping_add(self, o: Self) -> Self;
+    /// The low `k` bits (`k <= BITS`).
+    fn low_bits(self, k: u32) -> Self;
 }
 
 macro_rules! impl_entry {
@@ -115,6 +166,30 @@ macro_rules! impl_entry {
             #[inline(always)]
             fn to_u128(self) -> u128 {
                 self as u128
+            }
+            #[inline(always)]
+            fn from_u64_truncating(v: u64) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn to_u64(self) -> u64 {
+                self as u64
+            }
+            #[inline(always)]
+            fn wrapping_sub(self, o: Self) -> Self {
+                <$t>::wrapping_sub(self, o)
+            }
+            #[inline(always)]
+            fn wrapping_add(self, o: Self) -> Self {
+                <$t>::wrapping_add(self, o)
+            }
+            #[inline(always)]
+            fn low_bits(self, k: u32) -> Self {
+                if k >= <$t>::BITS {
+                    self
+                } else {
+                    self & ((1 << k) - 1)
+                }
             }
         }
     };
