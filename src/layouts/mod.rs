@@ -27,9 +27,6 @@ use crate::texel::Entry;
 pub trait Layout<const C: usize> {
     /// The type corner values are returned in.
     type Value: Entry;
-    /// True if values are residues modulo `2^modulus_bits()` (see [`Modular`]): the lookups then
-    /// reduce every small difference modulo `2^k` and refuse boxes whose sums may reach `2^k`.
-    const MODULAR: bool = false;
     /// Width of the texture in texels.
     fn width(&self) -> usize;
     /// Height of the texture in texels.
@@ -39,9 +36,12 @@ pub trait Layout<const C: usize> {
     /// Bits of the largest corner value the lookups may see (the whole-texture sum; for a
     /// modular layout, `k`).
     fn value_bits(&self) -> u32;
-    /// `k` of a modular layout (values are `S mod 2^k`); ignored when `MODULAR` is false.
-    fn modulus_bits(&self) -> u32 {
-        <Self::Value as Entry>::BITS
+    /// `Some(k)` if values are residues modulo `2^k` (see [`Modular`]): the lookups then reduce
+    /// every box-bounded difference modulo `2^k` and refuse boxes whose sums may reach `2^k`.
+    /// `None` (the default) for layouts that store `S` itself.
+    #[inline(always)]
+    fn modulus(&self) -> Option<u32> {
+        None
     }
     /// Bits of storage the layout occupies (all channels), for bits per entry.
     fn storage_bits(&self) -> u64;

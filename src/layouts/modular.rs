@@ -5,7 +5,7 @@
 //! scene asks for, not on the texture size: `k = bits_of(m * A)` for boxes of at most `A`
 //! texels (`m = 2^b - 1`), e.g. 16 bits for 8-bit texels and boxes up to 16 x 16.
 //!
-//! The lookups know `k` ([`Layout::MODULAR`]) and refuse, with
+//! The lookups know `k` ([`Layout::modulus`]) and refuse, with
 //! `TooWide { what: ModularBox, .. }`, any box whose sum could reach `2^k`: the texel cells the
 //! box overlaps times `m`, plus `2F` bits for [`crate::Paper`] and the edge-mode weighted path,
 //! whose corner values are only known modulo `2^k` (the [`crate::Stable`] form reduces its
@@ -112,7 +112,6 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
 
 impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
     type Value = E;
-    const MODULAR: bool = true;
     fn width(&self) -> usize {
         self.width
     }
@@ -125,8 +124,8 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
     fn value_bits(&self) -> u32 {
         self.k
     }
-    fn modulus_bits(&self) -> u32 {
-        self.k
+    fn modulus(&self) -> Option<u32> {
+        Some(self.k)
     }
     fn storage_bits(&self) -> u64 {
         (self.width * self.height * C) as u64 * self.k as u64

@@ -126,3 +126,38 @@ fn tiled_counts_fields_and_words() {
     assert!(k.reads >= 4 && k.reads <= 8, "{k:?}");
     assert_eq!(k.adds, 3);
 }
+
+#[test]
+fn tiled_modular_combination() {
+    let (w, h) = (20usize, 18usize);
+    let tex = texture(w, h, 11);
+    let t = Texture::<u8>::new(&tex[..w * h], w, h).unwrap();
+    let mut flat_st = [0u32; 4096];
+    let flat = Sat::build(&t, &mut flat_st).unwrap();
+    let k = modulus_bits_for(8, 25); // boxes of up to 25 cells
+    for spec in [
+        TiledSpec::tiles(4, 4).unwrap().with_modulus(k),
+        TiledSpec::square(&[2, 6]).unwrap().with_modulus(k),
+    ] {
+        let mut words = [0u32; 4096];
+        let mut scratch = [0u16; 512];
+        // u16 values suffice: only k = 13 bits are ever held.
+        let l = Tiled::<u16>::build(&t, spec, &mut words, &mut scratch).unwrap();
+        assert!(l.bits_per_entry() < k as f64, "{}", l.bits_per_entry());
+        for x0 in 0..=w as i32 {
+            for x1 in x0..=w as i32 {
+                for (y0, y1) in [(0, 5), (3, 8), (13, 18), (7, 8), (0, 18)] {
+                    let r = Rect::new(x0, y0, x1, y1);
+                    let area = (x1 - x0) * (y1 - y0);
+                    let got = l.box_sum_int(&r, Border, &mut NoCount);
+                    if area <= 25 {
+                        let want = flat.box_sum_int(&r, Border, &mut NoCount).unwrap();
+                        assert_eq!(got.unwrap().sum(), want.sum(), "{spec:?} {r:?}");
+                    } else if (255 * area as u32) >= (1 << k) {
+                        assert!(got.is_err(), "{r:?}");
+                    }
+                }
+            }
+        }
+    }
+}

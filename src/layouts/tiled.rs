@@ -152,13 +152,17 @@ impl AxisLevels {
     }
 }
 
-/// The levels of both axes.
+/// The levels of both axes, and an optional modulus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TiledSpec {
     /// Levels along x.
     pub x: AxisLevels,
     /// Levels along y.
     pub y: AxisLevels,
+    /// `Some(k)`: every field is stored modulo `2^k` and capped at `k` bits (the tiled and
+    /// modular layouts combined: exact for boxes whose sums stay below `2^k`, see
+    /// [`super::Modular`]); `None`: exact for every box.
+    pub modulus: Option<u32>,
 }
 
 impl TiledSpec {
@@ -172,13 +176,21 @@ impl TiledSpec {
             Ok(v) => v,
             Err(e) => return Err(e),
         };
-        Ok(TiledSpec { x, y })
+        Ok(TiledSpec {
+            x,
+            y,
+            modulus: None,
+        })
     }
 
     /// The same block sizes on both axes.
     pub const fn square(blocks: &[u32]) -> Result<Self, Error> {
         match AxisLevels::new(blocks) {
-            Ok(a) => Ok(TiledSpec { x: a, y: a }),
+            Ok(a) => Ok(TiledSpec {
+                x: a,
+                y: a,
+                modulus: None,
+            }),
             Err(e) => Err(e),
         }
     }
@@ -187,7 +199,16 @@ impl TiledSpec {
     pub const FLAT_PACKED: TiledSpec = TiledSpec {
         x: AxisLevels::FLAT,
         y: AxisLevels::FLAT,
+        modulus: None,
     };
+
+    /// The same levels with every field stored modulo `2^k` (at most `k` bits).
+    pub const fn with_modulus(self, k: u32) -> Self {
+        TiledSpec {
+            modulus: Some(k),
+            ..self
+        }
+    }
 }
 
 const N: usize = MAX_LEVELS + 1;
@@ -224,6 +245,11 @@ impl Geometry {
         if width == 0 || height == 0 || channels == 0 {
             return Err(Error::EmptyTexture);
         }
+        if let Some(k) = spec.modulus {
+            if k < texel_bits || k == 0 || k > 64 {
+                return Err(Error::InvalidModulus { bits: k });
+            }
+        }
         if width > MAX_DIMENSION || height > MAX_DIMENSION {
             return Err(Error::TextureTooLarge {
                 dimension: width.max(height),
@@ -236,7 +262,10 @@ impl Geometry {
             for (q, comp) in row.iter_mut().enumerate().take(spec.y.components()) {
                 let (cx, cy) = (spec.x.count(p, width), spec.y.count(q, height));
                 let len = spec.x.max_len(p, width) as u128 * spec.y.max_len(q, height) as u128;
-                let bits = bits_of(m * len);
+                let mut bits = bits_of(m * len);
+                if let Some(k) = spec.modulus {
+                    bits = bits.min(k);
+                }
                 if bits > 64 {
                     return Err(Error::TooWide {
                         what: Quantity::Field,
@@ -262,6 +291,15 @@ impl Geometry {
             comps,
             total_bits: offset,
         })
+    }
+
+    /// The value type must hold the worst-case total, or `k` bits for a modular spec.
+    fn check_value_type<E: Entry>(&self) -> Result<(), Error> {
+        match self.spec.modulus {
+            Some(k) if k <= E::BITS => Ok(()),
+            Some(k) => Err(Error::InvalidModulus { bits: k }),
+            None => width::check_entry_worst_case(self.texel_bits, self.width, self.height, E::BITS),
+        }
     }
 
     fn words(&self) -> usize {
@@ -340,7 +378,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         texel_bits: u32,
     ) -> Result<Self, Error> {
         let geo = Geometry::new(spec, width, height, texel_bits, C)?;
-        width::check_entry_worst_case(texel_bits, width, height, E::BITS)?;
+        geo.check_value_type::<E>()?;
         if words.len() < geo.words() {
             return Err(Error::StorageTooSmall {
                 needed: geo.words(),
@@ -391,7 +429,13 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         self.geo.texel_bits
     }
     fn value_bits(&self) -> u32 {
-        width::entry_bits_worst_case(self.geo.texel_bits, self.geo.width, self.geo.height)
+        match self.geo.spec.modulus {
+            Some(k) => k,
+            None => width::entry_bits_worst_case(self.geo.texel_bits, self.geo.width, self.geo.height),
+        }
+    }
+    fn modulus(&self) -> Option<u32> {
+        self.geo.spec.modulus
     }
     fn storage_bits(&self) -> u64 {
         self.geo.total_bits
@@ -425,6 +469,11 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         if fields > 1 {
             k.adds((fields - 1) * C as u32);
         }
+        if let Some(m) = g.spec.modulus {
+            for o in out.iter_mut() {
+                *o = o.low_bits(m);
+            }
+        }
         out
     }
 }
@@ -451,7 +500,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         scratch: &'s mut [E],
     ) -> Result<Self, Error> {
         let geo = Geometry::new(spec, width, height, texel_bits, C)?;
-        width::check_entry_worst_case(texel_bits, width, height, E::BITS)?;
+        geo.check_value_type::<E>()?;
         if words.len() < geo.words() {
             return Err(Error::StorageTooSmall {
                 needed: geo.words(),
@@ -493,20 +542,28 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             bits_needed: E::BITS + 1,
             bits_available: E::BITS,
         };
+        let modulus = g.spec.modulus;
+        // Exact sums are checked; a modular spec needs them only modulo 2^k and wraps on purpose.
+        let add = |a: E, b: E| -> Result<E, Error> {
+            match modulus {
+                Some(_) => Ok(a.wrapping_add(b)),
+                None => a.checked_add(b).ok_or(overflow),
+            }
+        };
         let (prefix, accs) = self.scratch.split_at_mut(row);
         // The row's prefix sums P[X], X = 0..=n.
         let mut run = [E::ZERO; C];
         prefix[..C].fill(E::ZERO);
         for (x, t) in texels.chunks_exact(C).enumerate() {
             for c in 0..C {
-                run[c] = run[c].checked_add(E::from(t[c].to_u16())).ok_or(overflow)?;
+                run[c] = add(run[c], E::from(t[c].to_u16()))?;
                 prefix[(x + 1) * C + c] = run[c];
             }
         }
         // Every y component accumulates the row.
         for acc in accs.chunks_exact_mut(row) {
             for (a, &p) in acc.iter_mut().zip(prefix.iter()) {
-                *a = a.checked_add(p).ok_or(overflow)?;
+                *a = add(*a, p)?;
             }
         }
         let y = self.rows_done + 1;
@@ -528,7 +585,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                         let ix = g.spec.x.index(p, x);
                         let (offset, bits) = g.field_offset(p, q, ix, iy);
                         for c in 0..C {
-                            let v = acc[x * C + c] - acc[lo * C + c];
+                            let mut v = acc[x * C + c].wrapping_sub(acc[lo * C + c]);
+                            if let Some(m) = modulus {
+                                v = v.low_bits(m);
+                            }
                             if !write_bits(self.words, offset + (c as u32 * bits) as u64, bits, v.to_u64()) {
                                 return Err(Error::TooWide {
                                     what: Quantity::Field,

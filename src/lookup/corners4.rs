@@ -39,8 +39,8 @@ impl Form for Corners4 {
         let mut out = [0u128; C];
         for c in 0..C {
             let mut v = d[c].wrapping_sub(c_[c]).wrapping_sub(b_[c].wrapping_sub(a[c]));
-            if L::MODULAR {
-                v = v.low_bits(t.modulus_bits());
+            if let Some(m) = t.modulus() {
+                v = v.low_bits(m);
             }
             out[c] = v.to_u128();
         }

@@ -296,13 +296,12 @@ fn check_modular<L: Layout<C>, const C: usize>(
     f: u32,
     headroom: u32,
 ) -> Result<(), Error> {
-    if !L::MODULAR {
+    let Some(k) = layout.modulus() else {
         return Ok(());
-    }
+    };
     let m = width::max_texel(layout.texel_bits());
     let area = cells(b.x0, b.x1, f).saturating_mul(cells(b.y0, b.y1, f));
     let needed = bits_of(m.saturating_mul(area)) + headroom;
-    let k = layout.modulus_bits();
     if needed > k {
         return Err(Error::TooWide {
             what: Quantity::ModularBox,

@@ -67,8 +67,8 @@ impl Form for Paper {
             let mut v = v11[c]
                 .wrapping_sub(v10[c])
                 .wrapping_sub(v01[c].wrapping_sub(v00[c]));
-            if L::MODULAR {
-                v = v.low_bits(t.modulus_bits());
+            if let Some(m) = t.modulus() {
+                v = v.low_bits(m);
             }
             out[c] = v.to_i128() as u128;
         }

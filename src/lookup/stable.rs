@@ -84,13 +84,12 @@ impl Form for Stable {
         // and corner 4 multiplies.
         k.adds(15 * C as u32);
         k.muls(8 * C as u32);
-        let modulus = t.modulus_bits();
+        let modulus = t.modulus();
         // The box-bounded quantities: exact values on every layout.
         let small = |v: L::Value| -> <L::Value as Entry>::Acc {
-            if L::MODULAR {
-                v.low_bits(modulus).to_acc()
-            } else {
-                v.to_acc()
+            match modulus {
+                Some(m) => v.low_bits(m).to_acc(),
+                None => v.to_acc(),
             }
         };
         let mut out = [0u128; C];

@@ -32,6 +32,7 @@ pub(crate) fn sum<M: EdgeMode, L: Layout<C>, K: Counter, const C: usize>(
     k: &mut K,
 ) -> Result<[u128; C], Error> {
     let (w, h) = (t.width(), t.height());
+    let modulus = t.modulus();
     let xs = [M::axis_terms(b.x0, w, f), M::axis_terms(b.x1, w, f)];
     let ys = [M::axis_terms(b.y0, h, f), M::axis_terms(b.y1, h, f)];
     let mut acc = [0i128; C];
@@ -44,7 +45,7 @@ pub(crate) fn sum<M: EdgeMode, L: Layout<C>, K: Counter, const C: usize>(
                     let e = t.corner(cx, cy, k);
                     k.muls(1 + C as u32);
                     k.adds(C as u32);
-                    if L::MODULAR {
+                    if modulus.is_some() {
                         let weight = wx.wrapping_mul(wy);
                         for c in 0..C {
                             let term = weight.wrapping_mul(e[c].to_u128() as i128);
@@ -74,8 +75,8 @@ pub(crate) fn sum<M: EdgeMode, L: Layout<C>, K: Counter, const C: usize>(
     }
     let mut out = [0u128; C];
     for c in 0..C {
-        out[c] = if L::MODULAR {
-            (acc[c] as u128) & ((1u128 << t.modulus_bits()) - 1)
+        out[c] = if let Some(m) = modulus {
+            (acc[c] as u128) & ((1u128 << m) - 1)
         } else {
             // The extended texture is non-negative, so a proper box integral is >= 0.
             u128::try_from(acc[c]).map_err(|_| overflow())?
