@@ -6,7 +6,8 @@
 //! Bits per entry are computed from the layout's actual storage (words x 32 / texels); reads are
 //! counted with `Tally` over random boxes of a random 8-bit texture built into each layout
 //! (integer corners: the 4-corner lookup; fractional corners at F = 8: the 16-corner Stable
-//! lookup). "Reads" are 32-bit words touched.
+//! lookup). A "read" is one table value fetched (a field, all channels); "words" are the 32-bit
+//! memory words those reads touch.
 
 use fixed::types::I24F8;
 use plotters::prelude::*;
@@ -33,6 +34,7 @@ struct Row {
     bits: f64,
     reads_int: f64,
     reads_int_max: u64,
+    words_int: f64,
     reads_frac: f64,
     adds_int: f64,
 }
@@ -47,7 +49,7 @@ fn measure<L: BoxLookup<1>>(
 ) -> Row {
     let (w, h) = (l.width() as u64, l.height() as u64);
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-    let (mut ri, mut rmax, mut rf, mut ai) = (0u64, 0u64, 0u64, 0u64);
+    let (mut ri, mut rmax, mut rf, mut ai, mut wi) = (0u64, 0u64, 0u64, 0u64, 0u64);
     for _ in 0..boxes {
         let bw = 1 + rng.below(max_side.min(w - 1));
         let bh = 1 + rng.below(max_side.min(h - 1));
@@ -58,6 +60,7 @@ fn measure<L: BoxLookup<1>>(
         let s = l.box_sum_int(&r, Border, &mut t).expect("in-range box");
         assert_eq!(s, flat.box_sum_int(&r, Border, &mut NoCount).unwrap());
         ri += t.reads;
+        wi += t.words;
         ai += t.adds;
         rmax = rmax.max(t.reads);
         let fr = Rect::new(
@@ -78,6 +81,7 @@ fn measure<L: BoxLookup<1>>(
         bits: l.bits_per_entry(),
         reads_int: ri as f64 / n,
         reads_int_max: rmax,
+        words_int: wi as f64 / n,
         reads_frac: rf as f64 / n,
         adds_int: ai as f64 / n,
     }
@@ -103,7 +107,7 @@ fn main() {
     let out = arg("--out").unwrap_or_else(|| "target/layouts".into());
     std::fs::create_dir_all(&out).expect("output folder");
     let mut md = String::new();
-    let mut plot_points: Vec<(usize, String, f64, f64)> = Vec::new();
+    let mut plot_points: Vec<(usize, String, f64, f64, bool)> = Vec::new();
     for &n in &sizes {
         let mut rng = Rng(n as u64 * 7919);
         let texels: Vec<u8> = (0..n * n).map(|_| rng.next() as u8).collect();
@@ -171,23 +175,24 @@ fn main() {
         let _ = writeln!(md, "\n### {n} x {n}, 8-bit texels\n");
         let _ = writeln!(
             md,
-            "| layout | bits per entry | memory vs texture | reads per 4-corner box (mean / max) | adds per 4-corner box | reads per 16-corner box (mean) | exact for |"
+            "| layout | bits per entry | memory vs texture | reads per 4-corner box (mean / max) | 32-bit words per 4-corner box | adds per 4-corner box | reads per 16-corner box | exact for |"
         );
-        let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+        let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
         for r in &rows {
             let _ = writeln!(
                 md,
-                "| {} | {:.3} | {:.2} | {:.2} / {} | {:.2} | {:.2} | {} |",
+                "| {} | {:.3} | {:.2} | {:.2} / {} | {:.2} | {:.2} | {:.2} | {} |",
                 r.name,
                 r.bits,
                 r.bits / 8.0,
                 r.reads_int,
                 r.reads_int_max,
+                r.words_int,
                 r.adds_int,
                 r.reads_frac,
                 r.exact
             );
-            plot_points.push((n, r.name.clone(), r.bits, r.reads_int));
+            plot_points.push((n, r.name.clone(), r.bits, r.reads_int, r.exact == "every box"));
         }
         eprintln!("{n} x {n} done");
     }
@@ -196,9 +201,10 @@ fn main() {
     plot(&format!("{out}/layouts_pareto.svg"), &plot_points, &sizes);
 }
 
-/// Bits per entry (x) against mean reads per 4-corner box (y), one series per size, with each
-/// size's Pareto front drawn.
-fn plot(path: &str, pts: &[(usize, String, f64, f64)], sizes: &[usize]) {
+/// Bits per entry (x) against mean reads per 4-corner box (y), one colour per size: circles for
+/// layouts exact for every box (with each size's Pareto front), triangles for layouts exact only
+/// for bounded boxes (modular).
+fn plot(path: &str, pts: &[(usize, String, f64, f64, bool)], sizes: &[usize]) {
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).unwrap();
     let ymax = pts.iter().map(|p| p.3).fold(0.0, f64::max) * 1.1;
@@ -212,7 +218,7 @@ fn plot(path: &str, pts: &[(usize, String, f64, f64)], sizes: &[usize]) {
     chart
         .configure_mesh()
         .x_desc("bits per entry (8-bit texels)")
-        .y_desc("32-bit words read per integer-corner box (mean)")
+        .y_desc("reads per integer-corner box (mean)")
         .draw()
         .unwrap();
     let colors = [RED, BLUE, GREEN];
@@ -220,12 +226,26 @@ fn plot(path: &str, pts: &[(usize, String, f64, f64)], sizes: &[usize]) {
         let c = colors[si % colors.len()];
         let mine: Vec<_> = pts.iter().filter(|p| p.0 == n).collect();
         chart
-            .draw_series(mine.iter().map(|p| Circle::new((p.2, p.3), 4, c.filled())))
+            .draw_series(
+                mine.iter()
+                    .filter(|p| p.4)
+                    .map(|p| Circle::new((p.2, p.3), 4, c.filled())),
+            )
             .unwrap()
-            .label(format!("{n} x {n}"))
+            .label(format!("{n} x {n} (exact for every box; line: Pareto front)"))
             .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
-        // Pareto front: sorted by bits, keep points with fewer reads than every cheaper-in-bits one.
-        let mut sorted: Vec<(f64, f64)> = mine.iter().map(|p| (p.2, p.3)).collect();
+        chart
+            .draw_series(
+                mine.iter()
+                    .filter(|p| !p.4)
+                    .map(|p| TriangleMarker::new((p.2, p.3), 6, c.filled())),
+            )
+            .unwrap()
+            .label(format!("{n} x {n} (exact for bounded boxes)"))
+            .legend(move |(x, y)| TriangleMarker::new((x, y), 6, c.filled()));
+        // Pareto front of the layouts exact for every box: sorted by bits, keep points with fewer
+        // reads than every point with fewer bits.
+        let mut sorted: Vec<(f64, f64)> = mine.iter().filter(|p| p.4).map(|p| (p.2, p.3)).collect();
         sorted.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
         let mut front = Vec::new();
         let mut best = f64::INFINITY;

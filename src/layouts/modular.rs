@@ -139,7 +139,8 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
         let entry = ((y - 1) * self.width + (x - 1)) as u64;
         let offset = entry * C as u64 * self.k as u64;
         let span = (offset % WORD_BITS as u64) as u32 + self.k * C as u32;
-        k.reads(span.div_ceil(WORD_BITS), WORD_BITS);
+        k.reads(1, self.k * C as u32);
+        k.words(span.div_ceil(WORD_BITS));
         for (c, o) in out.iter_mut().enumerate() {
             *o = E::from_u64_truncating(
                 read_bits(self.words, offset + (c as u32 * self.k) as u64, self.k).0,

@@ -457,7 +457,8 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
                 let iy = g.spec.y.index(q, g.spec.y.trunc(q, y));
                 let (offset, bits) = g.field_offset(p, q, ix, iy);
                 let span = (offset % WORD_BITS as u64) as u32 + bits * C as u32;
-                k.reads(span.div_ceil(WORD_BITS), WORD_BITS);
+                k.reads(1, bits * C as u32);
+                k.words(span.div_ceil(WORD_BITS));
                 for (c, o) in out.iter_mut().enumerate() {
                     let (v, _) = read_bits(self.words, offset + (c as u32 * bits) as u64, bits);
                     // Sums of parts of S: no wrap on a valid layout (E holds the total).
