@@ -1,1 +1,612 @@
-fn main() {}
+//! `sat`: summed-area tables of image files from the command line.
+//!
+//! ```text
+//! sat info IMAGE [--entry u16|u32|u64] [--checked]       one JSON object about the table
+//! sat query IMAGE [--frac-bits F] [--edge MODE] [--form paper|stable] ...
+//!                                                         box queries on stdin, JSON lines out
+//! sat demo                                                a guided tour on a generated texture
+//! ```
+//!
+//! Run `sat help <command>` for the details of each command; `cargo run --example sat -- demo`
+//! for the tour.
+
+#[path = "sat/demo.rs"]
+mod demo;
+#[path = "sat/load.rs"]
+mod load;
+#[path = "sat/num.rs"]
+mod num;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use fixed::traits::Fixed;
+use fixed::types::extra::{
+    U1, U10, U11, U12, U13, U14, U15, U16, U17, U18, U19, U2, U20, U21, U22, U23, U24, U3, U4, U5,
+    U6, U7, U8, U9,
+};
+use fixed::FixedI64;
+use load::{channel_totals, with_texture, TextureJob};
+use num::{fixed_decimal, parse_fixed, Inexact};
+use serde_json::{json, Value};
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use texsat::texel::Acc;
+use texsat::width::{self, bits_of};
+use texsat::{
+    Border, BoxSum, ClampToEdge, EdgeMode, Entry, Error, Form, MirroredRepeat, Paper, Rect, Repeat,
+    Sat, Stable, Tally, Texel, Texture,
+};
+
+#[derive(Parser)]
+#[command(
+    name = "sat",
+    version,
+    about = "Summed-area tables (Crow 1984) of PNG/PNM images: table sizes, exact box sums and means, lookup costs",
+    long_about = None
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print one JSON object describing IMAGE's summed-area table (sizes and widths).
+    #[command(after_long_help = INFO_HELP)]
+    Info(InfoArgs),
+    /// Answer box queries "x0 y0 x1 y1" read from stdin with one JSON object per line.
+    #[command(after_long_help = QUERY_HELP)]
+    Query(QueryArgs),
+    /// Build the table of a generated 256 x 256 texture and walk through sizes, lookups and costs.
+    Demo,
+}
+
+const INFO_HELP: &str = "\
+Output fields: width, height, channels, texel_bits, texel_type, bits_needed_worst_case
+(bits of (2^b - 1) * w * h, what `Sat::build` proves before it writes), bits_needed_naive
+(b + ceil(log2(w * h)), the textbook bound, for comparison), bits_needed_actual (bits of the
+largest per-channel whole-texture sum of this image), entry_type, entry_bits, bits_per_entry
+(= entry_bits: one entry holds one channel of one texel), bits_per_texel (entry_bits x
+channels), table_entries, table_bytes, layout (\"flat\": row-major, channels interleaved, entry
+(i, j) = sum of texels (i', j') with i' <= i and j' <= j), build (\"worst_case\" or \"checked\"),
+totals (per-channel whole-texture sums as decimal strings; an array when channels > 1).
+
+If the entry type is too narrow (the worst case with the default build, the actual sums with
+--checked), nothing is printed on stdout; the reason, with the bits needed and available, goes to
+stderr and the exit status is 1.";
+
+const QUERY_HELP: &str = "\
+INPUT: one box per line, \"x0 y0 x1 y1\" separated by blanks: the box [x0, x1) x [y0, y1) in
+texel units (x to the right, y down; texel (i, j) covers [i, i+1) x [j, j+1)). Coordinates are
+decimals such as 3, -1.25 or 0.375, parsed exactly (never through floating point). A coordinate
+that is not a multiple of 2^-F is an error unless --round is given. Empty lines and lines starting
+with '#' are skipped.
+
+OUTPUT: per input line, one JSON object:
+  {\"sum\": \"<exact>\", \"mean\": \"<decimal>\", \"lookup\": \"int4|paper|stable\",
+   \"reads\": R, \"bits_read\": B, \"muls\": M, \"divs\": D, \"adds\": A}
+sum is the exact integral of the texture over the box (a multiple of 2^-2F, printed with all its
+digits). mean is sum / area rounded to the nearest multiple of 2^-G (ties away from zero), G =
+--mean-bits, printed exactly; it is within 2^-(G+1) of the exact mean. With the border mode the
+area is the unclipped box's (outside counts as 0). A zero-area box has sum \"0\" and mean null.
+For images with several channels, sum and mean are arrays with one string per channel. Sums and
+means are strings because they can exceed 2^53.
+The counts are Crow's (1984, section 2.2), tallied over the lookup and the mean: reads of table
+entries (all channels together), multiplies, divides and additive operations (per channel).
+Interior boxes cost 4 reads, 1 mul, 1 div and 3 adds with integer corners (F = 0) and 16 reads,
+13 muls, 1 div, 27 adds (paper) or 31 adds (stable) with F > 0; with C channels, 12C + 1 muls
+(paper), C divs and 3C or 27C adds. The corner function's row y = 0 and column x = 0 are zero and
+cost no read, so boxes touching the first texel row or column read fewer entries; boxes
+straddling the texture edge under clamp, repeat or mirror take a weighted path with other counts.
+
+F = 0 uses the 4-read integer lookup (coordinates must be integers). F > 0 uses the 16-read
+lookup in the chosen --form for every box, integer corners included (as fixed-point hardware
+would), unless --int4 is given.
+
+A line that cannot be answered (wrong number of fields, not a number, not representable at F
+bits, inverted box, too wide for the accumulator, ...) gives {\"error\": \"...\", \"line\": N} and the
+following lines are still answered; the exit status is then 1. A table that cannot be built, or a
+lookup width that the entry type can never satisfy, is reported on stderr before any input is
+read (exit status 1).";
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum EntryArg {
+    U16,
+    U32,
+    U64,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum EdgeArg {
+    /// Zero outside the texture; the mean divides by the unclipped area.
+    Border,
+    /// Coordinates clamp to the edge texels.
+    Clamp,
+    /// The texture repeats.
+    Repeat,
+    /// The texture repeats, every other copy reflected.
+    Mirror,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum FormArg {
+    /// Crow's bilinear interpolation of the table at each corner (16 reads, 27 adds).
+    Paper,
+    /// Differences first; multiplier operands bounded by the box (16 reads, 31 adds).
+    Stable,
+}
+
+#[derive(Args)]
+struct TableArgs {
+    /// PNG or PNM (PGM, PPM, PAM, PBM) file; 8- or 16-bit samples, 1 to 4 channels.
+    image: PathBuf,
+    /// Table entry type (bits per entry and channel).
+    #[arg(long, value_enum, default_value_t = EntryArg::U32)]
+    entry: EntryArg,
+    /// Build with checked additions (`Sat::build_checked`): accept any image whose actual sums
+    /// fit the entry type, instead of proving the worst case first (`Sat::build`).
+    #[arg(long)]
+    checked: bool,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    #[command(flatten)]
+    table: TableArgs,
+}
+
+#[derive(Args)]
+struct QueryArgs {
+    #[command(flatten)]
+    table: TableArgs,
+    /// Fractional bits F of the corner coordinates (0 to 24). F = 0: integer corners, 4 reads.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=24))]
+    frac_bits: u32,
+    /// Boundary mode for boxes reaching outside the texture.
+    #[arg(long, value_enum, default_value_t = EdgeArg::Border)]
+    edge: EdgeArg,
+    /// Formulation of the 16-read lookup (F > 0).
+    #[arg(long, value_enum, default_value_t = FormArg::Paper)]
+    form: FormArg,
+    /// Round coordinates to the nearest multiple of 2^-F (ties toward +infinity) instead of
+    /// refusing those that are not representable.
+    #[arg(long)]
+    round: bool,
+    /// Fractional bits G of the printed mean (0 to 120) [default: min(2F + 8, 40)].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=120))]
+    mean_bits: Option<u32>,
+    /// With F > 0, answer boxes whose four coordinates are integers by the 4-read lookup.
+    #[arg(long)]
+    int4: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info(args) => info(&args),
+        Command::Query(args) => query(&args),
+        Command::Demo => demo::run(),
+    };
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::FAILURE,
+        Err(msg) => {
+            eprintln!("sat: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Building the table
+
+/// Code generic over the entry type and the channel count, run on a built table.
+trait SatJob {
+    type Out;
+    fn run<E: Entry, const C: usize>(self, sat: &Sat<'_, E, C>) -> Self::Out;
+}
+
+fn entry_name(e: EntryArg) -> &'static str {
+    match e {
+        EntryArg::U16 => "u16",
+        EntryArg::U32 => "u32",
+        EntryArg::U64 => "u64",
+    }
+}
+
+/// Builds the table of `texture` with entry type `entry` and runs `job` on it.
+fn with_sat<T: Texel, const C: usize, J: SatJob>(
+    texture: &Texture<'_, T, C>,
+    entry: EntryArg,
+    checked: bool,
+    job: J,
+) -> Result<J::Out, Error> {
+    fn go<T: Texel, E: Entry, const C: usize, J: SatJob>(
+        texture: &Texture<'_, T, C>,
+        checked: bool,
+        job: J,
+    ) -> Result<J::Out, Error> {
+        let mut storage = vec![E::ZERO; texture.width() * texture.height() * C];
+        let sat = if checked {
+            Sat::build_checked(texture, &mut storage)?
+        } else {
+            Sat::build(texture, &mut storage)?
+        };
+        Ok(job.run(&sat))
+    }
+    match entry {
+        EntryArg::U16 => go::<T, u16, C, J>(texture, checked, job),
+        EntryArg::U32 => go::<T, u32, C, J>(texture, checked, job),
+        EntryArg::U64 => go::<T, u64, C, J>(texture, checked, job),
+    }
+}
+
+/// The message for a refused build: the crate's reason, the numbers behind it, and what to do.
+fn refusal<T: Texel, const C: usize>(
+    texture: &Texture<'_, T, C>,
+    args: &TableArgs,
+    err: Error,
+) -> String {
+    let (w, h, b) = (texture.width(), texture.height(), T::BITS);
+    let actual = channel_totals(texture)
+        .iter()
+        .map(|&t| bits_of(t))
+        .max()
+        .unwrap_or(0);
+    let mut msg = format!(
+        "cannot build the table with {} entries: {err}",
+        entry_name(args.entry)
+    );
+    if let Error::TooWide { bits_needed, .. } = err {
+        let wider = [EntryArg::U16, EntryArg::U32, EntryArg::U64]
+            .into_iter()
+            .find(|&e| entry_bits(e) >= bits_needed)
+            .map_or("no entry type is wide enough".to_string(), |e| {
+                format!("use --entry {}", entry_name(e))
+            });
+        if args.checked {
+            msg +=
+                &format!(" (this texture's largest channel sum needs {bits_needed} bits); {wider}");
+        } else {
+            let worst = width::worst_case_total(b, w, h);
+            msg += &format!(
+                " (worst case for {w} x {h} texels of {b} bits: (2^{b} - 1) x {w} x {h} = {worst}); \
+                 {wider}"
+            );
+            if actual <= entry_bits(args.entry) {
+                msg += &format!(", or --checked (this texture's sums need only {actual} bits)");
+            }
+        }
+    }
+    msg
+}
+
+fn entry_bits(e: EntryArg) -> u32 {
+    match e {
+        EntryArg::U16 => 16,
+        EntryArg::U32 => 32,
+        EntryArg::U64 => 64,
+    }
+}
+
+/// Strings for per-channel values: a string for one channel, an array for several.
+fn per_channel<const C: usize>(values: [u128; C], k: u32) -> Value {
+    if C == 1 {
+        Value::String(fixed_decimal(values[0], k))
+    } else {
+        Value::Array(
+            values
+                .iter()
+                .map(|&v| Value::String(fixed_decimal(v, k)))
+                .collect(),
+        )
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// sat info
+
+fn info(args: &InfoArgs) -> Result<bool, String> {
+    let img = load::load(&args.table.image)?;
+    let json = with_texture(&img, InfoJob { args: &args.table })??;
+    println!("{json}");
+    Ok(true)
+}
+
+struct InfoJob<'a> {
+    args: &'a TableArgs,
+}
+
+impl TextureJob for InfoJob<'_> {
+    type Out = Result<Value, String>;
+    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        let totals = channel_totals(texture);
+        let job = InfoSatJob {
+            args: self.args,
+            texel_bits: T::BITS,
+            totals,
+        };
+        with_sat(texture, self.args.entry, self.args.checked, job)
+            .map_err(|e| refusal(texture, self.args, e))?
+    }
+}
+
+struct InfoSatJob<'a, const N: usize> {
+    args: &'a TableArgs,
+    texel_bits: u32,
+    totals: [u128; N],
+}
+
+impl<const N: usize> SatJob for InfoSatJob<'_, N> {
+    type Out = Result<Value, String>;
+    fn run<E: Entry, const C: usize>(self, sat: &Sat<'_, E, C>) -> Self::Out {
+        let (w, h, b) = (sat.width(), sat.height(), self.texel_bits);
+        let table_totals: Vec<u128> = sat.total().iter().map(|t| t.to_u128()).collect();
+        if table_totals[..] != self.totals[..] {
+            return Err(format!(
+                "internal error: table totals {table_totals:?} differ from the texel sums {:?}",
+                self.totals
+            ));
+        }
+        let mut totals = [0u128; C];
+        totals.copy_from_slice(&table_totals);
+        Ok(json!({
+            "width": w,
+            "height": h,
+            "channels": C,
+            "texel_bits": b,
+            "texel_type": if b == 8 { "u8" } else { "u16" },
+            "bits_needed_worst_case": width::entry_bits_worst_case(b, w, h),
+            "bits_needed_naive": width::entry_bits_naive(b, w, h),
+            "bits_needed_actual": sat.total_bits(),
+            "entry_type": entry_name(self.args.entry),
+            "entry_bits": E::BITS,
+            "bits_per_entry": E::BITS,
+            "bits_per_texel": E::BITS * C as u32,
+            "table_entries": sat.entries().len(),
+            "table_bytes": sat.table_bytes(),
+            "layout": "flat",
+            "build": if self.args.checked { "checked" } else { "worst_case" },
+            "totals": per_channel(totals, 0),
+        }))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// sat query
+
+struct QueryOpts {
+    frac_bits: u32,
+    mean_bits: u32,
+    edge: EdgeArg,
+    form: FormArg,
+    inexact: Inexact,
+    int4: bool,
+}
+
+fn query(args: &QueryArgs) -> Result<bool, String> {
+    let f = args.frac_bits;
+    let opts = QueryOpts {
+        frac_bits: f,
+        mean_bits: args.mean_bits.unwrap_or((2 * f + 8).min(40)),
+        edge: args.edge,
+        form: args.form,
+        inexact: if args.round {
+            Inexact::Round
+        } else {
+            Inexact::Refuse
+        },
+        int4: args.int4,
+    };
+    let img = load::load(&args.table.image)?;
+    with_texture(
+        &img,
+        QueryJob {
+            args: &args.table,
+            opts: &opts,
+        },
+    )?
+}
+
+struct QueryJob<'a> {
+    args: &'a TableArgs,
+    opts: &'a QueryOpts,
+}
+
+impl TextureJob for QueryJob<'_> {
+    type Out = Result<bool, String>;
+    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        let job = QuerySatJob { opts: self.opts };
+        with_sat(texture, self.args.entry, self.args.checked, job)
+            .map_err(|e| refusal(texture, self.args, e))?
+    }
+}
+
+struct QuerySatJob<'a> {
+    opts: &'a QueryOpts,
+}
+
+impl SatJob for QuerySatJob<'_> {
+    type Out = Result<bool, String>;
+    fn run<E: Entry, const C: usize>(self, sat: &Sat<'_, E, C>) -> Self::Out {
+        let o = self.opts;
+        // The in-range 16-read lookups refuse a table whose sums, scaled by 2^2F, overflow the
+        // accumulator; say so once, before reading any input, rather than on every line.
+        if o.frac_bits > 0 {
+            let (name, needed) = match o.form {
+                FormArg::Paper => ("paper", Paper::acc_bits(sat.total_bits(), o.frac_bits)),
+                FormArg::Stable => ("stable", Stable::acc_bits(sat.total_bits(), o.frac_bits)),
+            };
+            let available = <E::Acc as Acc>::VALUE_BITS;
+            if needed > available {
+                return Err(format!(
+                    "the {name} lookup at F = {} needs a {needed}-bit accumulator for this table \
+                     (sums of {} bits, scaled by 2^{}), but lookups on {}-bit entries accumulate \
+                     in i{} ({available} value bits); use a wider --entry or fewer --frac-bits",
+                    o.frac_bits,
+                    sat.total_bits(),
+                    2 * o.frac_bits,
+                    E::BITS,
+                    available + 1
+                ));
+            }
+        }
+        let stdin = std::io::stdin();
+        let mut input = stdin.lock();
+        let stdout = std::io::stdout();
+        let mut out = stdout.lock();
+        let mut buf = Vec::new();
+        let mut line_no = 0usize;
+        let mut all_ok = true;
+        loop {
+            buf.clear();
+            let n = input
+                .read_until(b'\n', &mut buf)
+                .map_err(|e| format!("reading stdin: {e}"))?;
+            if n == 0 {
+                break;
+            }
+            line_no += 1;
+            let answer = match std::str::from_utf8(&buf) {
+                Err(_) => Some(Err("line is not valid UTF-8".to_string())),
+                Ok(line) => {
+                    let line = line.trim();
+                    if line.is_empty() || line.starts_with('#') {
+                        None
+                    } else {
+                        Some(answer_line(sat, o, line))
+                    }
+                }
+            };
+            let json = match answer {
+                None => continue,
+                Some(Ok(v)) => v,
+                Some(Err(msg)) => {
+                    all_ok = false;
+                    json!({ "error": msg, "line": line_no })
+                }
+            };
+            writeln!(out, "{json}").map_err(|e| format!("writing stdout: {e}"))?;
+        }
+        out.flush().map_err(|e| format!("writing stdout: {e}"))?;
+        Ok(all_ok)
+    }
+}
+
+/// One query line: parse, look up, take the mean, format.
+fn answer_line<E: Entry, const C: usize>(
+    sat: &Sat<'_, E, C>,
+    o: &QueryOpts,
+    line: &str,
+) -> Result<Value, String> {
+    let fields: Vec<&str> = line.split_whitespace().collect();
+    if fields.len() != 4 {
+        return Err(format!(
+            "expected 4 numbers \"x0 y0 x1 y1\", got {} field{}",
+            fields.len(),
+            if fields.len() == 1 { "" } else { "s" }
+        ));
+    }
+    let mut raw = [0i64; 4];
+    for ((r, s), name) in raw.iter_mut().zip(&fields).zip(["x0", "y0", "x1", "y1"]) {
+        *r = parse_fixed(s, o.frac_bits, o.inexact).map_err(|e| format!("{name}: {e}"))?;
+    }
+    let mut tally = Tally::new();
+    let (sum, lookup) = lookup(sat, o, raw, &mut tally)?;
+    let mean = match sum.means_rounded(o.mean_bits, &mut tally) {
+        Ok(m) => per_channel(m, o.mean_bits),
+        Err(Error::ZeroArea) => Value::Null,
+        Err(e) => return Err(format!("mean: {e} (try fewer --mean-bits)")),
+    };
+    Ok(json!({
+        "sum": per_channel(sum.scaled_sums(), 2 * sum.frac_bits()),
+        "mean": mean,
+        "lookup": lookup,
+        "reads": tally.reads,
+        "bits_read": tally.bits_read,
+        "muls": tally.muls,
+        "divs": tally.divs,
+        "adds": tally.adds,
+    }))
+}
+
+type Looked<const C: usize> = Result<(BoxSum<C>, &'static str), String>;
+
+/// Dispatches on the boundary mode and the formulation (zero-sized types in the crate).
+fn lookup<E: Entry, const C: usize>(
+    sat: &Sat<'_, E, C>,
+    o: &QueryOpts,
+    raw: [i64; 4],
+    k: &mut Tally,
+) -> Looked<C> {
+    fn by_form<E: Entry, const C: usize, M: EdgeMode>(
+        sat: &Sat<'_, E, C>,
+        o: &QueryOpts,
+        raw: [i64; 4],
+        m: M,
+        k: &mut Tally,
+    ) -> Looked<C> {
+        match o.form {
+            FormArg::Paper => lookup_in::<E, C, M, Paper>(sat, o.frac_bits, o.int4, raw, m, k),
+            FormArg::Stable => lookup_in::<E, C, M, Stable>(sat, o.frac_bits, o.int4, raw, m, k),
+        }
+    }
+    match o.edge {
+        EdgeArg::Border => by_form(sat, o, raw, Border, k),
+        EdgeArg::Clamp => by_form(sat, o, raw, ClampToEdge, k),
+        EdgeArg::Repeat => by_form(sat, o, raw, Repeat, k),
+        EdgeArg::Mirror => by_form(sat, o, raw, MirroredRepeat, k),
+    }
+}
+
+/// The lookup proper: the 4-read integer lookup at `F = 0` (or for integer boxes with `--int4`),
+/// else the 16-read lookup with corners of the `fixed` type `FixedI64<U{F}>`.
+fn lookup_in<E: Entry, const C: usize, M: EdgeMode, Fm: Form>(
+    sat: &Sat<'_, E, C>,
+    f: u32,
+    int4: bool,
+    raw: [i64; 4],
+    mode: M,
+    k: &mut Tally,
+) -> Looked<C> {
+    let integer = raw.iter().all(|&v| v & ((1i64 << f) - 1) == 0);
+    if f == 0 || (int4 && integer) {
+        let mut c = [0i32; 4];
+        for (ci, &r) in c.iter_mut().zip(&raw) {
+            *ci = i32::try_from(r >> f).map_err(|_| {
+                format!(
+                    "coordinate {} is outside the integer lookup's range (i32)",
+                    r >> f
+                )
+            })?;
+        }
+        let r = Rect::new(c[0], c[1], c[2], c[3]);
+        return sat
+            .box_sum_int(&r, mode, k)
+            .map(|s| (s, "int4"))
+            .map_err(|e| e.to_string());
+    }
+    fn at<X: Fixed<Bits = i64>, E: Entry, const C: usize, M: EdgeMode, Fm: Form>(
+        sat: &Sat<'_, E, C>,
+        raw: [i64; 4],
+        mode: M,
+        k: &mut Tally,
+    ) -> Result<BoxSum<C>, Error> {
+        let [x0, y0, x1, y1] = raw.map(X::from_bits);
+        sat.box_sum(&Rect::new(x0, y0, x1, y1), Fm::default(), mode, k)
+    }
+    macro_rules! by_frac_bits {
+        ($($n:literal => $u:ident),* $(,)?) => {
+            match f {
+                $($n => at::<FixedI64<$u>, E, C, M, Fm>(sat, raw, mode, k),)*
+                _ => unreachable!("F is checked to be in 0..=24"),
+            }
+        };
+    }
+    let sum = by_frac_bits!(
+        1 => U1, 2 => U2, 3 => U3, 4 => U4, 5 => U5, 6 => U6, 7 => U7, 8 => U8,
+        9 => U9, 10 => U10, 11 => U11, 12 => U12, 13 => U13, 14 => U14, 15 => U15, 16 => U16,
+        17 => U17, 18 => U18, 19 => U19, 20 => U20, 21 => U21, 22 => U22, 23 => U23, 24 => U24,
+    );
+    sum.map(|s| (s, Fm::NAME)).map_err(|e| e.to_string())
+}

@@ -112,6 +112,11 @@ pub enum Error {
         /// `k` given
         bits: u32,
     },
+    /// Texel widths must be 1 to 16 bits.
+    InvalidTexelBits {
+        /// the width given
+        bits: u32,
+    },
 }
 
 impl fmt::Display for Quantity {
@@ -179,6 +184,9 @@ impl fmt::Display for Error {
                 f,
                 "modular width {bits} must be at least the texel bits and at most the value type's bits"
             ),
+            Error::InvalidTexelBits { bits } => {
+                write!(f, "texel width {bits} bits is outside 1..=16")
+            }
         }
     }
 }

@@ -70,6 +70,16 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     Ok(())
 }
 
+/// `w * h * C` entries, or an error if that overflows `usize` (a 32-bit target, a corrupt header).
+pub(crate) fn entries_needed<const C: usize>(width: usize, height: usize) -> Result<usize, Error> {
+    width
+        .checked_mul(height)
+        .and_then(|v| v.checked_mul(C))
+        .ok_or(Error::TextureTooLarge {
+            dimension: width.max(height),
+        })
+}
+
 /// Exact bits of the largest channel total of a texture (the error path of the checked build).
 fn actual_total_bits<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> u32 {
     let mut totals = [0u128; C];
@@ -122,8 +132,8 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         storage: &'a mut [E],
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
-        let row_len = w * C;
-        let needed = row_len * h;
+        let row_len = w * C; // checked by `Texture`
+        let needed = entries_needed::<C>(w, h)?;
         if storage.len() < needed {
             return Err(Error::StorageTooSmall {
                 needed,
@@ -180,14 +190,8 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
                 dimension: width.max(height),
             });
         }
-        if texel_bits == 0 || texel_bits > 16 {
-            return Err(Error::TooWide {
-                what: Quantity::Entry,
-                bits_needed: texel_bits,
-                bits_available: 16,
-            });
-        }
-        let needed = width * height * C;
+        width::check_texel_bits(texel_bits)?;
+        let needed = entries_needed::<C>(width, height)?;
         if table.len() < needed {
             return Err(Error::StorageTooSmall {
                 needed,
@@ -328,7 +332,7 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             });
         }
         width::check_entry_worst_case(texel_bits, width, height, E::BITS)?;
-        let needed = width * C;
+        let needed = entries_needed::<C>(width, 1)?;
         if row_storage.len() < needed {
             return Err(Error::StorageTooSmall {
                 needed,

@@ -39,7 +39,9 @@ impl<'a, T: Texel, const C: usize> Texture<'a, T, C> {
                 dimension: width.max(height),
             });
         }
-        let row = width * C;
+        let row = width
+            .checked_mul(C)
+            .ok_or(Error::TextureTooLarge { dimension: width })?;
         if stride < row {
             return Err(Error::StrideTooSmall {
                 stride,

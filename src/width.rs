@@ -43,14 +43,33 @@ pub const fn ceil_log2(v: u128) -> u32 {
     }
 }
 
-/// The largest texel of `texel_bits` bits: `2^b - 1`.
+/// The largest texel of `texel_bits` bits: `2^b - 1` (`u128::MAX` from 128 bits on).
 pub const fn max_texel(texel_bits: u32) -> u128 {
-    (1u128 << texel_bits) - 1
+    if texel_bits >= 128 {
+        u128::MAX
+    } else {
+        (1u128 << texel_bits) - 1
+    }
 }
 
-/// The largest possible whole-table sum: `(2^b - 1) * w * h`.
+/// Texel widths the crate accepts: 1 to 16 bits.
+pub const MAX_TEXEL_BITS: u32 = 16;
+
+/// Refuses texel widths outside `1..=16`.
+pub const fn check_texel_bits(texel_bits: u32) -> Result<(), Error> {
+    if texel_bits == 0 || texel_bits > MAX_TEXEL_BITS {
+        Err(Error::InvalidTexelBits { bits: texel_bits })
+    } else {
+        Ok(())
+    }
+}
+
+/// The largest possible whole-table sum: `(2^b - 1) * w * h` (saturating at `u128::MAX`, which
+/// no entry type holds, so a saturated value is still refused).
 pub const fn worst_case_total(texel_bits: u32, width: usize, height: usize) -> u128 {
-    max_texel(texel_bits) * width as u128 * height as u128
+    max_texel(texel_bits)
+        .saturating_mul(width as u128)
+        .saturating_mul(height as u128)
 }
 
 /// Exact bits per entry (and channel) the worst case needs: `bits_of((2^b - 1) * w * h)`.
@@ -61,7 +80,7 @@ pub const fn entry_bits_worst_case(texel_bits: u32, width: usize, height: usize)
 /// The conservative textbook bound `b + ceil(log2(w * h))`. Never smaller than
 /// [`entry_bits_worst_case`], sometimes one larger; kept to document the difference.
 pub const fn entry_bits_naive(texel_bits: u32, width: usize, height: usize) -> u32 {
-    texel_bits + ceil_log2(width as u128 * height as u128)
+    texel_bits.saturating_add(ceil_log2(width as u128 * height as u128))
 }
 
 /// Refuses a table whose worst case does not fit `entry_bits`.
@@ -71,6 +90,9 @@ pub const fn check_entry_worst_case(
     height: usize,
     entry_bits: u32,
 ) -> Result<(), Error> {
+    if let Err(e) = check_texel_bits(texel_bits) {
+        return Err(e);
+    }
     let needed = entry_bits_worst_case(texel_bits, width, height);
     if needed > entry_bits {
         Err(Error::TooWide {

@@ -36,6 +36,7 @@ pub const fn modulus_bits_for(texel_bits: u32, max_area: u64) -> u32 {
 }
 
 fn check_k<E: Entry>(texel_bits: u32, k: u32) -> Result<(), Error> {
+    width::check_texel_bits(texel_bits)?;
     if k < texel_bits || k > E::BITS || k == 0 {
         Err(Error::InvalidModulus { bits: k })
     } else {

@@ -245,6 +245,7 @@ impl Geometry {
         if width == 0 || height == 0 || channels == 0 {
             return Err(Error::EmptyTexture);
         }
+        width::check_texel_bits(texel_bits)?;
         if let Some(k) = spec.modulus {
             if k < texel_bits || k == 0 || k > 64 {
                 return Err(Error::InvalidModulus { bits: k });

@@ -163,7 +163,7 @@ impl<const C: usize> BoxSum<C> {
 
 /// `round(num * 2^g / den)`, ties up, refusing a numerator that does not fit `u128`.
 pub(crate) fn div_round(num: u128, g: u32, den: u128) -> Result<u128, Error> {
-    let needed = bits_of(num) + g;
+    let needed = bits_of(num).saturating_add(g);
     if needed > 128 || g >= 128 {
         return Err(Error::TooWide {
             what: Quantity::MeanNumerator,

@@ -47,8 +47,10 @@ impl Shortcut {
         if tol_num == 0 {
             return Shortcut { min_side: u64::MAX };
         }
-        let need = 2 * max_texel(texel_bits) * tol_den as u128;
-        let s = need.div_ceil(tol_num as u128) + 1;
+        let need = max_texel(texel_bits)
+            .saturating_mul(2)
+            .saturating_mul(tol_den as u128);
+        let s = need.div_ceil(tol_num as u128).saturating_add(1);
         Shortcut {
             min_side: if s > u64::MAX as u128 {
                 u64::MAX
