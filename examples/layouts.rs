@@ -1,4 +1,5 @@
-//! Bits per entry against reads per lookup for every layout: the table in `docs/layouts.md` and
+//! Bits per entry against reads per lookup for every layout: the table `OUT/layouts_table.md`
+//! (copied into `docs/layouts.md`) and
 //! the Pareto plot `docs/layouts_pareto.svg`.
 //!
 //! `cargo run --release --example layouts [-- --sizes 1024,2048,4096 --boxes 2000 --out docs]`
@@ -143,25 +144,27 @@ fn main() {
             let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
             rows.push(measure(name, "every box", &t, &flat, boxes, n as u64));
         }
-        let k17 = modulus_bits_for(8, 17 * 17);
+        // Bounded layouts: exact for boxes covering at most 16 x 16 texel cells, so the random
+        // boxes have sides up to 15 (a fractional box of side 15 covers up to 16 cells).
+        let k16 = modulus_bits_for(8, 16 * 16);
         for (name, spec) in [
-            ("tiles 4x4, mod 2^17", TiledSpec::tiles(4, 4).unwrap().with_modulus(k17)),
-            ("tiles 4 in 16, mod 2^17", TiledSpec::square(&[4, 16]).unwrap().with_modulus(k17)),
+            ("tiles 4x4, mod 2^16", TiledSpec::tiles(4, 4).unwrap().with_modulus(k16)),
+            ("tiles 4 in 16, mod 2^16", TiledSpec::square(&[4, 16]).unwrap().with_modulus(k16)),
         ] {
             let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, n, n, 8).unwrap()];
             let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n)];
             let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
-            rows.push(measure(name.into(), "boxes <= 17 x 17 cells", &t, &flat, boxes, 16));
+            rows.push(measure(name.into(), "boxes <= 16 x 16 cells", &t, &flat, boxes, 15));
         }
         for side in [16u64, 64] {
-            let k = modulus_bits_for(8, (side + 1) * (side + 1));
+            let k = modulus_bits_for(8, side * side);
             let mut words = vec![0u32; Modular::<u32>::words_needed(n, n, k)];
             let mut row = vec![0u32; n];
             let m = Modular::<u32>::build(&tex, k, &mut words, &mut row).unwrap();
             let exact = if side == 16 {
-                "boxes <= 17 x 17 cells"
+                "boxes <= 16 x 16 cells"
             } else {
-                "boxes <= 65 x 65 cells"
+                "boxes <= 64 x 64 cells"
             };
             rows.push(measure(
                 format!("modular k={k}"),
@@ -169,7 +172,7 @@ fn main() {
                 &m,
                 &flat,
                 boxes,
-                side,
+                side - 1,
             ));
         }
         let _ = writeln!(md, "\n### {n} x {n}, 8-bit texels\n");
@@ -196,7 +199,7 @@ fn main() {
         }
         eprintln!("{n} x {n} done");
     }
-    std::fs::write(format!("{out}/layouts.md"), &md).expect("write table");
+    std::fs::write(format!("{out}/layouts_table.md"), &md).expect("write table");
     print!("{md}");
     plot(&format!("{out}/layouts_pareto.svg"), &plot_points, &sizes);
 }
