@@ -52,6 +52,7 @@
 
 pub mod cost;
 pub mod edge;
+pub mod filters;
 pub mod layouts;
 mod error;
 pub mod lookup;
