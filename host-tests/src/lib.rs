@@ -653,3 +653,7 @@ pub mod strategies {
         prop::sample::select(RefForm::ALL.to_vec())
     }
 }
+
+pub mod filter_ref_mip;
+pub mod filter_ref_ripdip;
+pub mod filter_ref_tentvar;
