@@ -6,7 +6,7 @@
 //! test to need the binary runs `cargo build --example sat` for the same profile and target
 //! directory; set `SAT_BIN` to test another binary.
 
-use serde_json::Value;
+use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -54,12 +54,15 @@ fn run(args: &[&str], stdin: &str) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn sat");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(stdin.as_bytes())
-        .unwrap();
+    // A run that fails before reading its input may close the pipe first: not an error here.
+    let written = child.stdin.take().unwrap().write_all(stdin.as_bytes());
+    if let Err(e) = written {
+        assert_eq!(
+            e.kind(),
+            std::io::ErrorKind::BrokenPipe,
+            "writing stdin: {e}"
+        );
+    }
     child.wait_with_output().expect("wait for sat")
 }
 
@@ -366,12 +369,16 @@ fn info_reports_sizes_and_widths() {
             "bits_needed_actual": 7,      // 78
             "entry_type": "u32", "entry_bits": 32, "bits_per_entry": 32, "bits_per_texel": 32,
             "table_entries": 12, "table_bytes": 48, "layout": "flat", "build": "worst_case",
-            "totals": "78",
+            "totals": "78", "value_type": "u32", "storage_bits": 12 * 32, "fields_per_corner": 1,
         });
         assert_eq!(v, expected, "{}", path.display());
     }
     let v = info(&png, &["--entry", "u16", "--checked"]);
     assert_eq!(v["table_bytes"], 24);
+    assert_eq!(
+        v,
+        info(&png, &["--entry", "u16", "--checked", "--layout", "flat"])
+    );
     assert_eq!(v["build"], "checked");
 
     // RGB: per-channel totals, bits per texel = entry bits x channels.
@@ -843,4 +850,500 @@ fn argument_errors_and_demo() {
     ] {
         assert!(text.contains(needle), "demo output lacks {needle:?}");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// --layout
+
+use texsat::layouts::{modulus_bits_for, AxisLevels, Modular, Tiled, TiledSpec};
+use texsat::{Layout, Texel, Texture};
+
+/// A packed layout as the tests build it through the library, to compute what `sat info` must
+/// report.
+#[derive(Clone, Copy)]
+enum Packed {
+    Tiled(TiledSpec),
+    Modular(u32),
+}
+
+fn spec(xs: &[u32], ys: &[u32]) -> TiledSpec {
+    TiledSpec {
+        x: AxisLevels::new(xs).unwrap(),
+        y: AxisLevels::new(ys).unwrap(),
+        modulus: None,
+    }
+}
+
+/// `v` rounded to 4 decimals, as `sat info` prints bits per entry.
+fn round4(v: f64) -> Value {
+    json!((v * 1e4).round() / 1e4)
+}
+
+/// The fields `sat info` reports for a packed layout, from the layout API (`u64` values: the
+/// value type does not change the storage).
+fn packed_facts<T: Texel, const C: usize>(data: &[T], w: usize, h: usize, p: Packed) -> Value {
+    let tex = Texture::<T, C>::new(data, w, h).unwrap();
+    let m = (1u128 << T::BITS) - 1;
+    // bits_per_entry is storage bits / (w h C), bits_per_texel storage bits / (w h).
+    let per = |bits: u64| {
+        (
+            round4(bits as f64 / (w * h * C) as f64),
+            round4(bits as f64 / (w * h) as f64),
+        )
+    };
+    match p {
+        Packed::Tiled(spec) => {
+            let n = Tiled::<u64, C>::words_needed(spec, w, h, T::BITS).unwrap();
+            let mut words = vec![0u32; n];
+            let mut scratch = vec![0u64; Tiled::<u64, C>::scratch_needed(spec, w)];
+            let t = Tiled::<u64, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
+            let field_bits: Vec<Vec<u32>> = (0..spec.x.components())
+                .map(|p| {
+                    (0..spec.y.components())
+                        .map(|q| t.field_bits(p, q).unwrap())
+                        .collect()
+                })
+                .collect();
+            let (bpe, bpt) = per(t.storage_bits());
+            assert_eq!(bpe, round4(t.bits_per_entry()), "Layout::bits_per_entry");
+            let mut v = json!({
+                "words": n, "table_bytes": 4 * n, "storage_bits": t.storage_bits(),
+                "bits_per_entry": bpe, "bits_per_texel": bpt,
+                "fields_per_corner": t.max_fields_per_corner(), "field_bits": field_bits,
+                "blocks_x": spec.x.blocks(), "blocks_y": spec.y.blocks(),
+            });
+            if let Some(k) = spec.modulus {
+                v["k"] = json!(k);
+                v["max_exact_area"] = json!((((1u128 << k) - 1) / m) as u64);
+            }
+            v
+        }
+        Packed::Modular(k) => {
+            let n = Modular::<u64, C>::words_needed(w, h, k);
+            let mut words = vec![0u32; n];
+            let mut row = vec![0u64; w * C];
+            let l = Modular::<u64, C>::build(&tex, k, &mut words, &mut row).unwrap();
+            let (bpe, bpt) = per(l.storage_bits());
+            assert_eq!(bpe, round4(l.bits_per_entry()), "Layout::bits_per_entry");
+            json!({
+                "words": n, "table_bytes": 4 * n, "storage_bits": l.storage_bits(),
+                "bits_per_entry": bpe, "bits_per_texel": bpt, "fields_per_corner": 1,
+                "k": k, "max_exact_area": l.max_exact_area() as u64,
+            })
+        }
+    }
+}
+
+/// Checks every field of `expected` against `sat info IMAGE --layout LAYOUT`, and the fields
+/// common to every layout against the flat layout's.
+fn check_info(path: &Path, layout: &str, expected: &Value, value_type: &str) {
+    let v = info(path, &["--layout", layout]);
+    for (key, want) in expected.as_object().unwrap() {
+        assert_eq!(&v[key], want, "{layout}: {key} in {v}");
+    }
+    assert_eq!(v["layout"], layout);
+    assert_eq!(v["value_type"], value_type, "{layout}: {v}");
+    let flat = info(path, &[]);
+    for key in [
+        "width",
+        "height",
+        "channels",
+        "texel_bits",
+        "texel_type",
+        "bits_needed_worst_case",
+        "bits_needed_actual",
+        "totals",
+    ] {
+        assert_eq!(v[key], flat[key], "{layout}: {key}");
+    }
+}
+
+#[test]
+fn info_reports_every_layout() {
+    let dir = temp_dir("info-layouts");
+    // 8-bit gray, sides that are not multiples of the tiles.
+    let gray = Img::noise(13, 9, 1, 8, 21);
+    let pgm = dir.join("g.pgm");
+    gray.write_pnm(&pgm);
+    let g8: Vec<u8> = gray.data.iter().map(|&v| v as u8).collect();
+    let b8 = |w: u64, h: u64| modulus_bits_for(8, w * h);
+    let cases: Vec<(&str, Packed, &str)> = vec![
+        ("packed", Packed::Tiled(TiledSpec::FLAT_PACKED), "u32"),
+        (
+            "tiled:4x4",
+            Packed::Tiled(TiledSpec::tiles(4, 4).unwrap()),
+            "u32",
+        ),
+        (
+            "tiled:3x2",
+            Packed::Tiled(TiledSpec::tiles(3, 2).unwrap()),
+            "u32",
+        ),
+        (
+            "tiled:2x2/8x4",
+            Packed::Tiled(spec(&[2, 8], &[2, 4])),
+            "u32",
+        ),
+        (
+            "tiled:2x2/4x4/8x8",
+            Packed::Tiled(spec(&[2, 4, 8], &[2, 4, 8])),
+            "u32",
+        ),
+        ("modular:12", Packed::Modular(12), "u32"),
+        ("modular:40", Packed::Modular(40), "u64"),
+        ("modular:box=3x3", Packed::Modular(b8(3, 3)), "u32"),
+        (
+            "tiled:4x4+mod:14",
+            Packed::Tiled(TiledSpec::tiles(4, 4).unwrap().with_modulus(14)),
+            "u32",
+        ),
+        (
+            "tiled:2x2/4x4+mod:box=5x5",
+            Packed::Tiled(spec(&[2, 4], &[2, 4]).with_modulus(b8(5, 5))),
+            "u32",
+        ),
+    ];
+    for (layout, p, value_type) in &cases {
+        let expected = packed_facts::<u8, 1>(&g8, 13, 9, *p);
+        check_info(&pgm, layout, &expected, value_type);
+    }
+    // The packed flat table is the flat table at exactly the worst-case width.
+    let v = info(&pgm, &["--layout", "packed"]);
+    assert_eq!(v["field_bits"], json!([[v["bits_needed_worst_case"]]]));
+    assert_eq!(v["bits_per_entry"].as_f64(), Some(15.0)); // bits_of(255 * 117 = 29835)
+    assert_eq!(v["storage_bits"], 13 * 9 * 15);
+    assert_eq!(v["table_bytes"], (13 * 9 * 15usize).div_ceil(32) * 4);
+    // box=3x3: k = bits_of(255 * 9) = 12, exact up to floor(4095 / 255) = 16 cells.
+    let v = info(&pgm, &["--layout", "modular:box=3x3"]);
+    assert_eq!(
+        (v["k"].as_u64(), v["max_exact_area"].as_u64()),
+        (Some(12), Some(16))
+    );
+    // --entry names the value type of the exact packed layouts.
+    let v = info(&pgm, &["--layout", "tiled:4x4", "--entry", "u64"]);
+    assert_eq!(v["value_type"], "u64");
+    let v = info(&pgm, &["--layout", "tiled:4x4", "--entry", "u16"]);
+    assert_eq!(v["value_type"], "u16");
+
+    // 16-bit RGB: bits per entry divide by the channels, bits per texel do not.
+    let rgb = Img::noise(10, 7, 3, 16, 22);
+    let png = dir.join("rgb16.png");
+    rgb.write_png(&png);
+    let d16 = rgb.data.clone();
+    let b16 = |w: u64, h: u64| modulus_bits_for(16, w * h);
+    for (layout, p, value_type) in [
+        ("packed", Packed::Tiled(TiledSpec::FLAT_PACKED), "u32"),
+        (
+            "tiled:4x2",
+            Packed::Tiled(TiledSpec::tiles(4, 2).unwrap()),
+            "u32",
+        ),
+        (
+            "tiled:2x2/4x6",
+            Packed::Tiled(spec(&[2, 4], &[2, 6])),
+            "u32",
+        ),
+        ("modular:box=2x2", Packed::Modular(b16(2, 2)), "u32"),
+        ("modular:33", Packed::Modular(33), "u64"),
+        (
+            "tiled:5x5+mod:20",
+            Packed::Tiled(TiledSpec::tiles(5, 5).unwrap().with_modulus(20)),
+            "u32",
+        ),
+    ] {
+        let expected = packed_facts::<u16, 3>(&d16, 10, 7, p);
+        check_info(&png, layout, &expected, value_type);
+        let v = info(&png, &["--layout", layout]);
+        let (bpe, bpt) = (v["bits_per_entry"].as_f64(), v["bits_per_texel"].as_f64());
+        assert!((bpt.unwrap() - 3.0 * bpe.unwrap()).abs() < 1e-3, "{v}");
+    }
+
+    // Known numbers: 64 x 64 texels of 8 bits in 8 x 8 tiles (m = 255). Per axis, component 0
+    // (inside a tile) stores 7 positions per tile, 56 in all, intervals up to 7 long; component 1
+    // (tile corners) stores 8 positions, intervals up to 64 long. Fields (count x bits):
+    //   local sums   56 x 56 = 3136 x bits_of(255 * 7 * 7 = 12495)   = 14 -> 43904
+    //   strips       56 x 8  =  448 x bits_of(255 * 7 * 64 = 114240) = 17 ->  7616, twice
+    //   corners       8 x 8  =   64 x bits_of(255 * 64 * 64)         = 20 ->  1280
+    // 60416 bits = 1888 words = 7552 bytes; 60416 / 4096 = 14.75 bits per entry.
+    let big = Img::noise(64, 64, 1, 8, 23);
+    let path = dir.join("g64.pgm");
+    big.write_pnm(&path);
+    let v = info(&path, &["--layout", "tiled:8x8"]);
+    assert_eq!(v["bits_per_entry"].as_f64(), Some(14.75), "{v}");
+    assert_eq!(v["bits_per_texel"].as_f64(), Some(14.75));
+    assert_eq!(v["storage_bits"], 60416);
+    assert_eq!(v["words"], 1888);
+    assert_eq!(v["table_bytes"], 7552);
+    assert_eq!(v["field_bits"], json!([[14, 17], [17, 20]]));
+    assert_eq!(v["fields_per_corner"], 4);
+    assert_eq!(v["blocks_x"], json!([8]));
+}
+
+/// Answers of `sat query` on every layout against the flat table and the direct integrals.
+#[test]
+fn query_on_every_layout_matches_flat() {
+    let dir = temp_dir("query-layouts");
+    let gray = Img::noise(13, 9, 1, 8, 31);
+    let pgm = dir.join("g.pgm");
+    gray.write_pnm(&pgm);
+    let rgb = Img::noise(7, 6, 3, 16, 32);
+    let png = dir.join("rgb16.png");
+    rgb.write_png(&png);
+    // Modular K large enough for every box below (boxes up to 3 periods per side, plus 2F bits
+    // of headroom for the paper form and the edge path).
+    let layouts = [
+        "packed",
+        "tiled:4x4",
+        "tiled:3x2",
+        "tiled:2x2/8x4",
+        "tiled:2x2/4x4/8x8",
+        "modular:40",
+        "tiled:4x4+mod:40",
+    ];
+    let runs: [(u32, &str); 3] = [(0, "paper"), (4, "paper"), (6, "stable")];
+    let mut checked = 0;
+    for (img, path) in [(&gray, &pgm), (&rgb, &png)] {
+        for mode in ["border", "clamp", "repeat", "mirror"] {
+            for (i, &(f, form)) in runs.iter().enumerate() {
+                let mut list = boxes(img, f, mode != "border", 25, 40 + i as u64);
+                list.extend(boxes(img, f, false, 15, 50 + i as u64));
+                let input: String = list.iter().map(|&b| box_line(b, f) + "\n").collect();
+                let fs = f.to_string();
+                let common = ["--frac-bits", &fs, "--edge", mode, "--form", form];
+                let (flat, ok) = query(path, &common, &input);
+                assert!(ok, "flat {mode} F={f}: {flat:?}");
+                for layout in layouts {
+                    let mut opts = common.to_vec();
+                    opts.extend(["--layout", layout]);
+                    let (answers, ok) = query(path, &opts, &input);
+                    assert!(ok, "{layout} {mode} F={f}: {answers:?}");
+                    assert_eq!(answers.len(), list.len());
+                    for ((v, fv), &b) in answers.iter().zip(&flat).zip(&list) {
+                        let what = format!("{layout} {mode} F={f} {form} {b:?}: {v}");
+                        assert_eq!(v["sum"], fv["sum"], "{what}");
+                        assert_eq!(v["mean"], fv["mean"], "{what}");
+                        assert_eq!(v["lookup"], fv["lookup"], "{what}");
+                        assert_eq!(
+                            (&v["muls"], &v["divs"]),
+                            (&fv["muls"], &fv["divs"]),
+                            "{what}"
+                        );
+                        let (reads, words) = (v["reads"].as_u64(), v["words"].as_u64());
+                        assert!(words >= reads, "every read touches a word: {what}");
+                        if layout == "packed" || layout.starts_with("modular") {
+                            // One field per corner, as the flat table.
+                            assert_eq!(reads, fv["reads"].as_u64(), "{what}");
+                        } else {
+                            assert!(reads >= fv["reads"].as_u64(), "{what}");
+                        }
+                        if b[0] != b[2] && b[1] != b[3] {
+                            check_answer(img, v, b, f, 2 * f + 8, mode);
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 3000, "{checked} answers checked");
+
+    // Costs on a tiled layout, by hand: tiled:4x4, box [1, 5) x [1, 5). The corner (1, 1) reads
+    // the local sum only; (5, 1) and (1, 5) a local sum and a strip; (5, 5) all four fields:
+    // 9 reads, 0 + 1 + 1 + 3 adds in the corners plus 3 for the box.
+    let (a, ok) = query(
+        &pgm,
+        &["--frac-bits", "0", "--layout", "tiled:4x4"],
+        "1 1 5 5\n",
+    );
+    assert!(ok);
+    assert_eq!(costs(&a[0]), (9, 1, 1, 8), "{}", a[0]);
+    // The flat table: one 32-bit word per read.
+    let (a, _) = query(&pgm, &["--frac-bits", "0"], "1 1 5 5\n");
+    assert_eq!(
+        (a[0]["reads"].as_u64(), a[0]["words"].as_u64()),
+        (Some(4), Some(4))
+    );
+    // Modular: k bits per read (all channels together).
+    let (a, _) = query(
+        &png,
+        &["--frac-bits", "0", "--layout", "modular:40"],
+        "1 1 5 5\n",
+    );
+    assert_eq!(
+        (a[0]["reads"].as_u64(), a[0]["bits_read"].as_u64()),
+        (Some(4), Some(4 * 3 * 40))
+    );
+}
+
+#[test]
+fn modular_refuses_big_boxes_and_answers_small_ones() {
+    let dir = temp_dir("modular");
+    let img = Img::noise(20, 20, 1, 8, 61);
+    let pgm = dir.join("g.pgm");
+    img.write_pnm(&pgm);
+    // box=4x4: k = bits_of(255 * 16 = 4080) = 12; a 5 x 5 box needs bits_of(255 * 25) = 13.
+    let input = "0 0 4 4\n2 2 7 7\n1 1 3 4\n0 0 20 20\n16 16 20 20\n";
+    for layout in [
+        "modular:box=4x4",
+        "modular:12",
+        "tiled:4x4+mod:box=4x4",
+        "tiled:2x2/4x4+mod:12",
+    ] {
+        let (a, ok) = query(&pgm, &["--frac-bits", "0", "--layout", layout], input);
+        assert!(
+            !ok,
+            "{layout}: a refused box makes the exit status non-zero"
+        );
+        assert_eq!(a.len(), 5, "{layout}: {a:?}");
+        for (i, b) in [(0, [0, 0, 4, 4]), (2, [1, 1, 3, 4]), (4, [16, 16, 20, 20])] {
+            check_answer(&img, &a[i], b, 0, 8, "border");
+        }
+        assert_eq!(
+            a[1],
+            json!({"error": "box sum on the modular layout needs 13 bits but only 12 are available", "line": 2}),
+            "{layout}"
+        );
+        assert_eq!(
+            a[3],
+            json!({"error": "box sum on the modular layout needs 17 bits but only 12 are available", "line": 4}),
+            "{layout}"
+        );
+    }
+    // Fractional corners (stable form: no headroom): a box counts the texel cells it overlaps.
+    let (a, ok) = query(
+        &pgm,
+        &["--form", "stable", "--layout", "modular:box=4x4"],
+        "0.5 0.5 3.5 3.5\n0.5 0.5 4.5 4.5\n1 1 5 5\n",
+    );
+    assert!(!ok);
+    check_answer(&img, &a[0], [128, 128, 896, 896], 8, 24, "border");
+    assert_eq!(a[1]["line"], 2);
+    assert!(
+        a[1]["error"].as_str().unwrap().contains("needs 13 bits"),
+        "{}",
+        a[1]
+    );
+    check_answer(&img, &a[2], [256, 256, 1280, 1280], 8, 24, "border");
+    // The paper form needs 2F bits above the box sum: at F = 8 not even one texel fits k = 12,
+    // which is said once on stderr, before any input is read.
+    let out = run(
+        &[
+            "query",
+            pgm.to_str().unwrap(),
+            "--layout",
+            "modular:box=4x4",
+        ],
+        "1 1 2 2\n",
+    );
+    assert!(!out.status.success());
+    assert!(out.stdout.is_empty());
+    assert!(stderr(&out).contains("headroom"), "{}", stderr(&out));
+    // At F = 2 it needs 4 bits more: one cell fits (bits_of(255) + 4 = 12), a box overlapping
+    // 2 x 2 cells does not (bits_of(255 * 4) + 4 = 14).
+    let (a, ok) = query(
+        &pgm,
+        &["--frac-bits", "2", "--layout", "modular:box=4x4"],
+        "0 0 1 1\n0.25 0.25 1.75 1.75\n",
+    );
+    assert!(!ok);
+    check_answer(&img, &a[0], [0, 0, 4, 4], 2, 12, "border");
+    assert!(
+        a[1]["error"]
+            .as_str()
+            .unwrap()
+            .contains("needs 14 bits but only 12"),
+        "{}",
+        a[1]
+    );
+}
+
+#[test]
+fn bad_layouts_fail() {
+    let dir = temp_dir("bad-layouts");
+    let img = Img::noise(9, 9, 1, 8, 71);
+    let pgm = dir.join("g.pgm");
+    img.write_pnm(&pgm);
+    let p = pgm.to_str().unwrap();
+    for bad in [
+        "",
+        "Flat",
+        "tiles:8x8",
+        "tiled",
+        "tiled:",
+        "tiled:8",
+        "tiled:8x",
+        "tiled:x8",
+        "tiled:0x4",
+        "tiled:1x1",
+        "tiled:8x8/12x16",
+        "tiled:8x8/4x4",
+        "tiled:2x2/4x4/8x8/16x16/32x32",
+        "tiled:8x8+",
+        "tiled:8x8+mod:",
+        "tiled:8x8+mod:0",
+        "tiled:8x8+k:16",
+        "modular",
+        "modular:",
+        "modular:0",
+        "modular:65",
+        "modular:-3",
+        "modular:box=16",
+        "modular:box=0x4",
+        "modular:16+tiled:8x8",
+        "packed+mod:16",
+    ] {
+        for cmd in ["info", "query"] {
+            let out = run(&[cmd, p, "--layout", bad], "1 1 2 2\n");
+            assert!(!out.status.success(), "{cmd} --layout {bad:?} should fail");
+            assert!(out.stdout.is_empty(), "{bad:?}: {}", stdout(&out));
+            assert!(
+                stderr(&out).contains("--layout"),
+                "{bad:?}: {}",
+                stderr(&out)
+            );
+        }
+    }
+    // Well-formed but unusable with this image or these options: a message, exit status 1.
+    for (args, needle) in [
+        (vec!["--layout", "modular:7"], "texel width"),
+        (vec!["--layout", "tiled:4x4+mod:5"], "texel width"),
+        (
+            vec!["--layout", "modular:40", "--entry", "u32"],
+            "does not fit --entry u32",
+        ),
+        (
+            vec!["--layout", "modular:12", "--entry", "u16"],
+            "u32 or u64",
+        ),
+        (vec!["--layout", "tiled:4x4", "--checked"], "--checked"),
+        (vec!["--layout", "packed", "--checked"], "flat layout only"),
+    ] {
+        let mut full = vec!["info", p];
+        full.extend(&args);
+        let out = run(&full, "");
+        assert!(!out.status.success(), "{args:?}");
+        assert!(out.stdout.is_empty());
+        assert!(stderr(&out).contains(needle), "{args:?}: {}", stderr(&out));
+    }
+    // A value type too narrow for the worst case names a wider one (and not --checked).
+    let big = Img::noise(64, 64, 1, 8, 72);
+    let path = dir.join("g64.pgm");
+    big.write_pnm(&path);
+    let out = run(
+        &[
+            "info",
+            path.to_str().unwrap(),
+            "--layout",
+            "tiled:8x8",
+            "--entry",
+            "u16",
+        ],
+        "",
+    );
+    assert!(!out.status.success());
+    let msg = stderr(&out);
+    assert!(
+        msg.contains("20 bits") && msg.contains("--entry u32") && !msg.contains("--checked"),
+        "{msg}"
+    );
 }

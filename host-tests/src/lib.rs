@@ -13,6 +13,7 @@
 //! exactly the unit of [`texsat::BoxSum::scaled_sum`].
 #![warn(missing_docs)]
 
+pub mod crow_literal;
 use fixed::traits::Fixed;
 use proptest::prelude::*;
 use texsat::{

@@ -552,13 +552,23 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 None => a.checked_add(b).ok_or(overflow),
             }
         };
+        let max = width::max_texel(g.texel_bits);
         let (prefix, accs) = self.scratch.split_at_mut(row);
         // The row's prefix sums P[X], X = 0..=n.
         let mut run = [E::ZERO; C];
         prefix[..C].fill(E::ZERO);
         for (x, t) in texels.chunks_exact(C).enumerate() {
             for c in 0..C {
-                run[c] = add(run[c], E::from(t[c].to_u16()))?;
+                let v = t[c].to_u16();
+                // The field widths are proved for `texel_bits`; a wider texel would break them.
+                if v as u128 > max {
+                    return Err(Error::TooWide {
+                        what: Quantity::Entry,
+                        bits_needed: bits_of(v as u128),
+                        bits_available: g.texel_bits,
+                    });
+                }
+                run[c] = add(run[c], E::from(v))?;
                 prefix[(x + 1) * C + c] = run[c];
             }
         }
