@@ -71,7 +71,9 @@ fn measure<L: BoxLookup<1>>(
             I24F8::from_bits(((y0 + bh - 1) * 256 + 1 + rng.below(254)) as i32),
         );
         let mut t = Tally::new();
-        let s = l.box_sum(&fr, Stable, Border, &mut t).expect("in-range box");
+        let s = l
+            .box_sum(&fr, Stable, Border, &mut t)
+            .expect("in-range box");
         assert_eq!(s, flat.box_sum(&fr, Stable, Border, &mut NoCount).unwrap());
         rf += t.reads;
     }
@@ -135,8 +137,14 @@ fn main() {
             ("tiles 4 in 64".into(), TiledSpec::square(&[4, 64]).unwrap()),
             ("tiles 2 in 16".into(), TiledSpec::square(&[2, 16]).unwrap()),
             ("tiles 2 in 10".into(), TiledSpec::square(&[2, 10]).unwrap()),
-            ("tiles 4 in 16 in 64".into(), TiledSpec::square(&[4, 16, 64]).unwrap()),
-            ("tiles 2 in 4 in 16".into(), TiledSpec::square(&[2, 4, 16]).unwrap()),
+            (
+                "tiles 4 in 16 in 64".into(),
+                TiledSpec::square(&[4, 16, 64]).unwrap(),
+            ),
+            (
+                "tiles 2 in 4 in 16".into(),
+                TiledSpec::square(&[2, 4, 16]).unwrap(),
+            ),
         ];
         for (name, spec) in specs {
             let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, n, n, 8).unwrap()];
@@ -148,13 +156,26 @@ fn main() {
         // boxes have sides up to 15 (a fractional box of side 15 covers up to 16 cells).
         let k16 = modulus_bits_for(8, 16 * 16);
         for (name, spec) in [
-            ("tiles 4x4, mod 2^16", TiledSpec::tiles(4, 4).unwrap().with_modulus(k16)),
-            ("tiles 4 in 16, mod 2^16", TiledSpec::square(&[4, 16]).unwrap().with_modulus(k16)),
+            (
+                "tiles 4x4, mod 2^16",
+                TiledSpec::tiles(4, 4).unwrap().with_modulus(k16),
+            ),
+            (
+                "tiles 4 in 16, mod 2^16",
+                TiledSpec::square(&[4, 16]).unwrap().with_modulus(k16),
+            ),
         ] {
             let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, n, n, 8).unwrap()];
             let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n)];
             let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
-            rows.push(measure(name.into(), "boxes <= 16 x 16 cells", &t, &flat, boxes, 15));
+            rows.push(measure(
+                name.into(),
+                "boxes <= 16 x 16 cells",
+                &t,
+                &flat,
+                boxes,
+                15,
+            ));
         }
         for side in [16u64, 64] {
             let k = modulus_bits_for(8, side * side);
@@ -195,7 +216,13 @@ fn main() {
                 r.reads_frac,
                 r.exact
             );
-            plot_points.push((n, r.name.clone(), r.bits, r.reads_int, r.exact == "every box"));
+            plot_points.push((
+                n,
+                r.name.clone(),
+                r.bits,
+                r.reads_int,
+                r.exact == "every box",
+            ));
         }
         eprintln!("{n} x {n} done");
     }
@@ -212,7 +239,10 @@ fn plot(path: &str, pts: &[(usize, String, f64, f64, bool)], sizes: &[usize]) {
     root.fill(&WHITE).unwrap();
     let ymax = pts.iter().map(|p| p.3).fold(0.0, f64::max) * 1.1;
     let mut chart = ChartBuilder::on(&root)
-        .caption("Exact layouts: bits per entry vs reads per box", ("sans-serif", 22))
+        .caption(
+            "Exact layouts: bits per entry vs reads per box",
+            ("sans-serif", 22),
+        )
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(55)
@@ -235,7 +265,9 @@ fn plot(path: &str, pts: &[(usize, String, f64, f64, bool)], sizes: &[usize]) {
                     .map(|p| Circle::new((p.2, p.3), 4, c.filled())),
             )
             .unwrap()
-            .label(format!("{n} x {n} (exact for every box; line: Pareto front)"))
+            .label(format!(
+                "{n} x {n} (exact for every box; line: Pareto front)"
+            ))
             .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
         chart
             .draw_series(

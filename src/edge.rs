@@ -233,7 +233,11 @@ impl EdgeMode for MirroredRepeat {
     }
     fn texel_index(i: i64, n: usize) -> Option<usize> {
         let r = i.rem_euclid(2 * n as i64);
-        Some(if r < n as i64 { r } else { 2 * n as i64 - 1 - r } as usize)
+        Some(if r < n as i64 {
+            r
+        } else {
+            2 * n as i64 - 1 - r
+        } as usize)
     }
 }
 

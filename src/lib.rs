@@ -52,9 +52,9 @@
 
 pub mod cost;
 pub mod edge;
+mod error;
 pub mod filters;
 pub mod layouts;
-mod error;
 pub mod lookup;
 mod rect;
 pub mod table;

@@ -44,13 +44,18 @@ mod tests {
     fn within_one_ulp_below_f64() {
         let mut x = 1u64;
         for _ in 0..2000 {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let raw = (x >> 20) | 1;
             for f in [0u32, 8, 16] {
                 for out in [4u32, 8, 12] {
                     let got = log2_fixed(raw, f, out).unwrap() as f64;
                     let want = ((raw as f64).log2() - f as f64) * (1u64 << out) as f64;
-                    assert!(got <= want.floor() + 1e-9 && got >= want.floor() - 1.0, "{raw} {f} {out}: {got} vs {want}");
+                    assert!(
+                        got <= want.floor() + 1e-9 && got >= want.floor() - 1.0,
+                        "{raw} {f} {out}: {got} vs {want}"
+                    );
                 }
             }
         }

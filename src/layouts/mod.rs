@@ -12,8 +12,8 @@
 //!
 //! See `docs/layouts.md` for the derivations, bits per entry and reads per lookup.
 
-pub mod packed;
 mod modular;
+pub mod packed;
 mod tiled;
 
 pub use modular::{modulus_bits_for, Modular, ModularBuilder};

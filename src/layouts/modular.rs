@@ -222,7 +222,12 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         let max = width::max_texel(self.texel_bits);
         let mut run = [E::ZERO; C];
         let base = (self.rows_done * self.width * C) as u64;
-        for (x, (o, t)) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)).enumerate() {
+        for (x, (o, t)) in self
+            .row
+            .chunks_exact_mut(C)
+            .zip(texels.chunks_exact(C))
+            .enumerate()
+        {
             for c in 0..C {
                 let v = t[c].to_u16();
                 if v as u128 > max {

@@ -29,7 +29,11 @@ pub fn read_bits(words: &[u32], offset: u64, len: u32) -> (u64, u32) {
         let w = words.get(first + k).copied().unwrap_or(0) as u128;
         acc |= w << (k as u32 * WORD_BITS);
     }
-    let mask = if len == 64 { u64::MAX } else { (1u64 << len) - 1 };
+    let mask = if len == 64 {
+        u64::MAX
+    } else {
+        (1u64 << len) - 1
+    };
     (((acc >> shift) as u64) & mask, touched)
 }
 
@@ -47,7 +51,10 @@ pub fn write_bits(words: &mut [u32], offset: u64, len: u32, value: u64) -> bool 
     let first = (offset / WORD_BITS as u64) as usize;
     let shift = (offset % WORD_BITS as u64) as u32;
     let touched = (shift + len).div_ceil(WORD_BITS) as usize;
-    if first.checked_add(touched).is_none_or(|end| end > words.len()) {
+    if first
+        .checked_add(touched)
+        .is_none_or(|end| end > words.len())
+    {
         return false;
     }
     let field_mask: u128 = ((1u128 << len) - 1) << shift;
@@ -69,7 +76,8 @@ mod tests {
         let mut words = [0u32; 8];
         for len in 1..=64u32 {
             for offset in 0..(8 * 32 - len as u64) {
-                let value = 0xDEAD_BEEF_CAFE_F00Du64 & if len == 64 { u64::MAX } else { (1 << len) - 1 };
+                let value =
+                    0xDEAD_BEEF_CAFE_F00Du64 & if len == 64 { u64::MAX } else { (1 << len) - 1 };
                 words.fill(0xA5A5_A5A5);
                 assert!(write_bits(&mut words, offset, len, value));
                 let (v, touched) = read_bits(&words, offset, len);
@@ -77,8 +85,10 @@ mod tests {
                 assert_eq!(touched, ((offset % 32) as u32 + len).div_ceil(32));
                 // Neighbouring bits are untouched.
                 if offset > 0 {
-                    assert_eq!(read_bits(&words, 0, offset.min(64) as u32).0,
-                        read_bits(&[0xA5A5_A5A5u32; 8], 0, offset.min(64) as u32).0);
+                    assert_eq!(
+                        read_bits(&words, 0, offset.min(64) as u32).0,
+                        read_bits(&[0xA5A5_A5A5u32; 8], 0, offset.min(64) as u32).0
+                    );
                 }
             }
         }

@@ -85,7 +85,10 @@ fn modular_exact_within_bound_refused_beyond() {
                     let area = (x1 - x0) * (y1 - y0);
                     let got = m.box_sum_int(&r, Border, &mut NoCount);
                     if (255 * area as u32) < (1 << k) {
-                        assert_eq!(got.unwrap(), flat.box_sum_int(&r, Border, &mut NoCount).unwrap());
+                        assert_eq!(
+                            got.unwrap(),
+                            flat.box_sum_int(&r, Border, &mut NoCount).unwrap()
+                        );
                     } else {
                         assert!(matches!(got, Err(crate::Error::TooWide { .. })), "{r:?}");
                     }
@@ -118,8 +121,13 @@ fn tiled_counts_fields_and_words() {
     let t = Texture::<u8>::new(&tex[..w * h], w, h).unwrap();
     let mut words = [0u32; 4096];
     let mut scratch = [0u32; 512];
-    let tiled = Tiled::<u32>::build(&t, TiledSpec::tiles(8, 8).unwrap(), &mut words, &mut scratch)
-        .unwrap();
+    let tiled = Tiled::<u32>::build(
+        &t,
+        TiledSpec::tiles(8, 8).unwrap(),
+        &mut words,
+        &mut scratch,
+    )
+    .unwrap();
     // A corner strictly inside a tile, not in the first tile row or column: 4 fields.
     let mut k = Tally::new();
     tiled.corner(13, 19, &mut k);

@@ -299,7 +299,9 @@ impl Geometry {
         match self.spec.modulus {
             Some(k) if k <= E::BITS => Ok(()),
             Some(k) => Err(Error::InvalidModulus { bits: k }),
-            None => width::check_entry_worst_case(self.texel_bits, self.width, self.height, E::BITS),
+            None => {
+                width::check_entry_worst_case(self.texel_bits, self.width, self.height, E::BITS)
+            }
         }
     }
 
@@ -432,7 +434,9 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     fn value_bits(&self) -> u32 {
         match self.geo.spec.modulus {
             Some(k) => k,
-            None => width::entry_bits_worst_case(self.geo.texel_bits, self.geo.width, self.geo.height),
+            None => {
+                width::entry_bits_worst_case(self.geo.texel_bits, self.geo.width, self.geo.height)
+            }
         }
     }
     fn modulus(&self) -> Option<u32> {
@@ -601,7 +605,12 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                             if let Some(m) = modulus {
                                 v = v.low_bits(m);
                             }
-                            if !write_bits(self.words, offset + (c as u32 * bits) as u64, bits, v.to_u64()) {
+                            if !write_bits(
+                                self.words,
+                                offset + (c as u32 * bits) as u64,
+                                bits,
+                                v.to_u64(),
+                            ) {
                                 return Err(Error::TooWide {
                                     what: Quantity::Field,
                                     bits_needed: bits_of(v.to_u128()),

@@ -38,7 +38,9 @@ impl Form for Corners4 {
         k.adds(3 * C as u32);
         let mut out = [0u128; C];
         for c in 0..C {
-            let mut v = d[c].wrapping_sub(c_[c]).wrapping_sub(b_[c].wrapping_sub(a[c]));
+            let mut v = d[c]
+                .wrapping_sub(c_[c])
+                .wrapping_sub(b_[c].wrapping_sub(a[c]));
             if let Some(m) = t.modulus() {
                 v = v.low_bits(m);
             }

@@ -24,9 +24,9 @@ pub use shortcut::{Shortcut, ShortcutMean};
 use crate::cost::Counter;
 use crate::edge::{place, EdgeMode, Placement};
 use crate::error::{Error, Quantity};
+use crate::layouts::Layout;
 use crate::rect::{Coord, RawBox, Rect};
 use crate::table::Sat;
-use crate::layouts::Layout;
 use crate::texel::{Acc, Entry};
 use crate::width::{self, bits_of};
 

@@ -21,8 +21,8 @@ use super::{sum_raw, BoxLookup, BoxSum, Form};
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::Error;
-use crate::rect::{Coord, RawBox, Rect};
 use crate::layouts::Layout;
+use crate::rect::{Coord, RawBox, Rect};
 use crate::width::{self, max_texel};
 
 /// When to take the 4-read shortcut: boxes whose sides are both at least `min_side` texels.
