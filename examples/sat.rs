@@ -1,21 +1,26 @@
 //! `sat`: summed-area tables of image files from the command line.
 //!
 //! ```text
-//! sat info IMAGE [--layout L] [--entry u16|u32|u64] [--checked]
+//! sat info IMAGE [--layout L] [--entry u16|u32|u64] [--checked] [--filter NAME]
 //!                                                         one JSON object about the table
-//! sat query IMAGE [--layout L] [--frac-bits F] [--edge MODE] [--form paper|stable] ...
+//! sat query IMAGE [--filter NAME] [--layout L] [--frac-bits F] [--edge MODE] [--form FORM] ...
 //!                                                         box queries on stdin, JSON lines out
 //! sat demo                                                a guided tour on a generated texture
 //! ```
 //!
 //! `--layout` is one of `flat` (the default), `packed`, `tiled:WxH`, `tiled:W1xH1/W2xH2[/...]`,
-//! `modular:K`, `modular:box=WxH` and `tiled:WxH+mod:K` (see `sat/layout.rs`).
+//! `modular:K`, `modular:box=WxH` and `tiled:WxH+mod:K` (see `sat/layout.rs`). `--filter` is
+//! `box` (the summed-area table, the default) or one of the comparison filters `point`, `mip`,
+//! `trilinear`, `ripmap`, `dipmap`, `dipmap-trilinear`, `tent`, `tent-exact`, `variance` (see
+//! `sat/filter.rs`; they need the crate's `filters` feature: `--features filters`).
 //!
 //! Run `sat help <command>` for the details of each command; `cargo run --example sat -- demo`
 //! for the tour.
 
 #[path = "sat/demo.rs"]
 mod demo;
+#[path = "sat/filter.rs"]
+mod filter;
 #[path = "sat/layout.rs"]
 mod layout;
 #[path = "sat/load.rs"]
@@ -24,6 +29,7 @@ mod load;
 mod num;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use filter::{FilterArg, FilterQuery, ImageTexel};
 use fixed::traits::Fixed;
 use fixed::types::extra::{
     U1, U10, U11, U12, U13, U14, U15, U16, U17, U18, U19, U2, U20, U21, U22, U23, U24, U3, U4, U5,
@@ -103,7 +109,31 @@ If the entry (value) type is too narrow (the worst case with the default build, 
 with --checked), nothing is printed on stdout; the reason, with the bits needed and available,
 goes to stderr and the exit status is 1. A malformed --layout is refused with a message on
 stderr (exit status 2), as are K < texel bits and --checked with a layout other than flat (exit
-status 1).";
+status 1).
+
+--filter NAME reports the memory of that filter's structure, built from the image: width,
+height, channels, texel_bits, texel_type, filter, texture_bytes (w x h x channels x texel
+bytes), storage_bytes (the filter's own storage), reads_texture (whether samples also read the
+texture: point, mip/trilinear level 0, tent-exact), memory_bytes (storage, plus the texture if
+it is read) and memory_ratio (memory_bytes / texture_bytes, 4 decimals), and per filter:
+  point              no storage, ratio 1
+  mip, trilinear     levels, pyramid_texels, storage_type: levels 1.. (level 0 is the texture);
+                     ratio about 4/3 (Heckbert's 1.33)
+  ripmap             levels_x, levels_y, storage_type: every level (u, v scaled apart), the
+                     texture copied as level (0, 0); ratio about 4
+  dipmap, dipmap-trilinear
+                     levels_row, levels_column, storage_type: row and column pyramids sharing
+                     level 0; ratio about 3
+  tent               entry_type (u64, u128 if needed), entry_bits_needed, table_bytes: the
+                     order-2 table of the texture padded by one row and column; u8 texels in u64:
+                     about 8
+  tent-exact         also lines_entry_type, lines_bits_needed, lines_bytes (per-line order-2
+                     tables) and the texture
+  variance           tables (2), entry_type (--entry, else u32 or u64, whichever holds the
+                     squares), values_bits_needed, squares_bits_needed, values_bytes,
+                     squares_bytes
+  box                the table report above (--layout, --entry) plus these memory fields.
+--layout and --checked apply to box only, --entry to box and variance.";
 
 const QUERY_HELP: &str = "\
 INPUT: one box per line, \"x0 y0 x1 y1\" separated by blanks: the box [x0, x1) x [y0, y1) in
@@ -113,7 +143,7 @@ that is not a multiple of 2^-F is an error unless --round is given. Empty lines 
 with '#' are skipped.
 
 OUTPUT: per input line, one JSON object:
-  {\"sum\": \"<exact>\", \"mean\": \"<decimal>\", \"lookup\": \"int4|paper|stable\",
+  {\"sum\": \"<exact>\", \"mean\": \"<decimal>\", \"filter\": \"box\", \"lookup\": \"int4|paper|stable\",
    \"reads\": R, \"bits_read\": B, \"words\": W, \"muls\": M, \"divs\": D, \"adds\": A}
 sum is the exact integral of the texture over the box (a multiple of 2^-2F, printed with all its
 digits). mean is sum / area rounded to the nearest multiple of 2^-G (ties away from zero), G =
@@ -147,7 +177,39 @@ A line that cannot be answered (wrong number of fields, not a number, not repres
 bits, inverted box, too wide for the accumulator, too large for the modular layout, ...) gives
 {\"error\": \"...\", \"line\": N} and the following lines are still answered; the exit status is
 then 1. A table that cannot be built, or a lookup width that the value type (or K) can never
-satisfy, is reported on stderr before any input is read (exit status 1).";
+satisfy, is reported on stderr before any input is read (exit status 1).
+
+FILTERS: --filter box (the default) is the summed-area table described above. The comparison
+filters (Heckbert 1986, \"Comparison of Prefiltering Methods\"; Du and Wan, \"Dipmap\") read the
+same lines; a filter that needs a footprint takes the box as the rectangle bounding it (centre
+((x0 + x1) / 2, (y0 + y1) / 2), sides W = x1 - x0, H = y1 - y0). Each prints
+  {\"value\": \"<decimal>\", \"filter\": NAME, [\"variant\": V,] \"reads\": R, \"bits_read\": B,
+   \"words\": W, \"muls\": M, \"divs\": D, \"adds\": A}
+value is the filter's output (a multiple of 2^-16, printed exactly; an array of strings with
+several channels). The structures are built once per run from the image. Costs are counted as
+the survey and Crow count them (reads of texels or table entries, all channels together; the
+arithmetic per channel); the survey's figures (reads, multiplies) hold for footprints away from
+the edges (reads that the border mode resolves to zero are not counted by ripmap and dipmap):
+  point              the texel holding the centre (exact): 1, 0
+  mip                point-sampled pyramid: level round(log2 max(W, H)), nearest texel: 1, 0
+  trilinear          Williams' trilinear on the pyramid: 8 reads, 7 muls, 14 adds
+  ripmap             4-D pyramid, levels log2 W and log2 H apart: 16 reads, 15 muls
+  dipmap             bilinear in the lower level of the row and column pyramids, averaged:
+                     8 reads, 6 muls
+  dipmap-trilinear   trilinear in both pyramids, averaged: 16 reads, 14 muls
+  tent               triangle filter by repeated integration. variant \"int\" when the four
+                     numbers are integers and both sides even (integer centre and half-widths):
+                     9 reads, 3 muls + 1 div, exact; else variant \"paper\": bilinear
+                     interpolation of the order-2 table, 36 reads, 30 muls + 1 div, within the
+                     documented bound m/4 (1/a^2 + 1/b^2 + 1/(2 a^2 b^2)) of the exact filter
+  tent-exact         the exact triangle filter for fixed-point corners: 81 reads, 72 muls + 1 div
+  variance           the variance of the texels over the box (exact, rounded to 2^-16): variant
+                     \"int\" (integer corners, 8 reads) or the --form used (32 reads)
+Every boundary mode (--edge) applies to every filter. ripmap and dipmap floor their output to
+2^-16; trilinear, tent, tent-exact and variance round to nearest (ties up); point and mip are
+exact. --layout, --checked, --mean-bits and --int4 apply to box only; --entry to box and variance;
+--form to box and variance. Zero-area footprints are errors for tent and variance and point
+samples for the others.";
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug, ValueEnum)]
 enum EntryArg {
@@ -205,12 +267,18 @@ impl TableArgs {
 struct InfoArgs {
     #[command(flatten)]
     table: TableArgs,
+    /// Report the memory of this filter's structure instead of (box: as well as) the table's.
+    #[arg(long, value_enum)]
+    filter: Option<FilterArg>,
 }
 
 #[derive(Args)]
 struct QueryArgs {
     #[command(flatten)]
     table: TableArgs,
+    /// The filter that answers each line (see `sat help query`).
+    #[arg(long, value_enum, default_value_t = FilterArg::Box)]
+    filter: FilterArg,
     /// Fractional bits F of the corner coordinates (0 to 24). F = 0: integer corners, 4 reads.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=24))]
     frac_bits: u32,
@@ -345,24 +413,49 @@ fn round4(v: f64) -> Value {
 // sat info
 
 fn info(args: &InfoArgs) -> Result<bool, String> {
+    if let Some(f) = args.filter {
+        check_filter_options(f, &args.table)?;
+    }
     let img = load::load(&args.table.image)?;
-    let json = with_texture(&img, InfoJob { args: &args.table })??;
+    let json = with_texture(
+        &img,
+        InfoJob {
+            args: &args.table,
+            filter: args.filter,
+        },
+    )??;
     println!("{json}");
     Ok(true)
 }
 
+/// Refuses table options that do not apply to `filter` (and filters not compiled in).
+fn check_filter_options(filter: FilterArg, t: &TableArgs) -> Result<(), String> {
+    filter::check_options(
+        filter,
+        t.layout.kind == LayoutKind::Flat,
+        t.checked,
+        t.entry,
+    )
+}
+
 struct InfoJob<'a> {
     args: &'a TableArgs,
+    filter: Option<FilterArg>,
 }
 
 impl TextureJob for InfoJob<'_> {
     type Out = Result<Value, String>;
-    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        if let Some(f) = self.filter.filter(|&f| f != FilterArg::Box) {
+            return filter::info(texture, f, self.args.entry);
+        }
         let plan = self.args.plan(T::BITS)?;
         let job = InfoLayoutJob {
             args: self.args,
             plan: &plan,
             totals: channel_totals(texture),
+            filter_box: self.filter == Some(FilterArg::Box),
+            texture_bytes: texture.width() * texture.height() * C * std::mem::size_of::<T>(),
         };
         with_layout(texture, &plan, job).map_err(|e| refusal(texture, self.args, &plan, e))?
     }
@@ -373,6 +466,10 @@ struct InfoLayoutJob<'a, const N: usize> {
     plan: &'a Plan,
     /// Whole-texture sums straight from the texels.
     totals: [u128; N],
+    /// `--filter box`: add the memory fields the other filters report.
+    filter_box: bool,
+    /// Bytes of the texture's texels.
+    texture_bytes: usize,
 }
 
 impl<const N: usize> LayoutJob for InfoLayoutJob<'_, N> {
@@ -488,6 +585,19 @@ impl<const N: usize> LayoutJob for InfoLayoutJob<'_, N> {
             }
         }
         put("totals", per_channel(totals, 0));
+        if self.filter_box {
+            let table_bytes = o["table_bytes"].as_u64().unwrap_or(0);
+            let texture_bytes = self.texture_bytes as u64;
+            o.insert("filter".into(), json!("box"));
+            o.insert("texture_bytes".into(), json!(texture_bytes));
+            o.insert("storage_bytes".into(), json!(table_bytes));
+            o.insert("reads_texture".into(), json!(false));
+            o.insert("memory_bytes".into(), json!(table_bytes));
+            o.insert(
+                "memory_ratio".into(),
+                round4(table_bytes as f64 / texture_bytes as f64),
+            );
+        }
         Ok(out)
     }
 }
@@ -506,6 +616,35 @@ struct QueryOpts {
 
 fn query(args: &QueryArgs) -> Result<bool, String> {
     let f = args.frac_bits;
+    check_filter_options(args.filter, &args.table)?;
+    if args.filter != FilterArg::Box {
+        let name = args.filter.name();
+        if args.mean_bits.is_some() {
+            return Err(format!(
+                "--mean-bits applies to --filter box only (--filter {name} prints its value \
+                 with 16 fraction bits)"
+            ));
+        }
+        if args.int4 {
+            return Err(format!(
+                "--int4 applies to --filter box only, not to --filter {name}"
+            ));
+        }
+        let q = FilterQuery {
+            filter: args.filter,
+            frac_bits: f,
+            edge: args.edge,
+            form: args.form,
+            inexact: if args.round {
+                Inexact::Round
+            } else {
+                Inexact::Refuse
+            },
+            entry: args.table.entry,
+        };
+        let img = load::load(&args.table.image)?;
+        return with_texture(&img, FilterJob { q: &q })?;
+    }
     let opts = QueryOpts {
         frac_bits: f,
         mean_bits: args.mean_bits.unwrap_or((2 * f + 8).min(40)),
@@ -528,6 +667,17 @@ fn query(args: &QueryArgs) -> Result<bool, String> {
     )?
 }
 
+struct FilterJob<'a> {
+    q: &'a FilterQuery,
+}
+
+impl TextureJob for FilterJob<'_> {
+    type Out = Result<bool, String>;
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        filter::query(texture, self.q)
+    }
+}
+
 struct QueryJob<'a> {
     args: &'a TableArgs,
     opts: &'a QueryOpts,
@@ -535,7 +685,7 @@ struct QueryJob<'a> {
 
 impl TextureJob for QueryJob<'_> {
     type Out = Result<bool, String>;
-    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
         let plan = self.args.plan(T::BITS)?;
         let job = QueryLayoutJob {
             opts: self.opts,
@@ -603,54 +753,57 @@ impl LayoutJob for QueryLayoutJob<'_> {
     fn run<L: BoxLookup<C>, const C: usize>(self, l: &L, detail: &Detail) -> Self::Out {
         let o = self.opts;
         check_widths(l, o, self.value, detail)?;
-        let stdin = std::io::stdin();
-        let mut input = stdin.lock();
-        let stdout = std::io::stdout();
-        let mut out = stdout.lock();
-        let mut buf = Vec::new();
-        let mut line_no = 0usize;
-        let mut all_ok = true;
-        loop {
-            buf.clear();
-            let n = input
-                .read_until(b'\n', &mut buf)
-                .map_err(|e| format!("reading stdin: {e}"))?;
-            if n == 0 {
-                break;
-            }
-            line_no += 1;
-            let answer = match std::str::from_utf8(&buf) {
-                Err(_) => Some(Err("line is not valid UTF-8".to_string())),
-                Ok(line) => {
-                    let line = line.trim();
-                    if line.is_empty() || line.starts_with('#') {
-                        None
-                    } else {
-                        Some(answer_line(l, o, line))
-                    }
-                }
-            };
-            let json = match answer {
-                None => continue,
-                Some(Ok(v)) => v,
-                Some(Err(msg)) => {
-                    all_ok = false;
-                    json!({ "error": msg, "line": line_no })
-                }
-            };
-            writeln!(out, "{json}").map_err(|e| format!("writing stdout: {e}"))?;
-        }
-        out.flush().map_err(|e| format!("writing stdout: {e}"))?;
-        Ok(all_ok)
+        answer_lines(|line| answer_line(l, o, line))
     }
 }
 
-/// One query line: parse, look up, take the mean, format.
-fn answer_line<L: BoxLookup<C>, const C: usize>(
-    l: &L,
-    o: &QueryOpts,
-    line: &str,
-) -> Result<Value, String> {
+/// Reads query lines from stdin and prints `answer`'s JSON for each (`{"error": ..., "line": N}`
+/// for a refused one). Empty lines and lines starting with '#' are skipped. Returns whether every
+/// line was answered.
+fn answer_lines(mut answer: impl FnMut(&str) -> Result<Value, String>) -> Result<bool, String> {
+    let stdin = std::io::stdin();
+    let mut input = stdin.lock();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut buf = Vec::new();
+    let mut line_no = 0usize;
+    let mut all_ok = true;
+    loop {
+        buf.clear();
+        let n = input
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| format!("reading stdin: {e}"))?;
+        if n == 0 {
+            break;
+        }
+        line_no += 1;
+        let result = match std::str::from_utf8(&buf) {
+            Err(_) => Some(Err("line is not valid UTF-8".to_string())),
+            Ok(line) => {
+                let line = line.trim();
+                if line.is_empty() || line.starts_with('#') {
+                    None
+                } else {
+                    Some(answer(line))
+                }
+            }
+        };
+        let json = match result {
+            None => continue,
+            Some(Ok(v)) => v,
+            Some(Err(msg)) => {
+                all_ok = false;
+                json!({ "error": msg, "line": line_no })
+            }
+        };
+        writeln!(out, "{json}").map_err(|e| format!("writing stdout: {e}"))?;
+    }
+    out.flush().map_err(|e| format!("writing stdout: {e}"))?;
+    Ok(all_ok)
+}
+
+/// Parses `"x0 y0 x1 y1"` into raw fixed-point values with `f` fraction bits.
+fn parse_box(line: &str, f: u32, inexact: Inexact) -> Result<[i64; 4], String> {
     let fields: Vec<&str> = line.split_whitespace().collect();
     if fields.len() != 4 {
         return Err(format!(
@@ -661,8 +814,18 @@ fn answer_line<L: BoxLookup<C>, const C: usize>(
     }
     let mut raw = [0i64; 4];
     for ((r, s), name) in raw.iter_mut().zip(&fields).zip(["x0", "y0", "x1", "y1"]) {
-        *r = parse_fixed(s, o.frac_bits, o.inexact).map_err(|e| format!("{name}: {e}"))?;
+        *r = parse_fixed(s, f, inexact).map_err(|e| format!("{name}: {e}"))?;
     }
+    Ok(raw)
+}
+
+/// One query line: parse, look up, take the mean, format.
+fn answer_line<L: BoxLookup<C>, const C: usize>(
+    l: &L,
+    o: &QueryOpts,
+    line: &str,
+) -> Result<Value, String> {
+    let raw = parse_box(line, o.frac_bits, o.inexact)?;
     let mut tally = Tally::new();
     let (sum, lookup) = lookup(l, o, raw, &mut tally)?;
     let mean = match sum.means_rounded(o.mean_bits, &mut tally) {
@@ -673,6 +836,7 @@ fn answer_line<L: BoxLookup<C>, const C: usize>(
     Ok(json!({
         "sum": per_channel(sum.scaled_sums(), 2 * sum.frac_bits()),
         "mean": mean,
+        "filter": "box",
         "lookup": lookup,
         "reads": tally.reads,
         "bits_read": tally.bits_read,

@@ -356,6 +356,7 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
             let base = (y * self.w + x) * C;
             if let Some(texel) = self.data.get(base..base + C) {
                 k.reads(1, T::BITS * C as u32);
+                k.words((T::BITS * C as u32).div_ceil(32));
                 for (o, t) in out.iter_mut().zip(texel) {
                     *o = t.to_u16() as i64;
                 }
