@@ -658,3 +658,6 @@ pub mod strategies {
 pub mod filter_ref_mip;
 pub mod filter_ref_ripdip;
 pub mod filter_ref_tentvar;
+pub mod stability;
+pub mod ewa;
+pub mod scenes;
