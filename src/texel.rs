@@ -13,6 +13,10 @@ pub trait Texel: Copy + 'static {
     const BITS: u32;
     /// The texel as `u16` (lossless: texels have at most 16 bits).
     fn to_u16(self) -> u16;
+    /// The texel of value `v`: exact for `v <= 2^BITS - 1`; larger values saturate to
+    /// `2^BITS - 1`. (What a build that writes texels, such as a pyramid's rounded box averages,
+    /// needs: the inverse of [`Texel::to_u16`] on the texel range.)
+    fn from_u16_clamped(v: u16) -> Self;
 }
 
 impl Texel for u8 {
@@ -21,6 +25,10 @@ impl Texel for u8 {
     fn to_u16(self) -> u16 {
         self as u16
     }
+    #[inline(always)]
+    fn from_u16_clamped(v: u16) -> Self {
+        v.min(u8::MAX as u16) as u8
+    }
 }
 
 impl Texel for u16 {
@@ -28,6 +36,10 @@ impl Texel for u16 {
     #[inline(always)]
     fn to_u16(self) -> u16 {
         self
+    }
+    #[inline(always)]
+    fn from_u16_clamped(v: u16) -> Self {
+        v
     }
 }
 

@@ -144,18 +144,9 @@ impl FilterArg {
 }
 
 /// The texel types of the images (`u8`, `u16`) with what every filter's build needs.
-pub trait ImageTexel: Texel + Default + TryFrom<u16> + MipTexel {}
+pub trait ImageTexel: Texel + Default {}
 impl ImageTexel for u8 {}
 impl ImageTexel for u16 {}
-
-/// What the mip pyramid's build needs of a texel (nothing without `filter-mip`).
-#[cfg(feature = "filter-mip")]
-pub trait MipTexel: texsat::filters::mip::PyramidTexel {}
-/// What the mip pyramid's build needs of a texel (nothing without `filter-mip`).
-#[cfg(not(feature = "filter-mip"))]
-pub trait MipTexel {}
-impl MipTexel for u8 {}
-impl MipTexel for u16 {}
 
 /// Checks, before the image is read, that `filter` is compiled in and that the table options
 /// given make sense for it. The box filter takes every option.

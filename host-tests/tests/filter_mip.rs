@@ -23,7 +23,7 @@ use reference::{
     exact_pyramid, lod_in_range, memory_ratio, point_ref, point_sample_ref, pyramid_from_levels,
     pyramid_texels, rounded_pyramid, trilinear_bound, trilinear_ref, RefImage,
 };
-use texsat::filters::mip::{trilinear_error_bound, MipPyramid, PyramidTexel};
+use texsat::filters::mip::{trilinear_error_bound, MipPyramid};
 use texsat::filters::point::point;
 use texsat::filters::OUT_FRAC_BITS;
 use texsat::{
@@ -70,7 +70,7 @@ struct Case<'a, T: Texel, const C: usize> {
     bits: u32,
 }
 
-fn with_case<T: RefTexel + PyramidTexel, const C: usize, R>(
+fn with_case<T: RefTexel, const C: usize, R>(
     tex: &RefTexture,
     bits: u32,
     f: impl FnOnce(&Case<'_, T, C>) -> R,

@@ -90,46 +90,26 @@
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::{Error, Quantity};
-use crate::filters::level::log2_fixed;
-use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::filters::pyramid::{
+    check_dims, count_reads, fill_box_level, footprint, lerp, level_count, level_len,
+    level_position, split_level, split_position, Footprint,
+};
+use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, Rect};
 use crate::texel::Texel;
-use crate::texture::{Texture, MAX_DIMENSION};
-use crate::width::{bits_of, MAX_FRAC_BITS};
+use crate::texture::Texture;
+#[cfg(test)]
+use crate::texture::MAX_DIMENSION;
+use crate::width::bits_of;
 
 /// Most levels a pyramid can have: sizes up to `2^31 - 1` halve to 1 in 31 steps, plus level 0.
-pub const MAX_LEVELS: usize = 32;
+pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
 
 /// Fractional bits of the level of detail `L` ([`MipPyramid::lod`]).
 pub const LOD_FRAC_BITS: u32 = 8;
 
 /// Fractional bits of the bilinear position weights of [`MipPyramid::trilinear`] (truncated).
 pub const WEIGHT_BITS: u32 = 32;
-
-/// Coarse columns summed together in one pass of the build (stack accumulators).
-const CHUNK: usize = 16;
-
-/// A texel type the pyramid can store: a [`Texel`] that can be made from a rounded mean.
-///
-/// (The crate's [`Texel`] only converts *to* `u16`; the build must also write texels.)
-pub trait PyramidTexel: Texel {
-    /// The texel with value `v` (`v <= 2^BITS - 1`; larger values saturate).
-    fn from_mean(v: u16) -> Self;
-}
-
-impl PyramidTexel for u8 {
-    #[inline(always)]
-    fn from_mean(v: u16) -> Self {
-        v.min(u8::MAX as u16) as u8
-    }
-}
-
-impl PyramidTexel for u16 {
-    #[inline(always)]
-    fn from_mean(v: u16) -> Self {
-        v
-    }
-}
 
 /// The error bound of [`MipPyramid::trilinear`] in texel units against the same filter computed
 /// exactly on the same stored pyramid with the same level of detail: `m 2^-31 + 2^-17` with
@@ -153,37 +133,14 @@ pub struct MipPyramid<'a, T: Texel, const C: usize = 1> {
 
 /// Level sizes `(ceil(w / 2^l), ceil(h / 2^l))` down to `1 x 1`, and their number.
 fn level_sizes(w: usize, h: usize) -> Result<([(usize, usize); MAX_LEVELS], usize), Error> {
-    if w == 0 || h == 0 {
-        return Err(Error::EmptyTexture);
-    }
-    if w > MAX_DIMENSION || h > MAX_DIMENSION {
-        return Err(Error::TextureTooLarge {
-            dimension: w.max(h),
-        });
-    }
+    check_dims(w, h)?;
+    // w, h <= 2^31 - 1: at most 31 halvings reach 1, so count <= MAX_LEVELS.
+    let count = level_count(w.max(h)).min(MAX_LEVELS);
     let mut sizes = [(0, 0); MAX_LEVELS];
-    let (mut lw, mut lh) = (w, h);
-    let mut count = 0;
-    // At most 31 halvings reach 1 from 2^31 - 1, so `count` stays below MAX_LEVELS + 1.
-    while count < MAX_LEVELS {
-        sizes[count] = (lw, lh);
-        count += 1;
-        if lw == 1 && lh == 1 {
-            break;
-        }
-        lw = lw.div_ceil(2);
-        lh = lh.div_ceil(2);
+    for (l, s) in sizes[..count].iter_mut().enumerate() {
+        *s = (level_len(w, l), level_len(h, l));
     }
     Ok((sizes, count))
-}
-
-/// The validated footprint: doubled centre `x0 + x1`, `y0 + y1` (raw) and the clamped level of
-/// detail.
-struct Footprint {
-    sx: i128,
-    sy: i128,
-    f: u32,
-    lod: u32,
 }
 
 impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
@@ -246,44 +203,20 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     }
 
     /// The level of detail of `rect`: `log2(max(W, H))` with [`LOD_FRAC_BITS`] fraction bits from
-    /// [`log2_fixed`] (exact floor or one unit below), clamped to `[0, (levels - 1) 2^8]`;
-    /// `0` when the footprint is a point or a segment of length 0 (`d = 0`).
+    /// [`log2_fixed`](crate::filters::level::log2_fixed) (exact floor or one unit below), clamped
+    /// to `[0, (levels - 1) 2^8]`; `0` when the footprint is a point or a segment of length 0
+    /// (`d = 0`).
     ///
     /// Errors: [`Error::FracBitsUnsupported`] for `F > 24`, [`Error::InvertedBox`].
     pub fn lod<X: Coord>(&self, rect: &Rect<X>) -> Result<u32, Error> {
-        Ok(self.footprint(rect)?.lod)
+        Ok(self.footprint(rect)?.1)
     }
 
-    fn footprint<X: Coord>(&self, rect: &Rect<X>) -> Result<Footprint, Error> {
-        let f = X::FRAC_BITS;
-        if f > MAX_FRAC_BITS {
-            return Err(Error::FracBitsUnsupported {
-                frac_bits: f,
-                max: MAX_FRAC_BITS,
-            });
-        }
-        let (x0, y0, x1, y1) = (
-            rect.x0.raw() as i128,
-            rect.y0.raw() as i128,
-            rect.x1.raw() as i128,
-            rect.y1.raw() as i128,
-        );
-        if x1 < x0 || y1 < y0 {
-            return Err(Error::InvertedBox);
-        }
-        // Differences of two i64 values: in [0, 2^64 - 1].
-        let d = (x1 - x0).max(y1 - y0) as u64;
-        let top = ((self.count - 1) as i32) << LOD_FRAC_BITS;
-        let lod = match log2_fixed(d, f, LOD_FRAC_BITS) {
-            Some(l) => l.clamp(0, top) as u32,
-            None => 0,
-        };
-        Ok(Footprint {
-            sx: x0 + x1,
-            sy: y0 + y1,
-            f,
-            lod,
-        })
+    /// The validated footprint (doubled centre, sides) and its clamped level of detail.
+    fn footprint<X: Coord>(&self, rect: &Rect<X>) -> Result<(Footprint, u32), Error> {
+        let fp = footprint(rect)?;
+        let lod = level_position(fp.w.max(fp.h), fp.f, LOD_FRAC_BITS, self.top());
+        Ok((fp, lod))
     }
 
     /// The top level's index.
@@ -304,12 +237,6 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         }
     }
 
-    /// Counts `n` texel reads (all channels together).
-    fn count_reads<K: Counter>(n: u32, k: &mut K) {
-        k.reads(n, T::BITS * C as u32);
-        k.words(n * (T::BITS * C as u32).div_ceil(32));
-    }
-
     /// Dungan's point-sampled pyramid: the nearest texel of level `round(L)` to the footprint's
     /// centre. 1 read, 0 multiplies, 0 additive operations (survey: "point sampled pyramid 1,0").
     ///
@@ -326,13 +253,13 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let _ = mode;
-        let fp = self.footprint(rect)?;
-        let l = ((fp.lod + (1 << (LOD_FRAC_BITS - 1))) >> LOD_FRAC_BITS).min(self.top());
+        let (fp, lod) = self.footprint(rect)?;
+        let l = ((lod + (1 << (LOD_FRAC_BITS - 1))) >> LOD_FRAC_BITS).min(self.top());
         let shift = fp.f + 1 + l;
         // |x0 + x1| <= 2^64, shifted right by at least 1: in the i64 range.
-        let i = i64::try_from(fp.sx >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
-        let j = i64::try_from(fp.sy >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
-        Self::count_reads(1, k);
+        let i = i64::try_from(fp.px >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
+        let j = i64::try_from(fp.py >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
+        count_reads::<T, C, K>(1, k);
         let px = self.tap::<M>(l as usize, i, j);
         Ok(Sample {
             values: core::array::from_fn(|c| (px[c] as u64) << OUT_FRAC_BITS),
@@ -356,24 +283,19 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let _ = mode;
-        let fp = self.footprint(rect)?;
-        let l0 = fp.lod >> LOD_FRAC_BITS;
-        let l1 = (l0 + 1).min(self.top());
+        let (fp, lod) = self.footprint(rect)?;
         // lod <= top 2^8, so at the top t = 0.
-        let t = (fp.lod & ((1 << LOD_FRAC_BITS) - 1)) as i128;
+        let (l0, l1, t) = split_level(lod, LOD_FRAC_BITS, self.top());
         let v0 = self.bilinear::<M, K>(l0, &fp, k)?;
         let v1 = self.bilinear::<M, K>(l1, &fp, k)?;
-        let half = 1i128 << (2 * WEIGHT_BITS + LOD_FRAC_BITS - OUT_FRAC_BITS - 1);
-        let mut values = [0u64; C];
-        for (out, (&a, &b)) in values.iter_mut().zip(v0.iter().zip(v1.iter())) {
-            // Level lerp: units 2^-72, |v| < 2^80, so below 2^88.
-            let v = (a << LOD_FRAC_BITS) + (b - a) * t;
-            k.muls(1);
-            k.adds(2);
-            // v is a convex combination of texels: 0 <= v <= m 2^72.
-            *out = ((v + half) >> (2 * WEIGHT_BITS + LOD_FRAC_BITS - OUT_FRAC_BITS)) as u64;
-        }
-        Ok(Sample { values })
+        // Level lerp: units 2^-72, |v| < 2^80, so below 2^88.
+        let v = lerp(v0, v1, t as i128, LOD_FRAC_BITS, k);
+        let shift = 2 * WEIGHT_BITS + LOD_FRAC_BITS - OUT_FRAC_BITS;
+        let half = 1i128 << (shift - 1);
+        // v is a convex combination of texels: 0 <= v <= m 2^72.
+        Ok(Sample {
+            values: v.map(|v| ((v + half) >> shift) as u64),
+        })
     }
 
     /// Bilinear interpolation of level `l` at the footprint centre: 4 reads, 3 lerps per channel;
@@ -385,28 +307,23 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         k: &mut K,
     ) -> Result<[i128; C], Error> {
         let g = fp.f + 1 + l; // fraction bits of c / 2^l: at most 24 + 1 + 31 = 56
-        let (i, a) = split(fp.sx, g)?;
-        let (j, b) = split(fp.sy, g)?;
+        let (i, a) = split(fp.px, g)?;
+        let (j, b) = split(fp.py, g)?;
         // i, j <= 2^63 - 2 (split), so + 1 cannot overflow; checked anyway.
         let i1 = i.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         let j1 = j.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         let l = l as usize;
-        Self::count_reads(4, k);
+        count_reads::<T, C, K>(4, k);
         let p00 = self.tap::<M>(l, i, j);
         let p10 = self.tap::<M>(l, i1, j);
         let p01 = self.tap::<M>(l, i, j1);
         let p11 = self.tap::<M>(l, i1, j1);
-        let mut out = [0i128; C];
-        for c in 0..C {
-            // Row lerps, units 2^-32: |q - p| < 2^16, a < 2^32, so below 2^48 in i64.
-            let r0 = (p00[c] << WEIGHT_BITS) + (p10[c] - p00[c]) * a;
-            let r1 = (p01[c] << WEIGHT_BITS) + (p11[c] - p01[c]) * a;
-            // Column lerp, units 2^-64: below 2^80 in i128.
-            out[c] = ((r0 as i128) << WEIGHT_BITS) + (r1 - r0) as i128 * b as i128;
-            k.muls(3);
-            k.adds(6);
-        }
-        Ok(out)
+        // Row lerps, units 2^-32: |q - p| < 2^16, a < 2^32, so below 2^48 in i64.
+        let r0 = lerp(p00, p10, a, WEIGHT_BITS, k);
+        let r1 = lerp(p01, p11, a, WEIGHT_BITS, k);
+        // Column lerp, units 2^-64: below 2^80 in i128.
+        let (r0, r1) = (r0.map(i128::from), r1.map(i128::from));
+        Ok(lerp(r0, r1, b as i128, WEIGHT_BITS, k))
     }
 
     /// Builds the coarse levels of `texture` into `storage` (the first
@@ -415,10 +332,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     /// Each coarse texel is the exact box average of its clipped base block, rounded to nearest
     /// with ties up (module docs). Errors: [`Error::StorageTooSmall`]; [`Error::TooWide`]
     /// (`Quantity::Entry`) if `2^(B+1) w h >= 2^64`, where the exact sums could overflow `u64`.
-    pub fn build(texture: &Texture<'a, T, C>, storage: &'a mut [T]) -> Result<Self, Error>
-    where
-        T: PyramidTexel,
-    {
+    pub fn build(texture: &Texture<'a, T, C>, storage: &'a mut [T]) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         let (sizes, count) = level_sizes(w, h)?;
         let needed = Self::storage_needed(w, h)?;
@@ -442,7 +356,9 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
             at += sizes[l].0 * sizes[l].1 * C;
         }
         for l in 1..count {
-            build_level(texture, l as u32, sizes[l], &mut store[offsets[l]..])?;
+            // Level l averages blocks of 2^l x 2^l base texels; 2 sum + count <= 2^(B+1) w h,
+            // below 2^64 (checked above).
+            fill_box_level(texture, &mut store[offsets[l]..], l, l)?;
         }
         let coarse: &'a [T] = store;
         Ok(MipPyramid {
@@ -461,74 +377,9 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
 /// `s` lies in `[-2^64, 2^64 - 2]` and `g >= 1`, so `floor(u) <= 2^63 - 2`; it is below
 /// `i64::MIN` only for `s = -2^64`, `g = 1`: [`Error::CoordinateOutOfRange`].
 fn split(s: i128, g: u32) -> Result<(i64, i64), Error> {
-    let u = s - (1i128 << (g - 1));
-    let i = u >> g;
-    let frac = u - (i << g); // in [0, 2^g)
-    let w = if g >= WEIGHT_BITS {
-        frac >> (g - WEIGHT_BITS)
-    } else {
-        frac << (WEIGHT_BITS - g)
-    };
+    let (i, w) = split_position(s, g, WEIGHT_BITS);
     let i = i64::try_from(i).map_err(|_| Error::CoordinateOutOfRange)?;
-    Ok((i, w as i64))
-}
-
-/// Writes level `l` (`lw x lh` texels) into `out`: each texel the rounded mean of its clipped
-/// `2^l x 2^l` block of base texels, summed exactly in `u64` ([`MipPyramid::build`] checked the
-/// width), `CHUNK` coarse columns per pass over the block's base rows.
-fn build_level<T: PyramidTexel, const C: usize>(
-    texture: &Texture<'_, T, C>,
-    l: u32,
-    (lw, lh): (usize, usize),
-    out: &mut [T],
-) -> Result<(), Error> {
-    let (w, h) = (texture.width() as u64, texture.height() as u64);
-    // Block bounds in base texels: i < ceil(w / 2^l), so i 2^l < w <= 2^31 and (i + 1) 2^l
-    // < 2^33 (l <= 31): all in u64, the clipped ends in usize.
-    let span = |i: usize, n: u64| -> (usize, usize) {
-        let lo = (i as u64) << l;
-        let hi = (((i as u64) + 1) << l).min(n);
-        (lo as usize, hi as usize)
-    };
-    for j in 0..lh {
-        let (y_lo, y_hi) = span(j, h);
-        let mut i0 = 0;
-        while i0 < lw {
-            let n = CHUNK.min(lw - i0);
-            let mut acc = [[0u64; C]; CHUNK];
-            for y in y_lo..y_hi {
-                // y < h and the block columns lie below w: rows and slices always exist (the
-                // errors are unreachable; they stand in for panics).
-                let row = texture.row(y).ok_or(Error::EmptyTexture)?;
-                for (ci, a) in acc[..n].iter_mut().enumerate() {
-                    let (x_lo, x_hi) = span(i0 + ci, w);
-                    let px = row.get(x_lo * C..x_hi * C).ok_or(Error::EmptyTexture)?;
-                    for texel in px.chunks_exact(C) {
-                        for (s, t) in a.iter_mut().zip(texel) {
-                            *s += t.to_u16() as u64;
-                        }
-                    }
-                }
-            }
-            for (ci, a) in acc[..n].iter().enumerate() {
-                let (x_lo, x_hi) = span(i0 + ci, w);
-                let cnt = ((x_hi - x_lo) * (y_hi - y_lo)) as u64;
-                let at = (j * lw + i0 + ci) * C;
-                let len = out.len();
-                let dst = out.get_mut(at..at + C).ok_or(Error::StorageTooSmall {
-                    needed: at + C,
-                    got: len,
-                })?;
-                for (d, &s) in dst.iter_mut().zip(a.iter()) {
-                    // 2 s + cnt <= 2^(B+1) cnt < 2^64 (checked in build).
-                    let mean = (2 * s + cnt) / (2 * cnt);
-                    *d = T::from_mean(mean as u16);
-                }
-            }
-            i0 += n;
-        }
-    }
-    Ok(())
+    Ok((i, w))
 }
 
 #[cfg(test)]

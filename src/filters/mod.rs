@@ -29,6 +29,9 @@
 ))]
 pub mod level;
 
+#[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
+pub(crate) mod pyramid;
+
 #[cfg(feature = "filter-point")]
 pub mod point;
 

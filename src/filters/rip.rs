@@ -81,13 +81,17 @@
 
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
-use crate::error::{Error, Quantity};
+use crate::error::Error;
+#[cfg(test)]
 use crate::filters::level::log2_fixed;
-use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::filters::pyramid::{
+    axis_total, check_build, check_dims, check_storage, fill_box_level, floor_sample, footprint,
+    lerp, level_len, level_split, prefix, truncate, LevelView,
+};
+use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
-use crate::width::{bits_of, MAX_FRAC_BITS};
 
 /// Fraction bits of a bilinear probe's weights (positions truncated to `2^-16` level texels).
 pub const WEIGHT_BITS: u32 = 16;
@@ -96,7 +100,7 @@ pub const WEIGHT_BITS: u32 = 16;
 pub const LEVEL_FRAC_BITS: u32 = 12;
 
 /// The most levels an axis can have: sides up to `2^31 - 1` texels need levels `0..=31`.
-pub const MAX_LEVELS: usize = 32;
+pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
 
 /// The arithmetic error bound in output units: `|out - 2^16 * exact| < 2^(texel_bits + 1)`
 /// (module docs, "Arithmetic and error bound"). `exact` is the same filter in real arithmetic
@@ -126,254 +130,6 @@ pub struct RipMap<'a, T: Texel, const C: usize> {
     hcum: [usize; MAX_LEVELS + 1],
 }
 
-/// `ceil(n / 2^l)` for `n >= 1`.
-#[inline(always)]
-fn level_len(n: usize, l: usize) -> usize {
-    if l >= usize::BITS as usize {
-        1
-    } else {
-        ((n - 1) >> l) + 1
-    }
-}
-
-/// Levels of an axis of `n >= 1` texels: `ceil(log2 n) + 1`.
-#[inline(always)]
-fn level_count(n: usize) -> usize {
-    (usize::BITS - (n - 1).leading_zeros()) as usize + 1
-}
-
-/// Prefix sums of the level lengths of an axis of `n` texels (`1 <= n <= 2^31 - 1`, so
-/// `levels <= 32` and the total `< 2n + 32` fits `usize`).
-fn prefix(n: usize) -> (usize, [usize; MAX_LEVELS + 1]) {
-    let levels = level_count(n).min(MAX_LEVELS);
-    let mut cum = [0usize; MAX_LEVELS + 1];
-    for l in 0..levels {
-        cum[l + 1] = cum[l].saturating_add(level_len(n, l));
-    }
-    (levels, cum)
-}
-
-/// `sum_l ceil(n / 2^l)` over the levels of an axis, saturating.
-fn axis_total(n: usize) -> usize {
-    let mut t = 0usize;
-    for l in 0..level_count(n) {
-        t = t.saturating_add(level_len(n, l));
-    }
-    t
-}
-
-/// Refuses dimensions a texture could not have.
-fn check_dims(width: usize, height: usize) -> Result<(), Error> {
-    if width == 0 || height == 0 {
-        return Err(Error::EmptyTexture);
-    }
-    let max = (1usize << 31) - 1;
-    if width > max || height > max {
-        return Err(Error::TextureTooLarge {
-            dimension: width.max(height),
-        });
-    }
-    Ok(())
-}
-
-/// Proves that `2 * sum + count` of any block fits `u64`: `(2m + 1) w h < 2^64`.
-fn check_sum_width(texel_bits: u32, width: usize, height: usize) -> Result<(), Error> {
-    let m = (1u128 << texel_bits) - 1;
-    let worst = (2 * m + 1) * width as u128 * height as u128;
-    if worst > u64::MAX as u128 {
-        return Err(Error::TooWide {
-            what: Quantity::Entry,
-            bits_needed: bits_of(worst),
-            bits_available: 64,
-        });
-    }
-    Ok(())
-}
-
-/// Fills `out` (`lw * lh * C` elements, row-major) with the box averages of the base blocks of
-/// `2^sx x 2^sy` texels, clipped to the texture, each `round(sum / count)` ties up.
-///
-/// `check_sum_width` proved `2 * sum + count < 2^64`.
-fn fill_box_level<T: Texel + TryFrom<u16>, const C: usize>(
-    texture: &Texture<'_, T, C>,
-    out: &mut [T],
-    sx: usize,
-    sy: usize,
-) -> Result<(), Error> {
-    let (w, h) = (texture.width(), texture.height());
-    let (lw, lh) = (level_len(w, sx), level_len(h, sy));
-    for j in 0..lh {
-        let y0 = j << sy;
-        let y1 = y0.saturating_add(1usize << sy).min(h);
-        for i in 0..lw {
-            let x0 = i << sx;
-            let x1 = x0.saturating_add(1usize << sx).min(w);
-            let mut sums = [0u64; C];
-            for y in y0..y1 {
-                let Some(row) = texture.row(y) else { continue };
-                for texel in row.get(x0 * C..x1 * C).unwrap_or(&[]).chunks_exact(C) {
-                    for (s, t) in sums.iter_mut().zip(texel) {
-                        *s += t.to_u16() as u64;
-                    }
-                }
-            }
-            let count = ((x1 - x0) * (y1 - y0)) as u64;
-            let base = (j * lw + i) * C;
-            let Some(dst) = out.get_mut(base..base + C) else {
-                return Err(Error::StorageTooSmall {
-                    needed: base + C,
-                    got: out.len(),
-                });
-            };
-            for (d, s) in dst.iter_mut().zip(sums) {
-                let v = (2 * s + count) / (2 * count);
-                *d = T::try_from(v as u16).map_err(|_| Error::TooWide {
-                    what: Quantity::Entry,
-                    bits_needed: bits_of(v as u128),
-                    bits_available: T::BITS,
-                })?;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// One stored level: `w x h` texels, row-major, `C` channels.
-#[derive(Clone, Copy)]
-struct LevelView<'a, T, const C: usize> {
-    data: &'a [T],
-    w: usize,
-    h: usize,
-}
-
-/// The index the mode shows at (possibly huge) level index `i`. Indices outside `i64` (only
-/// reachable with 64-bit raw corners near their limits) are first moved by a multiple of `2n`
-/// to `+-(2^61 rounded to a multiple of 2n) + (i mod 2n)`: still far outside on the same side,
-/// and congruent modulo the period of `Repeat` and `MirroredRepeat`, so every mode answers as
-/// for `i`.
-#[inline(always)]
-fn resolve<M: EdgeMode>(i: i128, n: usize) -> Option<usize> {
-    let idx = match i64::try_from(i) {
-        Ok(v) => v,
-        Err(_) => {
-            let period = 2 * n as i128;
-            let far = ((1i128 << 61) / period) * period;
-            let r = i.rem_euclid(period);
-            (if i > 0 { far + r } else { r - far }) as i64
-        }
-    };
-    M::texel_index(idx, n).filter(|&v| v < n)
-}
-
-/// Splits a level position `p * 2^s` (a raw centre coordinate `x0 + x1`, `s = F + 1 + l`) into
-/// the left texel of the bilinear pair and the weight of the right one, truncated to
-/// `WEIGHT_BITS` bits.
-#[inline(always)]
-fn split_position(p: i128, s: u32) -> (i128, i64) {
-    let t = p - (1i128 << (s - 1));
-    let i0 = t >> s;
-    let frac = t & ((1i128 << s) - 1);
-    let a = if s >= WEIGHT_BITS {
-        frac >> (s - WEIGHT_BITS)
-    } else {
-        frac << (WEIGHT_BITS - s)
-    };
-    (i0, a as i64)
-}
-
-/// `b * 2^bits + (c - b) * a` per channel: 1 multiply and 2 additive operations per channel.
-#[inline(always)]
-fn lerp<K: Counter, const C: usize>(
-    b: [i64; C],
-    c: [i64; C],
-    a: i64,
-    bits: u32,
-    k: &mut K,
-) -> [i64; C] {
-    k.muls(C as u32);
-    k.adds(2 * C as u32);
-    let mut out = [0i64; C];
-    for ((o, b), c) in out.iter_mut().zip(b).zip(c) {
-        *o = (b << bits) + (c - b) * a;
-    }
-    out
-}
-
-impl<T: Texel, const C: usize> LevelView<'_, T, C> {
-    /// Texel `(i, j)` of the level under mode `M`, or zeros; counts one read if fetched.
-    #[inline(always)]
-    fn fetch<M: EdgeMode, K: Counter>(&self, i: i128, j: i128, k: &mut K) -> [i64; C] {
-        let mut out = [0i64; C];
-        if let (Some(x), Some(y)) = (resolve::<M>(i, self.w), resolve::<M>(j, self.h)) {
-            let base = (y * self.w + x) * C;
-            if let Some(texel) = self.data.get(base..base + C) {
-                k.reads(1, T::BITS * C as u32);
-                k.words((T::BITS * C as u32).div_ceil(32));
-                for (o, t) in out.iter_mut().zip(texel) {
-                    *o = t.to_u16() as i64;
-                }
-            }
-        }
-        out
-    }
-
-    /// The bilinear probe at the centre `(px, py) / 2^(F+1)` (base texels) in a level that
-    /// shrinks x by `2^sx` and y by `2^sy`: 4 reads, 3 lerps; `2 * WEIGHT_BITS` fraction bits.
-    #[inline(always)]
-    fn bilinear<M: EdgeMode, K: Counter>(
-        &self,
-        px: i128,
-        py: i128,
-        f: u32,
-        sx: u32,
-        sy: u32,
-        k: &mut K,
-    ) -> [i64; C] {
-        let (i0, ax) = split_position(px, f + 1 + sx);
-        let (j0, ay) = split_position(py, f + 1 + sy);
-        let t00 = self.fetch::<M, K>(i0, j0, k);
-        let t10 = self.fetch::<M, K>(i0 + 1, j0, k);
-        let t01 = self.fetch::<M, K>(i0, j0 + 1, k);
-        let t11 = self.fetch::<M, K>(i0 + 1, j0 + 1, k);
-        let r0 = lerp(t00, t10, ax, WEIGHT_BITS, k);
-        let r1 = lerp(t01, t11, ax, WEIGHT_BITS, k);
-        lerp(r0, r1, ay, WEIGHT_BITS, k)
-    }
-}
-
-/// Level position of a side of `side_raw / 2^f` texels on an axis whose top level is `top`:
-/// `(lo, hi, frac)` with `L = clamp(log2_fixed(side), 0, top)`, `lo = floor(L)`,
-/// `hi = min(lo + 1, top)`, `frac` in `LEVEL_FRAC_BITS` bits.
-fn level_split(side_raw: i128, f: u32, top: u32) -> (u32, u32, i64) {
-    let raw = u64::try_from(side_raw).unwrap_or(u64::MAX);
-    let l = log2_fixed(raw, f, LEVEL_FRAC_BITS)
-        .unwrap_or(0)
-        .clamp(0, (top as i32) << LEVEL_FRAC_BITS) as u32;
-    let lo = l >> LEVEL_FRAC_BITS;
-    let frac = (l & ((1 << LEVEL_FRAC_BITS) - 1)) as i64;
-    (lo, (lo + 1).min(top), frac)
-}
-
-/// Validates a footprint: `F <= MAX_FRAC_BITS`, not inverted. Returns the raw corners.
-fn raw_rect<X: Coord>(rect: &Rect<X>) -> Result<[i128; 4], Error> {
-    if X::FRAC_BITS > MAX_FRAC_BITS {
-        return Err(Error::FracBitsUnsupported {
-            frac_bits: X::FRAC_BITS,
-            max: MAX_FRAC_BITS,
-        });
-    }
-    let r = [
-        rect.x0.raw() as i128,
-        rect.y0.raw() as i128,
-        rect.x1.raw() as i128,
-        rect.y1.raw() as i128,
-    ];
-    if r[2] < r[0] || r[3] < r[1] {
-        return Err(Error::InvertedBox);
-    }
-    Ok(r)
-}
-
 impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
     /// Elements of `T` the levels of a `width x height` texture need:
     /// `C * (sum_lx ceil(w / 2^lx)) * (sum_ly ceil(h / 2^ly))` (`C (2w - 1)(2h - 1)` for powers
@@ -397,20 +153,10 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
     ///
     /// Cost: `(levels_x * levels_y)` passes over the texture, each texel added once per level
     /// (not counted: prefiltering is done once, off the per-sample path).
-    pub fn build(texture: &Texture<'_, T, C>, storage: &'a mut [T]) -> Result<Self, Error>
-    where
-        T: TryFrom<u16>,
-    {
+    pub fn build(texture: &Texture<'_, T, C>, storage: &'a mut [T]) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
-        check_dims(w, h)?;
-        check_sum_width(T::BITS, w, h)?;
         let needed = Self::storage_needed(w, h);
-        if storage.len() < needed {
-            return Err(Error::StorageTooSmall {
-                needed,
-                got: storage.len(),
-            });
-        }
+        check_build(T::BITS, w, h, needed, storage.len())?;
         let mut map = Self::layout(&[], w, h);
         for ly in 0..map.levels_y {
             for lx in 0..map.levels_x {
@@ -431,12 +177,7 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
     pub fn from_storage(storage: &'a [T], width: usize, height: usize) -> Result<Self, Error> {
         check_dims(width, height)?;
         let needed = Self::storage_needed(width, height);
-        if storage.len() < needed {
-            return Err(Error::StorageTooSmall {
-                needed,
-                got: storage.len(),
-            });
-        }
+        check_storage(needed, storage.len())?;
         Ok(Self::layout(&storage[..needed], width, height))
     }
 
@@ -499,13 +240,8 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
 
     /// Stored texel `(i, j)` of level `(lx, ly)` (all channels), or `None` outside.
     pub fn level_texel(&self, lx: usize, ly: usize, i: usize, j: usize) -> Option<[T; C]> {
-        let (lw, lh) = self.level_size(lx, ly)?;
-        if i >= lw || j >= lh {
-            return None;
-        }
-        let (start, _) = self.level_range(lx, ly);
-        let base = start + (j * lw + i) * C;
-        self.data.get(base..base + C)?.try_into().ok()
+        self.level_size(lx, ly)?;
+        self.view(lx, ly).texel(i, j)
     }
 
     /// Elements of `T` stored (all levels, level `(0, 0)` included).
@@ -537,20 +273,13 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let _ = mode;
-        let [x0, y0, x1, y1] = raw_rect(rect)?;
-        let f = X::FRAC_BITS;
-        let (lox, hix, fx) = level_split(x1 - x0, f, self.levels_x as u32 - 1);
-        let (loy, hiy, fy) = level_split(y1 - y0, f, self.levels_y as u32 - 1);
-        let (px, py) = (x0 + x1, y0 + y1);
+        let fp = footprint(rect)?;
+        let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, self.levels_x as u32 - 1);
+        let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, self.levels_y as u32 - 1);
         let shift = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
         let probe = |lx: u32, ly: u32, k: &mut K| {
-            let mut v = self
-                .view(lx as usize, ly as usize)
-                .bilinear::<M, K>(px, py, f, lx, ly, k);
-            for c in v.iter_mut() {
-                *c >>= shift;
-            }
-            v
+            let level = self.view(lx as usize, ly as usize);
+            truncate(level.bilinear::<M, K>(&fp, lx, ly, WEIGHT_BITS, k), shift)
         };
         let v00 = probe(lox, loy, k);
         let v10 = probe(hix, loy, k);
@@ -559,11 +288,7 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
         let b0 = lerp(v00, v10, fx, LEVEL_FRAC_BITS, k);
         let b1 = lerp(v01, v11, fx, LEVEL_FRAC_BITS, k);
         let out = lerp(b0, b1, fy, LEVEL_FRAC_BITS, k);
-        let mut values = [0u64; C];
-        for (o, v) in values.iter_mut().zip(out) {
-            *o = (v.max(0) >> (2 * LEVEL_FRAC_BITS)) as u64;
-        }
-        Ok(Sample { values })
+        Ok(floor_sample(out, 2 * LEVEL_FRAC_BITS))
     }
 }
 
