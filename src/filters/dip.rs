@@ -58,7 +58,7 @@
 //!
 //! # Arithmetic and error bound
 //!
-//! Integer, `i64`, as in [`crate::filters::rip`]: probe weights truncated to [`WEIGHT_BITS`]
+//! Integer, `i64`, as in the ripmap (`filters::rip`): probe weights truncated to [`WEIGHT_BITS`]
 //! bits, each probe exact for its truncated weights at `2 * WEIGHT_BITS` fraction bits.
 //! `Bilinear`: `(a + b) >> 17` (floor) to [`OUT_FRAC_BITS`] bits. `Trilinear`: each probe
 //! truncated to 16 fraction bits, the level lerp exact at `16 + LEVEL_FRAC_BITS` bits, then
