@@ -190,7 +190,10 @@ mod tests {
         let f = p.footprint(3.0, 2.0).unwrap();
         // u = 1.5, v = 0.5; du/dx = 1/y = 0.5, du/dy = -x/y^2 = -0.75, dv/dx = 0, dv/dy = -1/y^2.
         assert_eq!((f.u, f.v), (1.5, 0.5));
-        assert_eq!((f.du_dx, f.du_dy, f.dv_dx, f.dv_dy), (0.5, -0.75, 0.0, -0.25));
+        assert_eq!(
+            (f.du_dx, f.du_dy, f.dv_dx, f.dv_dy),
+            (0.5, -0.75, 0.0, -0.25)
+        );
         assert_eq!(p.map(3.0, 0.0), None);
         assert_eq!(p.map(3.0, -1.0), None);
     }

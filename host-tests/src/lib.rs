@@ -655,9 +655,9 @@ pub mod strategies {
     }
 }
 
+pub mod ewa;
 pub mod filter_ref_mip;
 pub mod filter_ref_ripdip;
 pub mod filter_ref_tentvar;
-pub mod stability;
-pub mod ewa;
 pub mod scenes;
+pub mod stability;
