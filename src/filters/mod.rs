@@ -6,12 +6,12 @@
 //!
 //! | feature | module | filter |
 //! |---|---|---|
-//! | `filter-point` | [`point`] | nearest texel |
-//! | `filter-mip` | [`mip`] | box-filtered 2x2 pyramid: point-sampled and trilinear (Williams) |
-//! | `filter-rip` | [`rip`] | 4-D pyramid (ripmap): u and v scaled independently, 4 bilinear probes |
-//! | `filter-dip` | [`dip`] | row and column pyramids (dipmap), bilinear and trilinear variants |
-//! | `filter-tent` | [`tent`] | repeated integration of order 2: the triangle filter |
-//! | `filter-variance` | [`variance`] | variance over a box from SATs of values and squares |
+//! | `filter-point` | `point` | nearest texel |
+//! | `filter-mip` | `mip` | box-filtered 2x2 pyramid: point-sampled and trilinear (Williams) |
+//! | `filter-rip` | `rip` | 4-D pyramid (ripmap): u and v scaled independently, 4 bilinear probes |
+//! | `filter-dip` | `dip` | row and column pyramids (dipmap), bilinear and trilinear variants |
+//! | `filter-tent` | `tent` | repeated integration of order 2: the triangle filter |
+//! | `filter-variance` | `variance` | variance over a box from SATs of values and squares |
 //!
 //! (`filters` enables them all.) Every filter takes the footprint as the rectangle that bounds it
 //! ([`crate::Rect`] with fixed-point corners, as the box lookups do), a boundary mode, and a

@@ -74,7 +74,7 @@ impl Shortcut {
     }
 }
 
-/// A mean from [`Sat::box_mean_shortcut`], and whether the shortcut answered it.
+/// A mean from [`crate::Sat::box_mean_shortcut`], and whether the shortcut answered it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ShortcutMean<const C: usize> {
     /// Per channel, the mean times `2^g`, rounded to nearest (ties up).
