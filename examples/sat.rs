@@ -1,29 +1,42 @@
 //! `sat`: summed-area tables of image files from the command line.
 //!
 //! ```text
-//! sat info IMAGE [--entry u16|u32|u64] [--checked]       one JSON object about the table
-//! sat query IMAGE [--frac-bits F] [--edge MODE] [--form paper|stable] ...
+//! sat info IMAGE [--layout L] [--entry u16|u32|u64] [--checked] [--filter NAME]
+//!                                                         one JSON object about the table
+//! sat query IMAGE [--filter NAME] [--layout L] [--frac-bits F] [--edge MODE] [--form FORM] ...
 //!                                                         box queries on stdin, JSON lines out
 //! sat demo                                                a guided tour on a generated texture
 //! ```
+//!
+//! `--layout` is one of `flat` (the default), `packed`, `tiled:WxH`, `tiled:W1xH1/W2xH2[/...]`,
+//! `modular:K`, `modular:box=WxH` and `tiled:WxH+mod:K` (see `sat/layout.rs`). `--filter` is
+//! `box` (the summed-area table, the default) or one of the comparison filters `point`, `mip`,
+//! `trilinear`, `ripmap`, `dipmap`, `dipmap-trilinear`, `tent`, `tent-exact`, `variance` (see
+//! `sat/filter.rs`; they need the crate's `filters` feature: `--features filters`).
 //!
 //! Run `sat help <command>` for the details of each command; `cargo run --example sat -- demo`
 //! for the tour.
 
 #[path = "sat/demo.rs"]
 mod demo;
+#[path = "sat/filter.rs"]
+mod filter;
+#[path = "sat/layout.rs"]
+mod layout;
 #[path = "sat/load.rs"]
 mod load;
 #[path = "sat/num.rs"]
 mod num;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use filter::{FilterArg, FilterQuery, ImageTexel};
 use fixed::traits::Fixed;
 use fixed::types::extra::{
     U1, U10, U11, U12, U13, U14, U15, U16, U17, U18, U19, U2, U20, U21, U22, U23, U24, U3, U4, U5,
     U6, U7, U8, U9,
 };
 use fixed::FixedI64;
+use layout::{with_layout, Detail, LayoutArg, LayoutJob, LayoutKind, Plan};
 use load::{channel_totals, with_texture, TextureJob};
 use num::{fixed_decimal, parse_fixed, Inexact};
 use serde_json::{json, Value};
@@ -33,8 +46,8 @@ use std::process::ExitCode;
 use texsat::texel::Acc;
 use texsat::width::{self, bits_of};
 use texsat::{
-    Border, BoxSum, ClampToEdge, EdgeMode, Entry, Error, Form, MirroredRepeat, Paper, Rect, Repeat,
-    Sat, Stable, Tally, Texel, Texture,
+    Border, BoxLookup, BoxSum, ClampToEdge, EdgeMode, Entry, Error, Form, MirroredRepeat, NoCount,
+    Paper, Quantity, Rect, Repeat, Stable, Tally, Texel, Texture,
 };
 
 #[derive(Parser)]
@@ -62,18 +75,65 @@ enum Command {
 }
 
 const INFO_HELP: &str = "\
-Output fields: width, height, channels, texel_bits, texel_type, bits_needed_worst_case
-(bits of (2^b - 1) * w * h, what `Sat::build` proves before it writes), bits_needed_naive
-(b + ceil(log2(w * h)), the textbook bound, for comparison), bits_needed_actual (bits of the
-largest per-channel whole-texture sum of this image), entry_type, entry_bits, bits_per_entry
-(= entry_bits: one entry holds one channel of one texel), bits_per_texel (entry_bits x
-channels), table_entries, table_bytes, layout (\"flat\": row-major, channels interleaved, entry
-(i, j) = sum of texels (i', j') with i' <= i and j' <= j), build (\"worst_case\" or \"checked\"),
-totals (per-channel whole-texture sums as decimal strings; an array when channels > 1).
+Output fields, every layout: width, height, channels, texel_bits, texel_type,
+bits_needed_worst_case (bits of (2^b - 1) * w * h, what the exact builds prove before they
+write), bits_needed_naive (b + ceil(log2(w * h)), the textbook bound, for comparison),
+bits_needed_actual (bits of the largest per-channel whole-texture sum of this image), layout (the
+--layout string), bits_per_entry (storage bits / (w * h * channels)), bits_per_texel (storage
+bits / (w * h), all channels), storage_bits, table_bytes, fields_per_corner (the most table values
+one corner S(x, y) reads), totals (per-channel whole-texture sums as decimal strings; an array
+when channels > 1).
 
-If the entry type is too narrow (the worst case with the default build, the actual sums with
---checked), nothing is printed on stdout; the reason, with the bits needed and available, goes to
-stderr and the exit status is 1.";
+flat (the default): row-major, channels interleaved, entry (i, j) = sum of texels (i', j') with
+i' <= i and j' <= j, in native --entry words; also entry_type, entry_bits, value_type (=
+entry_type), table_entries, build (\"worst_case\" or \"checked\"). bits_per_entry = entry_bits.
+
+packed, tiled:..., modular:...: fields of exact widths packed in 32-bit words; also value_type
+(the type corner values are summed in), words (table_bytes = 4 x words). bits_per_entry and
+bits_per_texel are rounded to 4 decimals.
+  packed             the flat table packed at its exact width (bits_needed_worst_case bits)
+  tiled:WxH          one level of W x H tiles: local sums, edge strips, tile corners
+  tiled:W1xH1/W2xH2  tiles within tiles (x blocks [W1, W2, ...], y blocks [H1, H2, ...]; each a
+                     multiple of the previous, at most 4 levels)
+  Tiled layouts (packed included) also report blocks_x, blocks_y and field_bits
+  (field_bits[p][q]: the field width of component (p, q), p the x level, q the y level; level 0
+  = inside the smallest block).
+  modular:K          the flat table modulo 2^K, K bits per field: exact only for boxes whose sum
+                     stays below 2^K; reports k and max_exact_area = floor((2^K - 1) / (2^b - 1))
+  modular:box=WxH    K = bits of (2^b - 1) * W * H: every box of W x H texel cells is exact
+  tiled:WxH+mod:K    tiles with every field modulo 2^K (also +mod:box=WxH); reports both
+The value type is --entry for exact layouts (default u32) and the narrowest of u32 and u64 that
+holds K for modular ones (--entry may name a wider one).
+
+If the entry (value) type is too narrow (the worst case with the default build, the actual sums
+with --checked), nothing is printed on stdout; the reason, with the bits needed and available,
+goes to stderr and the exit status is 1. A malformed --layout is refused with a message on
+stderr (exit status 2), as are K < texel bits and --checked with a layout other than flat (exit
+status 1).
+
+--filter NAME reports the memory of that filter's structure, built from the image: width,
+height, channels, texel_bits, texel_type, filter, texture_bytes (w x h x channels x texel
+bytes), storage_bytes (the filter's own storage), reads_texture (whether samples also read the
+texture: point, mip/trilinear level 0, tent-exact), memory_bytes (storage, plus the texture if
+it is read) and memory_ratio (memory_bytes / texture_bytes, 4 decimals), and per filter:
+  point              no storage, ratio 1
+  mip, trilinear     levels, pyramid_texels, storage_type: levels 1.. (level 0 is the texture);
+                     ratio about 4/3 (Heckbert's 1.33)
+  ripmap             levels_x, levels_y, storage_type: every level (u, v scaled apart), the
+                     texture copied as level (0, 0); ratio about 4
+  dipmap, dipmap-trilinear
+                     levels_row, levels_column, storage_type: row and column pyramids sharing
+                     level 0; ratio about 3
+  tent               entry_type (u64, u128 if needed), entry_bits_needed, table_bytes: the
+                     order-2 table of the texture padded by one row and column; u8 texels in u64:
+                     about 8
+  tent-exact         also lines_entry_type, lines_bits_needed, lines_bytes (per-line order-2
+                     tables) and the texture
+  variance           tables (2), entry_type (--entry, else u32 or u64, whichever holds the
+                     squares), values_bits_needed, squares_bits_needed, values_bytes,
+                     squares_bytes
+  box                the table report above (--layout, --entry) plus these memory fields.
+--layout and --checked apply to box only, --entry to box and variance.";
 
 const QUERY_HELP: &str = "\
 INPUT: one box per line, \"x0 y0 x1 y1\" separated by blanks: the box [x0, x1) x [y0, y1) in
@@ -83,8 +143,8 @@ that is not a multiple of 2^-F is an error unless --round is given. Empty lines 
 with '#' are skipped.
 
 OUTPUT: per input line, one JSON object:
-  {\"sum\": \"<exact>\", \"mean\": \"<decimal>\", \"lookup\": \"int4|paper|stable\",
-   \"reads\": R, \"bits_read\": B, \"muls\": M, \"divs\": D, \"adds\": A}
+  {\"sum\": \"<exact>\", \"mean\": \"<decimal>\", \"filter\": \"box\", \"lookup\": \"int4|paper|stable\",
+   \"reads\": R, \"bits_read\": B, \"words\": W, \"muls\": M, \"divs\": D, \"adds\": A}
 sum is the exact integral of the texture over the box (a multiple of 2^-2F, printed with all its
 digits). mean is sum / area rounded to the nearest multiple of 2^-G (ties away from zero), G =
 --mean-bits, printed exactly; it is within 2^-(G+1) of the exact mean. With the border mode the
@@ -92,24 +152,66 @@ area is the unclipped box's (outside counts as 0). A zero-area box has sum \"0\"
 For images with several channels, sum and mean are arrays with one string per channel. Sums and
 means are strings because they can exceed 2^53.
 The counts are Crow's (1984, section 2.2), tallied over the lookup and the mean: reads of table
-entries (all channels together), multiplies, divides and additive operations (per channel).
-Interior boxes cost 4 reads, 1 mul, 1 div and 3 adds with integer corners (F = 0) and 16 reads,
-13 muls, 1 div, 27 adds (paper) or 31 adds (stable) with F > 0; with C channels, 12C + 1 muls
-(paper), C divs and 3C or 27C adds. The corner function's row y = 0 and column x = 0 are zero and
-cost no read, so boxes touching the first texel row or column read fewer entries; boxes
-straddling the texture edge under clamp, repeat or mirror take a weighted path with other counts.
+values (fields; all channels together), the bits and the 32-bit words they touch, multiplies,
+divides and additive operations (per channel). On the flat table interior boxes cost 4 reads, 1
+mul, 1 div and 3 adds with integer corners (F = 0) and 16 reads, 13 muls, 1 div, 27 adds (paper)
+or 31 adds (stable) with F > 0; with C channels, 12C + 1 muls (paper), C divs and 3C or 27C adds.
+The corner function's row y = 0 and column x = 0 are zero and cost no read, so boxes touching the
+first texel row or column read fewer entries; boxes straddling the texture edge under clamp,
+repeat or mirror take a weighted path with other counts. On a tiled layout a corner reads one
+field per pair of non-zero digits of (x, y) (up to 4 with one level of tiles) and adds them: more
+reads and adds, fewer bits.
+
+--layout chooses the table the lookups read (see `sat help info`); sums are the same on every
+layout. A modular layout (modular:K, tiled:...+mod:K) refuses a box whose sum may reach 2^K: the
+texel cells the box overlaps times 2^b - 1 (plus 2F bits for the paper form at F > 0, and for
+boxes straddling the texture edge under clamp, repeat or mirror) must stay below 2^K; such a line
+gives {\"error\": \"box sum on the modular layout needs X bits but only K are available\", ...}.
+A fractional box W texels wide overlaps up to W + 1 cells.
 
 F = 0 uses the 4-read integer lookup (coordinates must be integers). F > 0 uses the 16-read
 lookup in the chosen --form for every box, integer corners included (as fixed-point hardware
 would), unless --int4 is given.
 
 A line that cannot be answered (wrong number of fields, not a number, not representable at F
-bits, inverted box, too wide for the accumulator, ...) gives {\"error\": \"...\", \"line\": N} and the
-following lines are still answered; the exit status is then 1. A table that cannot be built, or a
-lookup width that the entry type can never satisfy, is reported on stderr before any input is
-read (exit status 1).";
+bits, inverted box, too wide for the accumulator, too large for the modular layout, ...) gives
+{\"error\": \"...\", \"line\": N} and the following lines are still answered; the exit status is
+then 1. A table that cannot be built, or a lookup width that the value type (or K) can never
+satisfy, is reported on stderr before any input is read (exit status 1).
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+FILTERS: --filter box (the default) is the summed-area table described above. The comparison
+filters (Heckbert 1986, \"Comparison of Prefiltering Methods\"; Du and Wan, \"Dipmap\") read the
+same lines; a filter that needs a footprint takes the box as the rectangle bounding it (centre
+((x0 + x1) / 2, (y0 + y1) / 2), sides W = x1 - x0, H = y1 - y0). Each prints
+  {\"value\": \"<decimal>\", \"filter\": NAME, [\"variant\": V,] \"reads\": R, \"bits_read\": B,
+   \"words\": W, \"muls\": M, \"divs\": D, \"adds\": A}
+value is the filter's output (a multiple of 2^-16, printed exactly; an array of strings with
+several channels). The structures are built once per run from the image. Costs are counted as
+the survey and Crow count them (reads of texels or table entries, all channels together; the
+arithmetic per channel); the survey's figures (reads, multiplies) hold for footprints away from
+the edges (reads that the border mode resolves to zero are not counted by ripmap and dipmap):
+  point              the texel holding the centre (exact): 1, 0
+  mip                point-sampled pyramid: level round(log2 max(W, H)), nearest texel: 1, 0
+  trilinear          Williams' trilinear on the pyramid: 8 reads, 7 muls, 14 adds
+  ripmap             4-D pyramid, levels log2 W and log2 H apart: 16 reads, 15 muls
+  dipmap             bilinear in the lower level of the row and column pyramids, averaged:
+                     8 reads, 6 muls
+  dipmap-trilinear   trilinear in both pyramids, averaged: 16 reads, 14 muls
+  tent               triangle filter by repeated integration. variant \"int\" when the four
+                     numbers are integers and both sides even (integer centre and half-widths):
+                     9 reads, 3 muls + 1 div, exact; else variant \"paper\": bilinear
+                     interpolation of the order-2 table, 36 reads, 30 muls + 1 div, within the
+                     documented bound m/4 (1/a^2 + 1/b^2 + 1/(2 a^2 b^2)) of the exact filter
+  tent-exact         the exact triangle filter for fixed-point corners: 81 reads, 72 muls + 1 div
+  variance           the variance of the texels over the box (exact, rounded to 2^-16): variant
+                     \"int\" (integer corners, 8 reads) or the --form used (32 reads)
+Every boundary mode (--edge) applies to every filter. ripmap and dipmap floor their output to
+2^-16; trilinear, tent, tent-exact and variance round to nearest (ties up); point and mip are
+exact. --layout, --checked, --mean-bits and --int4 apply to box only; --entry to box and variance;
+--form to box and variance. Zero-area footprints are errors for tent and variance and point
+samples for the others.";
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug, ValueEnum)]
 enum EntryArg {
     U16,
     U32,
@@ -140,25 +242,43 @@ enum FormArg {
 struct TableArgs {
     /// PNG or PNM (PGM, PPM, PAM, PBM) file; 8- or 16-bit samples, 1 to 4 channels.
     image: PathBuf,
-    /// Table entry type (bits per entry and channel).
-    #[arg(long, value_enum, default_value_t = EntryArg::U32)]
-    entry: EntryArg,
+    /// Table layout: flat, packed, tiled:WxH, tiled:W1xH1/W2xH2[/...], modular:K,
+    /// modular:box=WxH, tiled:WxH+mod:K (see `sat help info`).
+    #[arg(long, value_parser = layout::parse_layout, default_value = "flat")]
+    layout: LayoutArg,
+    /// Table entry type (bits per entry and channel) of the flat layout; the type corner values
+    /// are summed in for the others [default: u32; modular: u32 if K <= 32, else u64].
+    #[arg(long, value_enum)]
+    entry: Option<EntryArg>,
     /// Build with checked additions (`Sat::build_checked`): accept any image whose actual sums
-    /// fit the entry type, instead of proving the worst case first (`Sat::build`).
+    /// fit the entry type, instead of proving the worst case first (`Sat::build`). Flat only.
     #[arg(long)]
     checked: bool,
+}
+
+impl TableArgs {
+    /// What to build for texels of `texel_bits` bits.
+    fn plan(&self, texel_bits: u32) -> Result<Plan, String> {
+        layout::resolve(&self.layout, self.entry, self.checked, texel_bits)
+    }
 }
 
 #[derive(Args)]
 struct InfoArgs {
     #[command(flatten)]
     table: TableArgs,
+    /// Report the memory of this filter's structure instead of (box: as well as) the table's.
+    #[arg(long, value_enum)]
+    filter: Option<FilterArg>,
 }
 
 #[derive(Args)]
 struct QueryArgs {
     #[command(flatten)]
     table: TableArgs,
+    /// The filter that answers each line (see `sat help query`).
+    #[arg(long, value_enum, default_value_t = FilterArg::Box)]
+    filter: FilterArg,
     /// Fractional bits F of the corner coordinates (0 to 24). F = 0: integer corners, 4 reads.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=24))]
     frac_bits: u32,
@@ -200,12 +320,6 @@ fn main() -> ExitCode {
 // ---------------------------------------------------------------------------------------------
 // Building the table
 
-/// Code generic over the entry type and the channel count, run on a built table.
-trait SatJob {
-    type Out;
-    fn run<E: Entry, const C: usize>(self, sat: &Sat<'_, E, C>) -> Self::Out;
-}
-
 fn entry_name(e: EntryArg) -> &'static str {
     match e {
         EntryArg::U16 => "u16",
@@ -214,30 +328,11 @@ fn entry_name(e: EntryArg) -> &'static str {
     }
 }
 
-/// Builds the table of `texture` with entry type `entry` and runs `job` on it.
-fn with_sat<T: Texel, const C: usize, J: SatJob>(
-    texture: &Texture<'_, T, C>,
-    entry: EntryArg,
-    checked: bool,
-    job: J,
-) -> Result<J::Out, Error> {
-    fn go<T: Texel, E: Entry, const C: usize, J: SatJob>(
-        texture: &Texture<'_, T, C>,
-        checked: bool,
-        job: J,
-    ) -> Result<J::Out, Error> {
-        let mut storage = vec![E::ZERO; texture.width() * texture.height() * C];
-        let sat = if checked {
-            Sat::build_checked(texture, &mut storage)?
-        } else {
-            Sat::build(texture, &mut storage)?
-        };
-        Ok(job.run(&sat))
-    }
-    match entry {
-        EntryArg::U16 => go::<T, u16, C, J>(texture, checked, job),
-        EntryArg::U32 => go::<T, u32, C, J>(texture, checked, job),
-        EntryArg::U64 => go::<T, u64, C, J>(texture, checked, job),
+fn entry_bits(e: EntryArg) -> u32 {
+    match e {
+        EntryArg::U16 => 16,
+        EntryArg::U32 => 32,
+        EntryArg::U64 => 64,
     }
 }
 
@@ -245,6 +340,7 @@ fn with_sat<T: Texel, const C: usize, J: SatJob>(
 fn refusal<T: Texel, const C: usize>(
     texture: &Texture<'_, T, C>,
     args: &TableArgs,
+    plan: &Plan,
     err: Error,
 ) -> String {
     let (w, h, b) = (texture.width(), texture.height(), T::BITS);
@@ -253,40 +349,45 @@ fn refusal<T: Texel, const C: usize>(
         .map(|&t| bits_of(t))
         .max()
         .unwrap_or(0);
-    let mut msg = format!(
-        "cannot build the table with {} entries: {err}",
-        entry_name(args.entry)
-    );
-    if let Error::TooWide { bits_needed, .. } = err {
+    let value = plan.value();
+    let mut msg = match plan {
+        Plan::Flat { .. } => format!(
+            "cannot build the table with {} entries: {err}",
+            entry_name(value)
+        ),
+        _ => format!(
+            "cannot build the {} layout with {} values: {err}",
+            args.layout.text,
+            entry_name(value)
+        ),
+    };
+    if let Error::TooWide {
+        what: Quantity::Entry,
+        bits_needed,
+        ..
+    } = err
+    {
         let wider = [EntryArg::U16, EntryArg::U32, EntryArg::U64]
             .into_iter()
             .find(|&e| entry_bits(e) >= bits_needed)
             .map_or("no entry type is wide enough".to_string(), |e| {
                 format!("use --entry {}", entry_name(e))
             });
-        if args.checked {
+        if plan.checked() {
             msg +=
                 &format!(" (this texture's largest channel sum needs {bits_needed} bits); {wider}");
-        } else {
+        } else if plan.worst_case() {
             let worst = width::worst_case_total(b, w, h);
             msg += &format!(
                 " (worst case for {w} x {h} texels of {b} bits: (2^{b} - 1) x {w} x {h} = {worst}); \
                  {wider}"
             );
-            if actual <= entry_bits(args.entry) {
+            if args.layout.kind == LayoutKind::Flat && actual <= entry_bits(value) {
                 msg += &format!(", or --checked (this texture's sums need only {actual} bits)");
             }
         }
     }
     msg
-}
-
-fn entry_bits(e: EntryArg) -> u32 {
-    match e {
-        EntryArg::U16 => 16,
-        EntryArg::U32 => 32,
-        EntryArg::U64 => 64,
-    }
 }
 
 /// Strings for per-channel values: a string for one channel, an array for several.
@@ -303,54 +404,103 @@ fn per_channel<const C: usize>(values: [u128; C], k: u32) -> Value {
     }
 }
 
+/// `v` rounded to 4 decimals, as a JSON number.
+fn round4(v: f64) -> Value {
+    json!((v * 1e4).round() / 1e4)
+}
+
 // ---------------------------------------------------------------------------------------------
 // sat info
 
 fn info(args: &InfoArgs) -> Result<bool, String> {
+    if let Some(f) = args.filter {
+        check_filter_options(f, &args.table)?;
+    }
     let img = load::load(&args.table.image)?;
-    let json = with_texture(&img, InfoJob { args: &args.table })??;
+    let json = with_texture(
+        &img,
+        InfoJob {
+            args: &args.table,
+            filter: args.filter,
+        },
+    )??;
     println!("{json}");
     Ok(true)
 }
 
+/// Refuses table options that do not apply to `filter` (and filters not compiled in).
+fn check_filter_options(filter: FilterArg, t: &TableArgs) -> Result<(), String> {
+    filter::check_options(
+        filter,
+        t.layout.kind == LayoutKind::Flat,
+        t.checked,
+        t.entry,
+    )
+}
+
 struct InfoJob<'a> {
     args: &'a TableArgs,
+    filter: Option<FilterArg>,
 }
 
 impl TextureJob for InfoJob<'_> {
     type Out = Result<Value, String>;
-    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
-        let totals = channel_totals(texture);
-        let job = InfoSatJob {
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        if let Some(f) = self.filter.filter(|&f| f != FilterArg::Box) {
+            return filter::info(texture, f, self.args.entry);
+        }
+        let plan = self.args.plan(T::BITS)?;
+        let job = InfoLayoutJob {
             args: self.args,
-            texel_bits: T::BITS,
-            totals,
+            plan: &plan,
+            totals: channel_totals(texture),
+            filter_box: self.filter == Some(FilterArg::Box),
+            texture_bytes: texture.width() * texture.height() * C * std::mem::size_of::<T>(),
         };
-        with_sat(texture, self.args.entry, self.args.checked, job)
-            .map_err(|e| refusal(texture, self.args, e))?
+        with_layout(texture, &plan, job).map_err(|e| refusal(texture, self.args, &plan, e))?
     }
 }
 
-struct InfoSatJob<'a, const N: usize> {
+struct InfoLayoutJob<'a, const N: usize> {
     args: &'a TableArgs,
-    texel_bits: u32,
+    plan: &'a Plan,
+    /// Whole-texture sums straight from the texels.
     totals: [u128; N],
+    /// `--filter box`: add the memory fields the other filters report.
+    filter_box: bool,
+    /// Bytes of the texture's texels.
+    texture_bytes: usize,
 }
 
-impl<const N: usize> SatJob for InfoSatJob<'_, N> {
+impl<const N: usize> LayoutJob for InfoLayoutJob<'_, N> {
     type Out = Result<Value, String>;
-    fn run<E: Entry, const C: usize>(self, sat: &Sat<'_, E, C>) -> Self::Out {
-        let (w, h, b) = (sat.width(), sat.height(), self.texel_bits);
-        let table_totals: Vec<u128> = sat.total().iter().map(|t| t.to_u128()).collect();
-        if table_totals[..] != self.totals[..] {
+    fn run<L: BoxLookup<C>, const C: usize>(self, l: &L, detail: &Detail) -> Self::Out {
+        let (w, h, b) = (l.width(), l.height(), l.texel_bits());
+        // The layout's whole-texture corner must be the texel sum (mod 2^k if modular).
+        let corner: Vec<u128> = l
+            .corner(w, h, &mut NoCount)
+            .iter()
+            .map(|v| v.to_u128())
+            .collect();
+        let expected: Vec<u128> = self
+            .totals
+            .iter()
+            .map(|&t| match l.modulus() {
+                Some(k) if k < 128 => t & ((1u128 << k) - 1),
+                _ => t,
+            })
+            .collect();
+        if corner != expected {
             return Err(format!(
-                "internal error: table totals {table_totals:?} differ from the texel sums {:?}",
-                self.totals
+                "internal error: the layout's whole-texture corner {corner:?} differs from the \
+                 texel sums {expected:?}"
             ));
         }
         let mut totals = [0u128; C];
-        totals.copy_from_slice(&table_totals);
-        Ok(json!({
+        totals.copy_from_slice(&self.totals);
+        let storage_bits = l.storage_bits();
+        let value = self.plan.value();
+        let mut out = json!({
             "width": w,
             "height": h,
             "channels": C,
@@ -358,17 +508,97 @@ impl<const N: usize> SatJob for InfoSatJob<'_, N> {
             "texel_type": if b == 8 { "u8" } else { "u16" },
             "bits_needed_worst_case": width::entry_bits_worst_case(b, w, h),
             "bits_needed_naive": width::entry_bits_naive(b, w, h),
-            "bits_needed_actual": sat.total_bits(),
-            "entry_type": entry_name(self.args.entry),
-            "entry_bits": E::BITS,
-            "bits_per_entry": E::BITS,
-            "bits_per_texel": E::BITS * C as u32,
-            "table_entries": sat.entries().len(),
-            "table_bytes": sat.table_bytes(),
-            "layout": "flat",
-            "build": if self.args.checked { "checked" } else { "worst_case" },
-            "totals": per_channel(totals, 0),
-        }))
+            "bits_needed_actual": self.totals.iter().map(|&t| bits_of(t)).max().unwrap_or(0),
+            "layout": self.args.layout.text,
+        });
+        let o = out.as_object_mut().expect("an object");
+        let mut put = |k: &str, v: Value| {
+            o.insert(k.to_string(), v);
+        };
+        let packed = |put: &mut dyn FnMut(&str, Value), words: usize| {
+            put("words", json!(words));
+            put("table_bytes", json!(words * 4));
+            put("storage_bits", json!(storage_bits));
+            put("bits_per_entry", round4(l.bits_per_entry()));
+            put(
+                "bits_per_texel",
+                round4(storage_bits as f64 / (w as f64 * h as f64)),
+            );
+        };
+        match detail {
+            Detail::Flat {
+                entries,
+                table_bytes,
+            } => {
+                let eb = entry_bits(value);
+                put("entry_type", json!(entry_name(value)));
+                put("entry_bits", json!(eb));
+                put("value_type", json!(entry_name(value)));
+                put("bits_per_entry", json!(eb));
+                put("bits_per_texel", json!(eb * C as u32));
+                put("table_entries", json!(entries));
+                put("table_bytes", json!(table_bytes));
+                put("storage_bits", json!(storage_bits));
+                put("fields_per_corner", json!(1));
+                put(
+                    "build",
+                    json!(if self.plan.checked() {
+                        "checked"
+                    } else {
+                        "worst_case"
+                    }),
+                );
+            }
+            Detail::Tiled {
+                spec,
+                words,
+                field_bits,
+                fields_per_corner,
+            } => {
+                put("value_type", json!(entry_name(value)));
+                put("blocks_x", json!(spec.x.blocks()));
+                put("blocks_y", json!(spec.y.blocks()));
+                put("fields_per_corner", json!(fields_per_corner));
+                put("field_bits", json!(field_bits));
+                if let Some(k) = spec.modulus {
+                    put("k", json!(k));
+                    put(
+                        "max_exact_area",
+                        json!(u64::try_from(layout::max_exact_area(k, b)).unwrap_or(u64::MAX)),
+                    );
+                }
+                packed(&mut put, *words);
+            }
+            Detail::Modular {
+                k,
+                words,
+                max_exact_area,
+            } => {
+                put("value_type", json!(entry_name(value)));
+                put("k", json!(k));
+                put(
+                    "max_exact_area",
+                    json!(u64::try_from(*max_exact_area).unwrap_or(u64::MAX)),
+                );
+                put("fields_per_corner", json!(1));
+                packed(&mut put, *words);
+            }
+        }
+        put("totals", per_channel(totals, 0));
+        if self.filter_box {
+            let table_bytes = o["table_bytes"].as_u64().unwrap_or(0);
+            let texture_bytes = self.texture_bytes as u64;
+            o.insert("filter".into(), json!("box"));
+            o.insert("texture_bytes".into(), json!(texture_bytes));
+            o.insert("storage_bytes".into(), json!(table_bytes));
+            o.insert("reads_texture".into(), json!(false));
+            o.insert("memory_bytes".into(), json!(table_bytes));
+            o.insert(
+                "memory_ratio".into(),
+                round4(table_bytes as f64 / texture_bytes as f64),
+            );
+        }
+        Ok(out)
     }
 }
 
@@ -386,6 +616,35 @@ struct QueryOpts {
 
 fn query(args: &QueryArgs) -> Result<bool, String> {
     let f = args.frac_bits;
+    check_filter_options(args.filter, &args.table)?;
+    if args.filter != FilterArg::Box {
+        let name = args.filter.name();
+        if args.mean_bits.is_some() {
+            return Err(format!(
+                "--mean-bits applies to --filter box only (--filter {name} prints its value \
+                 with 16 fraction bits)"
+            ));
+        }
+        if args.int4 {
+            return Err(format!(
+                "--int4 applies to --filter box only, not to --filter {name}"
+            ));
+        }
+        let q = FilterQuery {
+            filter: args.filter,
+            frac_bits: f,
+            edge: args.edge,
+            form: args.form,
+            inexact: if args.round {
+                Inexact::Round
+            } else {
+                Inexact::Refuse
+            },
+            entry: args.table.entry,
+        };
+        let img = load::load(&args.table.image)?;
+        return with_texture(&img, FilterJob { q: &q })?;
+    }
     let opts = QueryOpts {
         frac_bits: f,
         mean_bits: args.mean_bits.unwrap_or((2 * f + 8).min(40)),
@@ -408,6 +667,17 @@ fn query(args: &QueryArgs) -> Result<bool, String> {
     )?
 }
 
+struct FilterJob<'a> {
+    q: &'a FilterQuery,
+}
+
+impl TextureJob for FilterJob<'_> {
+    type Out = Result<bool, String>;
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        filter::query(texture, self.q)
+    }
+}
+
 struct QueryJob<'a> {
     args: &'a TableArgs,
     opts: &'a QueryOpts,
@@ -415,90 +685,125 @@ struct QueryJob<'a> {
 
 impl TextureJob for QueryJob<'_> {
     type Out = Result<bool, String>;
-    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
-        let job = QuerySatJob { opts: self.opts };
-        with_sat(texture, self.args.entry, self.args.checked, job)
-            .map_err(|e| refusal(texture, self.args, e))?
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        let plan = self.args.plan(T::BITS)?;
+        let job = QueryLayoutJob {
+            opts: self.opts,
+            value: plan.value(),
+        };
+        with_layout(texture, &plan, job).map_err(|e| refusal(texture, self.args, &plan, e))?
     }
 }
 
-struct QuerySatJob<'a> {
+struct QueryLayoutJob<'a> {
     opts: &'a QueryOpts,
+    value: EntryArg,
 }
 
-impl SatJob for QuerySatJob<'_> {
+/// Refuses, before any input is read, lookups that no box could pass: an accumulator too narrow
+/// for the table's values at F, or a modular K below the paper form's headroom for one texel.
+fn check_widths<L: BoxLookup<C>, const C: usize>(
+    l: &L,
+    o: &QueryOpts,
+    value: EntryArg,
+    detail: &Detail,
+) -> Result<(), String> {
+    if o.frac_bits == 0 {
+        return Ok(());
+    }
+    let f = o.frac_bits;
+    let (name, needed) = match o.form {
+        FormArg::Paper => ("paper", Paper::acc_bits(l.value_bits(), f)),
+        FormArg::Stable => ("stable", Stable::acc_bits(l.value_bits(), f)),
+    };
+    let available = <<L::Value as Entry>::Acc as Acc>::VALUE_BITS;
+    if needed > available {
+        let what = match (l.modulus(), detail) {
+            (Some(_), _) => "residues",
+            (None, Detail::Flat { .. }) => "sums",
+            (None, _) => "worst-case sums",
+        };
+        return Err(format!(
+            "the {name} lookup at F = {f} needs a {needed}-bit accumulator for this table \
+             ({what} of {} bits, scaled by 2^{}), but lookups on {} values accumulate in i{} \
+             ({available} value bits); use a wider --entry or fewer --frac-bits",
+            l.value_bits(),
+            2 * f,
+            entry_name(value),
+            available + 1
+        ));
+    }
+    if let (Some(k), FormArg::Paper, false) = (l.modulus(), o.form, o.int4) {
+        let headroom = <Paper as Form>::modular_headroom_bits(f);
+        let one_texel = l.texel_bits() + headroom;
+        if one_texel > k {
+            return Err(format!(
+                "the paper lookup at F = {f} on a modular layout needs {headroom} bits of headroom \
+                 above the box sum, so even a one-texel box needs {one_texel} bits but K = {k}; \
+                 use --form stable (no headroom), fewer --frac-bits, --int4 for integer boxes, \
+                 or a larger K"
+            ));
+        }
+    }
+    Ok(())
+}
+
+impl LayoutJob for QueryLayoutJob<'_> {
     type Out = Result<bool, String>;
-    fn run<E: Entry, const C: usize>(self, sat: &Sat<'_, E, C>) -> Self::Out {
+    fn run<L: BoxLookup<C>, const C: usize>(self, l: &L, detail: &Detail) -> Self::Out {
         let o = self.opts;
-        // The in-range 16-read lookups refuse a table whose sums, scaled by 2^2F, overflow the
-        // accumulator; say so once, before reading any input, rather than on every line.
-        if o.frac_bits > 0 {
-            let (name, needed) = match o.form {
-                FormArg::Paper => ("paper", Paper::acc_bits(sat.total_bits(), o.frac_bits)),
-                FormArg::Stable => ("stable", Stable::acc_bits(sat.total_bits(), o.frac_bits)),
-            };
-            let available = <E::Acc as Acc>::VALUE_BITS;
-            if needed > available {
-                return Err(format!(
-                    "the {name} lookup at F = {} needs a {needed}-bit accumulator for this table \
-                     (sums of {} bits, scaled by 2^{}), but lookups on {}-bit entries accumulate \
-                     in i{} ({available} value bits); use a wider --entry or fewer --frac-bits",
-                    o.frac_bits,
-                    sat.total_bits(),
-                    2 * o.frac_bits,
-                    E::BITS,
-                    available + 1
-                ));
-            }
-        }
-        let stdin = std::io::stdin();
-        let mut input = stdin.lock();
-        let stdout = std::io::stdout();
-        let mut out = stdout.lock();
-        let mut buf = Vec::new();
-        let mut line_no = 0usize;
-        let mut all_ok = true;
-        loop {
-            buf.clear();
-            let n = input
-                .read_until(b'\n', &mut buf)
-                .map_err(|e| format!("reading stdin: {e}"))?;
-            if n == 0 {
-                break;
-            }
-            line_no += 1;
-            let answer = match std::str::from_utf8(&buf) {
-                Err(_) => Some(Err("line is not valid UTF-8".to_string())),
-                Ok(line) => {
-                    let line = line.trim();
-                    if line.is_empty() || line.starts_with('#') {
-                        None
-                    } else {
-                        Some(answer_line(sat, o, line))
-                    }
-                }
-            };
-            let json = match answer {
-                None => continue,
-                Some(Ok(v)) => v,
-                Some(Err(msg)) => {
-                    all_ok = false;
-                    json!({ "error": msg, "line": line_no })
-                }
-            };
-            writeln!(out, "{json}").map_err(|e| format!("writing stdout: {e}"))?;
-        }
-        out.flush().map_err(|e| format!("writing stdout: {e}"))?;
-        Ok(all_ok)
+        check_widths(l, o, self.value, detail)?;
+        answer_lines(|line| answer_line(l, o, line))
     }
 }
 
-/// One query line: parse, look up, take the mean, format.
-fn answer_line<E: Entry, const C: usize>(
-    sat: &Sat<'_, E, C>,
-    o: &QueryOpts,
-    line: &str,
-) -> Result<Value, String> {
+/// Reads query lines from stdin and prints `answer`'s JSON for each (`{"error": ..., "line": N}`
+/// for a refused one). Empty lines and lines starting with '#' are skipped. Returns whether every
+/// line was answered.
+fn answer_lines(mut answer: impl FnMut(&str) -> Result<Value, String>) -> Result<bool, String> {
+    let stdin = std::io::stdin();
+    let mut input = stdin.lock();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut buf = Vec::new();
+    let mut line_no = 0usize;
+    let mut all_ok = true;
+    loop {
+        buf.clear();
+        let n = input
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| format!("reading stdin: {e}"))?;
+        if n == 0 {
+            break;
+        }
+        line_no += 1;
+        let result = match std::str::from_utf8(&buf) {
+            Err(_) => Some(Err("line is not valid UTF-8".to_string())),
+            Ok(line) => {
+                let line = line.trim();
+                if line.is_empty() || line.starts_with('#') {
+                    None
+                } else {
+                    Some(answer(line))
+                }
+            }
+        };
+        let json = match result {
+            None => continue,
+            Some(Ok(v)) => v,
+            Some(Err(msg)) => {
+                all_ok = false;
+                json!({ "error": msg, "line": line_no })
+            }
+        };
+        writeln!(out, "{json}").map_err(|e| format!("writing stdout: {e}"))?;
+    }
+    out.flush().map_err(|e| format!("writing stdout: {e}"))?;
+    Ok(all_ok)
+}
+
+/// Parses `"x0 y0 x1 y1"` into raw fixed-point values with `f` fraction bits.
+fn parse_box(line: &str, f: u32, inexact: Inexact) -> Result<[i64; 4], String> {
     let fields: Vec<&str> = line.split_whitespace().collect();
     if fields.len() != 4 {
         return Err(format!(
@@ -509,10 +814,20 @@ fn answer_line<E: Entry, const C: usize>(
     }
     let mut raw = [0i64; 4];
     for ((r, s), name) in raw.iter_mut().zip(&fields).zip(["x0", "y0", "x1", "y1"]) {
-        *r = parse_fixed(s, o.frac_bits, o.inexact).map_err(|e| format!("{name}: {e}"))?;
+        *r = parse_fixed(s, f, inexact).map_err(|e| format!("{name}: {e}"))?;
     }
+    Ok(raw)
+}
+
+/// One query line: parse, look up, take the mean, format.
+fn answer_line<L: BoxLookup<C>, const C: usize>(
+    l: &L,
+    o: &QueryOpts,
+    line: &str,
+) -> Result<Value, String> {
+    let raw = parse_box(line, o.frac_bits, o.inexact)?;
     let mut tally = Tally::new();
-    let (sum, lookup) = lookup(sat, o, raw, &mut tally)?;
+    let (sum, lookup) = lookup(l, o, raw, &mut tally)?;
     let mean = match sum.means_rounded(o.mean_bits, &mut tally) {
         Ok(m) => per_channel(m, o.mean_bits),
         Err(Error::ZeroArea) => Value::Null,
@@ -521,9 +836,11 @@ fn answer_line<E: Entry, const C: usize>(
     Ok(json!({
         "sum": per_channel(sum.scaled_sums(), 2 * sum.frac_bits()),
         "mean": mean,
+        "filter": "box",
         "lookup": lookup,
         "reads": tally.reads,
         "bits_read": tally.bits_read,
+        "words": tally.words,
         "muls": tally.muls,
         "divs": tally.divs,
         "adds": tally.adds,
@@ -533,36 +850,36 @@ fn answer_line<E: Entry, const C: usize>(
 type Looked<const C: usize> = Result<(BoxSum<C>, &'static str), String>;
 
 /// Dispatches on the boundary mode and the formulation (zero-sized types in the crate).
-fn lookup<E: Entry, const C: usize>(
-    sat: &Sat<'_, E, C>,
+fn lookup<L: BoxLookup<C>, const C: usize>(
+    l: &L,
     o: &QueryOpts,
     raw: [i64; 4],
     k: &mut Tally,
 ) -> Looked<C> {
-    fn by_form<E: Entry, const C: usize, M: EdgeMode>(
-        sat: &Sat<'_, E, C>,
+    fn by_form<L: BoxLookup<C>, const C: usize, M: EdgeMode>(
+        l: &L,
         o: &QueryOpts,
         raw: [i64; 4],
         m: M,
         k: &mut Tally,
     ) -> Looked<C> {
         match o.form {
-            FormArg::Paper => lookup_in::<E, C, M, Paper>(sat, o.frac_bits, o.int4, raw, m, k),
-            FormArg::Stable => lookup_in::<E, C, M, Stable>(sat, o.frac_bits, o.int4, raw, m, k),
+            FormArg::Paper => lookup_in::<L, C, M, Paper>(l, o.frac_bits, o.int4, raw, m, k),
+            FormArg::Stable => lookup_in::<L, C, M, Stable>(l, o.frac_bits, o.int4, raw, m, k),
         }
     }
     match o.edge {
-        EdgeArg::Border => by_form(sat, o, raw, Border, k),
-        EdgeArg::Clamp => by_form(sat, o, raw, ClampToEdge, k),
-        EdgeArg::Repeat => by_form(sat, o, raw, Repeat, k),
-        EdgeArg::Mirror => by_form(sat, o, raw, MirroredRepeat, k),
+        EdgeArg::Border => by_form(l, o, raw, Border, k),
+        EdgeArg::Clamp => by_form(l, o, raw, ClampToEdge, k),
+        EdgeArg::Repeat => by_form(l, o, raw, Repeat, k),
+        EdgeArg::Mirror => by_form(l, o, raw, MirroredRepeat, k),
     }
 }
 
 /// The lookup proper: the 4-read integer lookup at `F = 0` (or for integer boxes with `--int4`),
 /// else the 16-read lookup with corners of the `fixed` type `FixedI64<U{F}>`.
-fn lookup_in<E: Entry, const C: usize, M: EdgeMode, Fm: Form>(
-    sat: &Sat<'_, E, C>,
+fn lookup_in<L: BoxLookup<C>, const C: usize, M: EdgeMode, Fm: Form>(
+    l: &L,
     f: u32,
     int4: bool,
     raw: [i64; 4],
@@ -581,24 +898,24 @@ fn lookup_in<E: Entry, const C: usize, M: EdgeMode, Fm: Form>(
             })?;
         }
         let r = Rect::new(c[0], c[1], c[2], c[3]);
-        return sat
+        return l
             .box_sum_int(&r, mode, k)
             .map(|s| (s, "int4"))
             .map_err(|e| e.to_string());
     }
-    fn at<X: Fixed<Bits = i64>, E: Entry, const C: usize, M: EdgeMode, Fm: Form>(
-        sat: &Sat<'_, E, C>,
+    fn at<X: Fixed<Bits = i64>, L: BoxLookup<C>, const C: usize, M: EdgeMode, Fm: Form>(
+        l: &L,
         raw: [i64; 4],
         mode: M,
         k: &mut Tally,
     ) -> Result<BoxSum<C>, Error> {
         let [x0, y0, x1, y1] = raw.map(X::from_bits);
-        sat.box_sum(&Rect::new(x0, y0, x1, y1), Fm::default(), mode, k)
+        l.box_sum(&Rect::new(x0, y0, x1, y1), Fm::default(), mode, k)
     }
     macro_rules! by_frac_bits {
         ($($n:literal => $u:ident),* $(,)?) => {
             match f {
-                $($n => at::<FixedI64<$u>, E, C, M, Fm>(sat, raw, mode, k),)*
+                $($n => at::<FixedI64<$u>, L, C, M, Fm>(l, raw, mode, k),)*
                 _ => unreachable!("F is checked to be in 0..=24"),
             }
         };

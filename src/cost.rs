@@ -7,7 +7,9 @@
 //! What is counted follows Crow §2.2: the operations on *table values* and the area multiply and
 //! the divide of the mean. A *read* is one table entry fetched, all channels together; a read of
 //! the zero row or column of the corner function (`x = 0` or `y = 0`) and the cached whole-table
-//! sum cost no read. *Additive* operations are adds and subtracts; *multiplicative* operations are
+//! sum cost no read. A packed layout also reports the 32-bit *words* a read touches (a field may
+//! straddle words), which is what an MCU's bus pays; an FPGA with one block RAM per field width
+//! pays one access per read. *Additive* operations are adds and subtracts; *multiplicative* operations are
 //! multiplies (`muls`) plus divides (`divs`). Shifts by the constant `F` (a scale by `2^F`) are
 //! wiring in hardware and are not counted. Coordinate arithmetic (splitting a corner into integer
 //! and fraction, side lengths, addresses, comparisons) belongs to the address unit and is not
@@ -24,6 +26,10 @@ pub trait Counter {
     fn divs(&mut self, n: u32);
     /// `n` additive operations (adds or subtracts).
     fn adds(&mut self, n: u32);
+    /// `n` 32-bit memory words touched by the reads.
+    fn words(&mut self, n: u32) {
+        let _ = n;
+    }
 }
 
 /// The counter that counts nothing: a zero-sized type that compiles away.
@@ -49,6 +55,8 @@ pub struct Tally {
     pub reads: u64,
     /// Bits read: the sum over reads of bits per entry times channels.
     pub bits_read: u64,
+    /// 32-bit words touched by the reads.
+    pub words: u64,
     /// Multiplies.
     pub muls: u64,
     /// Divides.
@@ -63,6 +71,7 @@ impl Tally {
         Tally {
             reads: 0,
             bits_read: 0,
+            words: 0,
             muls: 0,
             divs: 0,
             adds: 0,
@@ -92,6 +101,10 @@ impl Counter for Tally {
     #[inline]
     fn adds(&mut self, n: u32) {
         self.adds += n as u64;
+    }
+    #[inline]
+    fn words(&mut self, n: u32) {
+        self.words += n as u64;
     }
 }
 

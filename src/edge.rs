@@ -96,6 +96,10 @@ pub trait EdgeMode: Copy + Default {
     /// The prefix integral of the extended texture at `x` (raw) as weights on the in-range corner
     /// function: `2^F * integral_0^x t_ext = sum weight * S(index)`, valid for any `x`.
     fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms;
+    /// The texel index the extended texture shows at integer position `i` of an axis of `n`
+    /// texels, or `None` where it is zero ([`Border`] outside the texture). Used by the
+    /// texel-fetching filters (point, pyramids).
+    fn texel_index(i: i64, n: usize) -> Option<usize>;
 }
 
 /// Outside the texture is zero; the area of the mean is the unclipped box's (Crow §2.4).
@@ -128,6 +132,13 @@ impl EdgeMode for Border {
     fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms {
         AxisTerms::lerp(x.clamp(0, (n as i128) << f), n, f, 1)
     }
+    fn texel_index(i: i64, n: usize) -> Option<usize> {
+        if i >= 0 && (i as u64) < n as u64 {
+            Some(i as usize)
+        } else {
+            None
+        }
+    }
 }
 
 impl EdgeMode for ClampToEdge {
@@ -156,6 +167,9 @@ impl EdgeMode for ClampToEdge {
         }
         t
     }
+    fn texel_index(i: i64, n: usize) -> Option<usize> {
+        Some(i.clamp(0, n as i64 - 1) as usize)
+    }
 }
 
 impl EdgeMode for Repeat {
@@ -178,6 +192,9 @@ impl EdgeMode for Repeat {
         let mut t = AxisTerms::lerp(r, n, f, 1);
         t.push(n, q << f);
         t
+    }
+    fn texel_index(i: i64, n: usize) -> Option<usize> {
+        Some(i.rem_euclid(n as i64) as usize)
     }
 }
 
@@ -213,6 +230,14 @@ impl EdgeMode for MirroredRepeat {
         }
         t.push(n, whole << f);
         t
+    }
+    fn texel_index(i: i64, n: usize) -> Option<usize> {
+        let r = i.rem_euclid(2 * n as i64);
+        Some(if r < n as i64 {
+            r
+        } else {
+            2 * n as i64 - 1 - r
+        } as usize)
     }
 }
 

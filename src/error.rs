@@ -13,6 +13,10 @@ pub enum Quantity {
     LookupAccumulator,
     /// The mean's numerator, the sum scaled by the requested output fraction bits.
     MeanNumerator,
+    /// A box sum on a modular layout: it must stay below `2^k` to be recovered exactly.
+    ModularBox,
+    /// A field of a packed layout.
+    Field,
 }
 
 /// Why a build or a lookup was refused.
@@ -100,6 +104,14 @@ pub enum Error {
     },
     /// The channel index is not below the channel count.
     NoSuchChannel,
+    /// Tile levels must ascend, each a multiple of the one before, at least 2, and at most
+    /// [`crate::layouts::MAX_LEVELS`] per axis.
+    InvalidLevels,
+    /// A modular layout's `k` must be at least the texel bits and at most the value type's bits.
+    InvalidModulus {
+        /// `k` given
+        bits: u32,
+    },
     /// Texel widths must be 1 to 16 bits.
     InvalidTexelBits {
         /// the width given
@@ -113,6 +125,8 @@ impl fmt::Display for Quantity {
             Quantity::Entry => "table entry",
             Quantity::LookupAccumulator => "lookup accumulator",
             Quantity::MeanNumerator => "mean numerator",
+            Quantity::ModularBox => "box sum on the modular layout",
+            Quantity::Field => "packed field",
         })
     }
 }
@@ -162,6 +176,14 @@ impl fmt::Display for Error {
                 write!(f, "build finished after {got} of {expected} rows")
             }
             Error::NoSuchChannel => write!(f, "channel index out of range"),
+            Error::InvalidLevels => write!(
+                f,
+                "tile levels must ascend, each a multiple of the previous, at least 2, at most 4 per axis"
+            ),
+            Error::InvalidModulus { bits } => write!(
+                f,
+                "modular width {bits} must be at least the texel bits and at most the value type's bits"
+            ),
             Error::InvalidTexelBits { bits } => {
                 write!(f, "texel width {bits} bits is outside 1..=16")
             }

@@ -294,6 +294,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     pub(crate) fn read<K: crate::Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
         if x != 0 && y != 0 {
             k.reads(1, E::BITS * C as u32);
+            k.words((E::BITS * C as u32).div_ceil(32));
         }
         self.s(x, y)
     }

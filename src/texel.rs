@@ -13,6 +13,10 @@ pub trait Texel: Copy + 'static {
     const BITS: u32;
     /// The texel as `u16` (lossless: texels have at most 16 bits).
     fn to_u16(self) -> u16;
+    /// The texel of value `v`: exact for `v <= 2^BITS - 1`; larger values saturate to
+    /// `2^BITS - 1`. (What a build that writes texels, such as a pyramid's rounded box averages,
+    /// needs: the inverse of [`Texel::to_u16`] on the texel range.)
+    fn from_u16_clamped(v: u16) -> Self;
 }
 
 impl Texel for u8 {
@@ -21,6 +25,10 @@ impl Texel for u8 {
     fn to_u16(self) -> u16 {
         self as u16
     }
+    #[inline(always)]
+    fn from_u16_clamped(v: u16) -> Self {
+        v.min(u8::MAX as u16) as u8
+    }
 }
 
 impl Texel for u16 {
@@ -28,6 +36,10 @@ impl Texel for u16 {
     #[inline(always)]
     fn to_u16(self) -> u16 {
         self
+    }
+    #[inline(always)]
+    fn from_u16_clamped(v: u16) -> Self {
+        v
     }
 }
 
@@ -52,6 +64,15 @@ pub trait Acc:
     fn from_u32(v: u32) -> Self;
     /// Widen to `i128`.
     fn to_i128(self) -> i128;
+    /// Wrapping addition (used only where the width proof rules out wrapping, or where the
+    /// arithmetic is modular on purpose).
+    fn wrapping_add(self, o: Self) -> Self;
+    /// Wrapping subtraction (see [`Acc::wrapping_add`]).
+    fn wrapping_sub(self, o: Self) -> Self;
+    /// Wrapping multiplication (see [`Acc::wrapping_add`]).
+    fn wrapping_mul(self, o: Self) -> Self;
+    /// The low `k` bits, as a non-negative value (`k` below the type's width).
+    fn low_bits(self, k: u32) -> Self;
 }
 
 impl Acc for i64 {
@@ -65,6 +86,22 @@ impl Acc for i64 {
     fn to_i128(self) -> i128 {
         self as i128
     }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        i64::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        i64::wrapping_sub(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        i64::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn low_bits(self, k: u32) -> Self {
+        self & ((1 << k) - 1)
+    }
 }
 
 impl Acc for i128 {
@@ -77,6 +114,22 @@ impl Acc for i128 {
     #[inline(always)]
     fn to_i128(self) -> i128 {
         self
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        i128::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        i128::wrapping_sub(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        i128::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn low_bits(self, k: u32) -> Self {
+        self & ((1 << k) - 1)
     }
 }
 
@@ -96,6 +149,16 @@ pub trait Entry:
     fn to_acc(self) -> Self::Acc;
     /// The entry as `u128` (always lossless).
     fn to_u128(self) -> u128;
+    /// The low bits of a `u64` (a packed field of at most `BITS` bits).
+    fn from_u64_truncating(v: u64) -> Self;
+    /// The entry as `u64` (lossless for `u16`, `u32`, `u64`).
+    fn to_u64(self) -> u64;
+    /// Wrapping subtraction (modular layouts; elsewhere only where no wrap is possible).
+    fn wrapping_sub(self, o: Self) -> Self;
+    /// Wrapping addition (modular layouts).
+    fn wrapping_add(self, o: Self) -> Self;
+    /// The low `k` bits (`k <= BITS`).
+    fn low_bits(self, k: u32) -> Self;
 }
 
 macro_rules! impl_entry {
@@ -115,6 +178,30 @@ macro_rules! impl_entry {
             #[inline(always)]
             fn to_u128(self) -> u128 {
                 self as u128
+            }
+            #[inline(always)]
+            fn from_u64_truncating(v: u64) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn to_u64(self) -> u64 {
+                self as u64
+            }
+            #[inline(always)]
+            fn wrapping_sub(self, o: Self) -> Self {
+                <$t>::wrapping_sub(self, o)
+            }
+            #[inline(always)]
+            fn wrapping_add(self, o: Self) -> Self {
+                <$t>::wrapping_add(self, o)
+            }
+            #[inline(always)]
+            fn low_bits(self, k: u32) -> Self {
+                if k >= <$t>::BITS {
+                    self
+                } else {
+                    self & ((1 << k) - 1)
+                }
             }
         }
     };

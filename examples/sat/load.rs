@@ -1,6 +1,7 @@
 //! Reading PNG and PNM images into texel buffers, and dispatching on texel type and channel
 //! count to code generic over `Texture<T, C>`.
 
+use crate::filter::ImageTexel;
 use image::codecs::pnm::PnmDecoder;
 use image::{DynamicImage, ImageFormat, ImageReader};
 use std::fs::File;
@@ -76,10 +77,10 @@ pub fn load(path: &Path) -> Result<Image, String> {
     })
 }
 
-/// Code generic over the texel type and the channel count.
+/// Code generic over the texel type (`u8`, `u16`: [`ImageTexel`]) and the channel count.
 pub trait TextureJob {
     type Out;
-    fn run<T: Texel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out;
+    fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out;
 }
 
 /// Runs `job` on the image as a `Texture<T, C>` with `T = u8 | u16` and `C = 1..=4`.

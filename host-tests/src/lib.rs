@@ -13,6 +13,7 @@
 //! exactly the unit of [`texsat::BoxSum::scaled_sum`].
 #![warn(missing_docs)]
 
+pub mod crow_literal;
 use fixed::traits::Fixed;
 use proptest::prelude::*;
 use texsat::{
@@ -653,3 +654,10 @@ pub mod strategies {
         prop::sample::select(RefForm::ALL.to_vec())
     }
 }
+
+pub mod ewa;
+pub mod filter_ref_mip;
+pub mod filter_ref_ripdip;
+pub mod filter_ref_tentvar;
+pub mod scenes;
+pub mod stability;

@@ -24,6 +24,7 @@ pub use shortcut::{Shortcut, ShortcutMean};
 use crate::cost::Counter;
 use crate::edge::{place, EdgeMode, Placement};
 use crate::error::{Error, Quantity};
+use crate::layouts::Layout;
 use crate::rect::{Coord, RawBox, Rect};
 use crate::table::Sat;
 use crate::texel::{Acc, Entry};
@@ -35,10 +36,13 @@ pub trait Form: Copy + Default {
     const NAME: &'static str;
     /// Accumulator value bits a table with whole-texture sums of `total_bits` bits needs at `F`.
     fn acc_bits(total_bits: u32, frac_bits: u32) -> u32;
+    /// Extra bits a modular layout needs above the box sum's bits: the form's result is only
+    /// known modulo `2^k`, so it must be below `2^k`.
+    fn modular_headroom_bits(frac_bits: u32) -> u32;
     /// The box integral scaled by `2^2F`, for a box inside `[0, w] x [0, h]` (raw units).
     #[doc(hidden)]
-    fn in_range<E: Entry, const C: usize, K: Counter>(
-        sat: &Sat<'_, E, C>,
+    fn in_range<L: Layout<C>, const C: usize, K: Counter>(
+        layout: &L,
         b: &RawBox,
         frac_bits: u32,
         k: &mut K,
@@ -172,40 +176,44 @@ pub(crate) fn div_round(num: u128, g: u32, den: u128) -> Result<u128, Error> {
     Ok(if r >= den - r { q + 1 } else { q })
 }
 
-impl<E: Entry, const C: usize> Sat<'_, E, C> {
+/// Box lookups over any [`Layout`]: implemented for every layout, so every mode and form works
+/// on each. ([`Sat`] also has these as inherent methods, so the flat table needs no import.)
+pub trait BoxLookup<const C: usize>: Layout<C> + Sized {
     /// The exact sum over the box `[x0, x1) x [y0, y1)` with integer corners, under boundary mode
-    /// `M`. An in-range (or placeable, see [`crate::edge`]) box costs 4 reads and 3 additive
-    /// operations per channel; corners on the zero row or column cost no read. Zero-area boxes sum
-    /// to 0 with no reads; inverted boxes are [`Error::InvertedBox`].
-    pub fn box_sum_int<M: EdgeMode, K: Counter>(
+    /// `M`. An in-range (or placeable, see [`crate::edge`]) box costs 4 corner reads and 3
+    /// additive operations per channel; corners on the zero row or column cost no read. Zero-area
+    /// boxes sum to 0 with no reads; inverted boxes are [`Error::InvertedBox`].
+    fn box_sum_int<M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<i32>,
-        _mode: M,
+        mode: M,
         k: &mut K,
     ) -> Result<BoxSum<C>, Error> {
+        let _ = mode;
         let b = RawBox {
             x0: r.x0 as i128,
             y0: r.y0 as i128,
             x1: r.x1 as i128,
             y1: r.y1 as i128,
         };
-        self.sum_raw::<corners4::Corners4, M, K>(b, 0, k)
+        sum_raw::<Self, corners4::Corners4, M, K, C>(self, b, 0, k)
     }
 
     /// The exact integral over the box with fixed-point corners (`X` has `F` fractional bits,
     /// `F <= 24`), scaled by `2^2F`, in formulation `Fm` under boundary mode `M`. An in-range box
-    /// costs 16 reads (fewer on the zero row and column).
+    /// costs 16 corner reads (fewer on the zero row and column).
     ///
-    /// Refused with [`Error::TooWide`] if the accumulator `E::Acc` cannot hold the formulation's
+    /// Refused with [`Error::TooWide`] if the accumulator cannot hold the formulation's
     /// intermediates for this table ([`Form::acc_bits`]), e.g. `u32` entries holding 32-bit
-    /// sums at `F = 16`.
-    pub fn box_sum<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
+    /// sums at `F = 16`, or, on a modular layout, if the box's sum may reach `2^k`.
+    fn box_sum<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<X>,
-        _form: Fm,
-        _mode: M,
+        form: Fm,
+        mode: M,
         k: &mut K,
     ) -> Result<BoxSum<C>, Error> {
+        let _ = (form, mode);
         let f = X::FRAC_BITS;
         if f > width::MAX_FRAC_BITS {
             return Err(Error::FracBitsUnsupported {
@@ -219,42 +227,127 @@ impl<E: Entry, const C: usize> Sat<'_, E, C> {
             x1: r.x1.raw() as i128,
             y1: r.y1.raw() as i128,
         };
-        self.sum_raw::<Fm, M, K>(b, f, k)
+        sum_raw::<Self, Fm, M, K, C>(self, b, f, k)
     }
 
-    /// The common driver: validate, place the box for the mode, then the in-range form or the
-    /// weighted path.
-    pub(crate) fn sum_raw<Fm: Form, M: EdgeMode, K: Counter>(
+    /// See [`shortcut`](crate::lookup::Shortcut): the mean by the 4-read shortcut when both
+    /// sides are at least `shortcut.min_side()` texels, else by the exact 16-read lookup.
+    fn box_mean_shortcut<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
         &self,
-        b: RawBox,
-        f: u32,
+        r: &Rect<X>,
+        form: Fm,
+        mode: M,
+        shortcut: &Shortcut,
+        out_frac_bits: u32,
+        k: &mut K,
+    ) -> Result<ShortcutMean<C>, Error> {
+        shortcut::mean(self, r, form, mode, shortcut, out_frac_bits, k)
+    }
+}
+
+impl<const C: usize, L: Layout<C>> BoxLookup<C> for L {}
+
+impl<E: Entry, const C: usize> Sat<'_, E, C> {
+    /// [`BoxLookup::box_sum_int`] on the flat table: 4 reads, exact.
+    pub fn box_sum_int<M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<i32>,
+        mode: M,
         k: &mut K,
     ) -> Result<BoxSum<C>, Error> {
-        if b.x1 < b.x0 || b.y1 < b.y0 {
-            return Err(Error::InvertedBox);
-        }
-        let mut out = BoxSum {
-            sums: [0; C],
-            frac_bits: f,
-            width_raw: (b.x1 - b.x0) as u128,
-            height_raw: (b.y1 - b.y0) as u128,
-        };
-        if b.x1 == b.x0 || b.y1 == b.y0 {
-            return Ok(out);
-        }
-        match place::<M>(b, self.width(), self.height(), f) {
-            Placement::Empty => {}
-            Placement::InRange(ib) => {
-                width::check_acc(
-                    Fm::acc_bits(self.total_bits(), f),
-                    <E::Acc as Acc>::VALUE_BITS,
-                )?;
-                out.sums = Fm::in_range(self, &ib, f, k);
-            }
-            Placement::Outside(ob) => out.sums = weighted::sum::<M, E, C, K>(self, &ob, f, k)?,
-        }
-        Ok(out)
+        BoxLookup::box_sum_int(self, r, mode, k)
     }
+
+    /// [`BoxLookup::box_sum`] on the flat table: 16 reads, exact, scaled by `2^2F`.
+    pub fn box_sum<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<X>,
+        form: Fm,
+        mode: M,
+        k: &mut K,
+    ) -> Result<BoxSum<C>, Error> {
+        BoxLookup::box_sum(self, r, form, mode, k)
+    }
+
+    /// [`BoxLookup::box_mean_shortcut`] on the flat table.
+    pub fn box_mean_shortcut<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<X>,
+        form: Fm,
+        mode: M,
+        shortcut: &Shortcut,
+        out_frac_bits: u32,
+        k: &mut K,
+    ) -> Result<ShortcutMean<C>, Error> {
+        BoxLookup::box_mean_shortcut(self, r, form, mode, shortcut, out_frac_bits, k)
+    }
+}
+
+/// Texel columns (rows) a raw interval `[lo, hi)` overlaps: `ceil(hi) - floor(lo)`.
+fn cells(lo: i128, hi: i128, f: u32) -> u128 {
+    let s = 1i128 << f;
+    (((hi + s - 1) >> f) - (lo >> f)).max(0) as u128
+}
+
+/// Refuses, on a modular layout, a box whose sum (with `headroom` extra bits) may reach `2^k`.
+fn check_modular<L: Layout<C>, const C: usize>(
+    layout: &L,
+    b: &RawBox,
+    f: u32,
+    headroom: u32,
+) -> Result<(), Error> {
+    let Some(k) = layout.modulus() else {
+        return Ok(());
+    };
+    let m = width::max_texel(layout.texel_bits());
+    let area = cells(b.x0, b.x1, f).saturating_mul(cells(b.y0, b.y1, f));
+    let needed = bits_of(m.saturating_mul(area)) + headroom;
+    if needed > k {
+        return Err(Error::TooWide {
+            what: Quantity::ModularBox,
+            bits_needed: needed,
+            bits_available: k,
+        });
+    }
+    Ok(())
+}
+
+/// The common driver: validate, place the box for the mode, then the in-range form or the
+/// weighted path.
+pub(crate) fn sum_raw<L: Layout<C>, Fm: Form, M: EdgeMode, K: Counter, const C: usize>(
+    layout: &L,
+    b: RawBox,
+    f: u32,
+    k: &mut K,
+) -> Result<BoxSum<C>, Error> {
+    if b.x1 < b.x0 || b.y1 < b.y0 {
+        return Err(Error::InvertedBox);
+    }
+    let mut out = BoxSum {
+        sums: [0; C],
+        frac_bits: f,
+        width_raw: (b.x1 - b.x0) as u128,
+        height_raw: (b.y1 - b.y0) as u128,
+    };
+    if b.x1 == b.x0 || b.y1 == b.y0 {
+        return Ok(out);
+    }
+    match place::<M>(b, layout.width(), layout.height(), f) {
+        Placement::Empty => {}
+        Placement::InRange(ib) => {
+            check_modular(layout, &ib, f, Fm::modular_headroom_bits(f))?;
+            width::check_acc(
+                Fm::acc_bits(layout.value_bits(), f),
+                <<L::Value as Entry>::Acc as Acc>::VALUE_BITS,
+            )?;
+            out.sums = Fm::in_range(layout, &ib, f, k);
+        }
+        Placement::Outside(ob) => {
+            check_modular(layout, &ob, f, 2 * f)?;
+            out.sums = weighted::sum::<M, L, K, C>(layout, &ob, f, k)?;
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

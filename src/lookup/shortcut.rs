@@ -16,13 +16,13 @@
 //! `(s-1)/s`: a box whose four edges all round inward by 1/2 over a texture that is `m` exactly
 //! under the lost strips and 0 elsewhere (tested in `host-tests`).
 
-use super::{BoxSum, Form};
+use super::corners4::Corners4;
+use super::{sum_raw, BoxLookup, BoxSum, Form};
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::Error;
+use crate::layouts::Layout;
 use crate::rect::{Coord, RawBox, Rect};
-use crate::table::Sat;
-use crate::texel::Entry;
 use crate::width::{self, max_texel};
 
 /// When to take the 4-read shortcut: boxes whose sides are both at least `min_side` texels.
@@ -74,7 +74,7 @@ impl Shortcut {
     }
 }
 
-/// A mean from [`Sat::box_mean_shortcut`], and whether the shortcut answered it.
+/// A mean from [`crate::Sat::box_mean_shortcut`], and whether the shortcut answered it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ShortcutMean<const C: usize> {
     /// Per channel, the mean times `2^g`, rounded to nearest (ties up).
@@ -92,57 +92,56 @@ fn round_raw(x: i128, f: u32) -> i128 {
     }
 }
 
-impl<E: Entry, const C: usize> Sat<'_, E, C> {
-    /// The mean over the box with `out_frac_bits` fractional bits, by the 4-read shortcut when
-    /// both sides are at least `shortcut.min_side()` texels (then within the bound in the
-    /// module docs of the exact mean), else by the exact 16-read lookup in form `Fm`.
-    ///
-    /// Shortcut cost: 4 reads, 3 additive, 1 multiply (area), 1 divide per channel: Crow's
-    /// "4 texture accesses, two multiplicative operations and 3 additive operations".
-    pub fn box_mean_shortcut<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
-        &self,
-        r: &Rect<X>,
-        form: Fm,
-        mode: M,
-        shortcut: &Shortcut,
-        out_frac_bits: u32,
-        k: &mut K,
-    ) -> Result<ShortcutMean<C>, Error> {
-        let f = X::FRAC_BITS;
-        if f > width::MAX_FRAC_BITS {
-            return Err(Error::FracBitsUnsupported {
-                frac_bits: f,
-                max: width::MAX_FRAC_BITS,
-            });
-        }
-        let (x0, y0, x1, y1) = (
-            r.x0.raw() as i128,
-            r.y0.raw() as i128,
-            r.x1.raw() as i128,
-            r.y1.raw() as i128,
-        );
-        if x1 < x0 || y1 < y0 {
-            return Err(Error::InvertedBox);
-        }
-        let min_raw = (shortcut.min_side as i128).saturating_mul(1i128 << f);
-        if x1 - x0 >= min_raw && y1 - y0 >= min_raw {
-            let b = RawBox {
-                x0: round_raw(x0, f),
-                y0: round_raw(y0, f),
-                x1: round_raw(x1, f),
-                y1: round_raw(y1, f),
-            };
-            let sum: BoxSum<C> = self.sum_raw::<super::corners4::Corners4, M, K>(b, 0, k)?;
-            let means = sum.means_rounded(out_frac_bits, k)?;
-            return Ok(ShortcutMean {
-                means,
-                shortcut: true,
-            });
-        }
-        let sum = self.box_sum(r, form, mode, k)?;
-        Ok(ShortcutMean {
-            means: sum.means_rounded(out_frac_bits, k)?,
-            shortcut: false,
-        })
+/// [`crate::BoxLookup::box_mean_shortcut`]: the mean over the box with `out_frac_bits`
+/// fractional bits, by the 4-read shortcut when both sides are at least `shortcut.min_side()`
+/// texels (then within the bound in the module docs of the exact mean), else by the exact
+/// 16-read lookup in form `Fm`.
+///
+/// Shortcut cost: 4 reads, 3 additive, 1 multiply (area), 1 divide per channel: Crow's
+/// "4 texture accesses, two multiplicative operations and 3 additive operations".
+pub(crate) fn mean<L: Layout<C>, X: Coord, Fm: Form, M: EdgeMode, K: Counter, const C: usize>(
+    layout: &L,
+    r: &Rect<X>,
+    form: Fm,
+    mode: M,
+    shortcut: &Shortcut,
+    out_frac_bits: u32,
+    k: &mut K,
+) -> Result<ShortcutMean<C>, Error> {
+    let f = X::FRAC_BITS;
+    if f > width::MAX_FRAC_BITS {
+        return Err(Error::FracBitsUnsupported {
+            frac_bits: f,
+            max: width::MAX_FRAC_BITS,
+        });
     }
+    let (x0, y0, x1, y1) = (
+        r.x0.raw() as i128,
+        r.y0.raw() as i128,
+        r.x1.raw() as i128,
+        r.y1.raw() as i128,
+    );
+    if x1 < x0 || y1 < y0 {
+        return Err(Error::InvertedBox);
+    }
+    let min_raw = (shortcut.min_side as i128).saturating_mul(1i128 << f);
+    if x1 - x0 >= min_raw && y1 - y0 >= min_raw {
+        let b = RawBox {
+            x0: round_raw(x0, f),
+            y0: round_raw(y0, f),
+            x1: round_raw(x1, f),
+            y1: round_raw(y1, f),
+        };
+        let sum: BoxSum<C> = sum_raw::<L, Corners4, M, K, C>(layout, b, 0, k)?;
+        let means = sum.means_rounded(out_frac_bits, k)?;
+        return Ok(ShortcutMean {
+            means,
+            shortcut: true,
+        });
+    }
+    let sum = BoxLookup::box_sum(layout, r, form, mode, k)?;
+    Ok(ShortcutMean {
+        means: sum.means_rounded(out_frac_bits, k)?,
+        shortcut: false,
+    })
 }

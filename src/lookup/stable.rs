@@ -3,54 +3,55 @@
 use super::{Form, Stable};
 use crate::cost::Counter;
 use crate::edge::split;
+use crate::layouts::Layout;
 use crate::rect::RawBox;
-use crate::table::Sat;
 use crate::texel::{Acc, Entry};
 use crate::width;
 
-/// What one corner's 4 reads give: `S(i, j)`, the column strip `S(i+1, j) - S(i, j)`, the row
-/// strip `S(i, j+1) - S(i, j)` and the texel `(i, j)`. 4 reads, 4 additive operations.
-struct CornerParts<A, const C: usize> {
-    s: [A; C],
-    col: [A; C],
-    row: [A; C],
-    texel: [A; C],
+/// What one corner's 4 reads give, in the value type: `S(i, j)`, the column strip
+/// `S(i+1, j) - S(i, j)`, the row strip `S(i, j+1) - S(i, j)` and the texel `(i, j)`.
+/// 4 reads, 4 additive operations.
+struct CornerParts<V, A, const C: usize> {
+    s: [V; C],
+    col: [V; C],
+    row: [V; C],
+    texel: [V; C],
     frac_x: A,
     frac_y: A,
 }
 
 #[inline(always)]
-fn corner<E: Entry, const C: usize, K: Counter>(
-    sat: &Sat<'_, E, C>,
+fn corner<L: Layout<C>, const C: usize, K: Counter>(
+    t: &L,
     x: i128,
     y: i128,
     f: u32,
     k: &mut K,
-) -> CornerParts<E::Acc, C> {
-    let (i, a) = split(x, sat.width(), f);
-    let (j, b) = split(y, sat.height(), f);
-    let q00 = sat.read(i, j, k);
-    let q10 = sat.read(i + 1, j, k);
-    let q01 = sat.read(i, j + 1, k);
-    let q11 = sat.read(i + 1, j + 1, k);
+) -> CornerParts<L::Value, <L::Value as Entry>::Acc, C> {
+    let (i, a) = split(x, t.width(), f);
+    let (j, b) = split(y, t.height(), f);
+    let q00 = t.corner(i, j, k);
+    let q10 = t.corner(i + 1, j, k);
+    let q01 = t.corner(i, j + 1, k);
+    let q11 = t.corner(i + 1, j + 1, k);
     k.adds(4 * C as u32);
-    let z = [E::Acc::ZERO; C];
+    let z = [<L::Value as Entry>::ZERO; C];
     let mut p = CornerParts {
-        s: z,
+        s: q00,
         col: z,
         row: z,
         texel: z,
-        frac_x: E::Acc::from_u32(a),
-        frac_y: E::Acc::from_u32(b),
+        frac_x: <L::Value as Entry>::Acc::from_u32(a),
+        frac_y: <L::Value as Entry>::Acc::from_u32(b),
     };
     for c in 0..C {
-        let s00 = q00[c].to_acc();
-        let col0 = q10[c].to_acc() - s00;
-        let col1 = q11[c].to_acc() - q01[c].to_acc();
-        p.s[c] = s00;
+        // Monotone tables: no subtraction wraps. Modular tables: they wrap on purpose; only the
+        // small differences below are used, after reduction modulo 2^k.
+        let col0 = q10[c].wrapping_sub(q00[c]);
+        let col1 = q11[c].wrapping_sub(q01[c]);
         p.col[c] = col0;
-        p.row[c] = q01[c].to_acc() - s00;
-        p.texel[c] = col1 - col0;
+        p.row[c] = q01[c].wrapping_sub(q00[c]);
+        p.texel[c] = col1.wrapping_sub(col0);
     }
     p
 }
@@ -60,17 +61,21 @@ impl Form for Stable {
     fn acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
         width::stable_acc_bits(total_bits, frac_bits)
     }
+    fn modular_headroom_bits(_frac_bits: u32) -> u32 {
+        // Every quantity reduced modulo 2^k is a sum over part of the box's cells.
+        0
+    }
     #[inline]
-    fn in_range<E: Entry, const C: usize, K: Counter>(
-        sat: &Sat<'_, E, C>,
+    fn in_range<L: Layout<C>, const C: usize, K: Counter>(
+        t: &L,
         b: &RawBox,
         f: u32,
         k: &mut K,
     ) -> [u128; C] {
-        let p11 = corner(sat, b.x1, b.y1, f, k);
-        let p10 = corner(sat, b.x1, b.y0, f, k);
-        let p01 = corner(sat, b.x0, b.y1, f, k);
-        let p00 = corner(sat, b.x0, b.y0, f, k);
+        let p11 = corner(t, b.x1, b.y1, f, k);
+        let p10 = corner(t, b.x1, b.y0, f, k);
+        let p01 = corner(t, b.x0, b.y1, f, k);
+        let p00 = corner(t, b.x0, b.y0, f, k);
         let (a0, a1, b0, b1) = (p00.frac_x, p11.frac_x, p00.frac_y, p11.frac_y);
         // Fraction products, shared by the channels.
         let (w11, w10, w01, w00) = (a1 * b1, a1 * b0, a0 * b1, a0 * b0);
@@ -79,16 +84,29 @@ impl Form for Stable {
         // and corner 4 multiplies.
         k.adds(15 * C as u32);
         k.muls(8 * C as u32);
+        let modulus = t.modulus();
+        // The box-bounded quantities: exact values on every layout.
+        let small = |v: L::Value| -> <L::Value as Entry>::Acc {
+            match modulus {
+                Some(m) => v.low_bits(m).to_acc(),
+                None => v.to_acc(),
+            }
+        };
         let mut out = [0u128; C];
         for (c, o) in out.iter_mut().enumerate() {
-            let bint = (p11.s[c] - p10.s[c]) - (p01.s[c] - p00.s[c]);
-            let right = p11.col[c] - p10.col[c];
-            let left = p01.col[c] - p00.col[c];
-            let bottom = p11.row[c] - p01.row[c];
-            let top = p10.row[c] - p00.row[c];
+            let bint = small(
+                p11.s[c]
+                    .wrapping_sub(p10.s[c])
+                    .wrapping_sub(p01.s[c].wrapping_sub(p00.s[c])),
+            );
+            let right = small(p11.col[c].wrapping_sub(p10.col[c]));
+            let left = small(p01.col[c].wrapping_sub(p00.col[c]));
+            let bottom = small(p11.row[c].wrapping_sub(p01.row[c]));
+            let top = small(p10.row[c].wrapping_sub(p00.row[c]));
+            let (t11, t10) = (small(p11.texel[c]), small(p10.texel[c]));
+            let (t01, t00) = (small(p01.texel[c]), small(p00.texel[c]));
             let edges = (a1 * right - a0 * left) + (b1 * bottom - b0 * top);
-            let corners = (w11 * p11.texel[c] - w10 * p10.texel[c])
-                - (w01 * p01.texel[c] - w00 * p00.texel[c]);
+            let corners = (w11 * t11 - w10 * t10) - (w01 * t01 - w00 * t00);
             *o = ((bint << (2 * f)) + (edges << f) + corners).to_i128() as u128;
         }
         out

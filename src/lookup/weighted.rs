@@ -10,8 +10,8 @@
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::{Error, Quantity};
+use crate::layouts::Layout;
 use crate::rect::RawBox;
-use crate::table::Sat;
 use crate::texel::Entry;
 
 fn overflow() -> Error {
@@ -22,13 +22,17 @@ fn overflow() -> Error {
     }
 }
 
-pub(crate) fn sum<M: EdgeMode, E: Entry, const C: usize, K: Counter>(
-    sat: &Sat<'_, E, C>,
+/// On a modular layout the values are residues: the sum runs in wrapping `i128` arithmetic and is
+/// reduced modulo `2^k` at the end, exact because the driver has checked that the scaled box sum
+/// (`box sum * 2^2F`) is below `2^k`.
+pub(crate) fn sum<M: EdgeMode, L: Layout<C>, K: Counter, const C: usize>(
+    t: &L,
     b: &RawBox,
     f: u32,
     k: &mut K,
 ) -> Result<[u128; C], Error> {
-    let (w, h) = (sat.width(), sat.height());
+    let (w, h) = (t.width(), t.height());
+    let modulus = t.modulus();
     let xs = [M::axis_terms(b.x0, w, f), M::axis_terms(b.x1, w, f)];
     let ys = [M::axis_terms(b.y0, h, f), M::axis_terms(b.y1, h, f)];
     let mut acc = [0i128; C];
@@ -38,10 +42,22 @@ pub(crate) fn sum<M: EdgeMode, E: Entry, const C: usize, K: Counter>(
             let positive = xi == yi;
             for &(cx, wx) in xt.as_slice() {
                 for &(cy, wy) in yt.as_slice() {
-                    let e = sat.read(cx, cy, k);
-                    let weight = wx.checked_mul(wy).ok_or_else(overflow)?;
+                    let e = t.corner(cx, cy, k);
                     k.muls(1 + C as u32);
                     k.adds(C as u32);
+                    if modulus.is_some() {
+                        let weight = wx.wrapping_mul(wy);
+                        for c in 0..C {
+                            let term = weight.wrapping_mul(e[c].to_u128() as i128);
+                            acc[c] = if positive {
+                                acc[c].wrapping_add(term)
+                            } else {
+                                acc[c].wrapping_sub(term)
+                            };
+                        }
+                        continue;
+                    }
+                    let weight = wx.checked_mul(wy).ok_or_else(overflow)?;
                     for c in 0..C {
                         let term = weight
                             .checked_mul(e[c].to_u128() as i128)
@@ -59,8 +75,12 @@ pub(crate) fn sum<M: EdgeMode, E: Entry, const C: usize, K: Counter>(
     }
     let mut out = [0u128; C];
     for c in 0..C {
-        // The extended texture is non-negative, so a proper box integral is >= 0.
-        out[c] = u128::try_from(acc[c]).map_err(|_| overflow())?;
+        out[c] = if let Some(m) = modulus {
+            (acc[c] as u128) & ((1u128 << m) - 1)
+        } else {
+            // The extended texture is non-negative, so a proper box integral is >= 0.
+            u128::try_from(acc[c]).map_err(|_| overflow())?
+        };
     }
     Ok(out)
 }

@@ -1,0 +1,214 @@
+//! The texture-filtering report: every comparison filter of `texsat::filters` and every
+//! summed-area-table formulation and layout, on the scenes of `texsat-host-tests`, against the
+//! ideal pixel values (the exact mean over each pixel's pre-image), against each filter's own
+//! `f64` reference, timed and counted; plus the float32 stability study.
+//!
+//! ```text
+//! cargo run --release --example report [-- --quick|--full] [--scene NAME]... [--method NAME]...
+//!                                          [--out DIR] [--repeats R] [--no-stability]
+//! ```
+//!
+//! Writes `DIR/report.md`, `DIR/report.csv`, `DIR/stability.csv`, `DIR/error_vs_time.png`,
+//! `DIR/error_vs_cost.png`, `DIR/float32_error_vs_size.png` and `DIR/render_<scene>.png`
+//! (default `DIR` = `target/report`). `docs/report.md` explains the numbers.
+
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use texsat_host_tests::scenes::{builtin_scenes, image_scene, Scene, SceneSize};
+use texsat_host_tests::stability;
+
+#[path = "report/measure.rs"]
+mod measure;
+#[path = "report/methods.rs"]
+mod methods;
+#[path = "report/output.rs"]
+mod output;
+#[path = "report/plots.rs"]
+mod plots;
+
+use methods::Method;
+
+/// Compares texture filters on analytic scenes and writes a report with tables, plots and
+/// renders.
+#[derive(Parser, Debug)]
+#[command(name = "report")]
+struct Args {
+    /// Tiny scenes and 3 timed passes (seconds; for CI).
+    #[arg(long, conflicts_with = "full")]
+    quick: bool,
+    /// Larger scenes (1024 x 1024 textures, 320 x 240 outputs) and the largest stability sizes.
+    #[arg(long)]
+    full: bool,
+    /// A scene to run (a built-in name, or a path to a PNG/PGM image shown on a perspective
+    /// plane); repeat to run several; default: every built-in scene.
+    #[arg(long = "scene", value_name = "NAME")]
+    scenes: Vec<String>,
+    /// A method to run; repeat to run several; default: every method.
+    #[arg(long = "method", value_name = "NAME", value_enum)]
+    methods: Vec<Method>,
+    /// Output folder.
+    #[arg(long, value_name = "DIR", default_value = "target/report")]
+    out: PathBuf,
+    /// Timed passes per method and scene (median reported); default 5, 3 with --quick.
+    #[arg(long, value_name = "R")]
+    repeats: Option<usize>,
+    /// Skip the float32 stability study.
+    #[arg(long)]
+    no_stability: bool,
+}
+
+fn pick_scenes(names: &[String], size: SceneSize) -> Result<Vec<Scene>, String> {
+    let builtin = builtin_scenes(size);
+    if names.is_empty() {
+        return Ok(builtin);
+    }
+    let available: Vec<String> = builtin.iter().map(|s| s.name.clone()).collect();
+    let mut builtin: Vec<Option<Scene>> = builtin.into_iter().map(Some).collect();
+    let mut out = Vec::new();
+    for name in names {
+        if let Some(i) = available.iter().position(|a| a == name) {
+            if let Some(s) = builtin[i].take() {
+                out.push(s);
+            }
+            continue;
+        }
+        let path = std::path::Path::new(name);
+        if path.is_file() {
+            out.push(image_scene(path, size)?);
+            continue;
+        }
+        return Err(format!(
+            "unknown scene {name:?}: not a built-in ({}) nor an image file",
+            available.join(", ")
+        ));
+    }
+    Ok(out)
+}
+
+fn main() {
+    let args = Args::parse();
+    let started = Instant::now();
+    let size = if args.quick {
+        SceneSize::Quick
+    } else if args.full {
+        SceneSize::Full
+    } else {
+        SceneSize::Default
+    };
+    let repeats = args
+        .repeats
+        .unwrap_or(if args.quick { 3 } else { 5 })
+        .max(1);
+    let settings = measure::Settings {
+        repeats,
+        time_budget: Duration::from_secs_f64(if args.quick { 0.3 } else { 1.5 }),
+    };
+    let scenes = match pick_scenes(&args.scenes, size) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    let mut methods: Vec<Method> = if args.methods.is_empty() {
+        Method::ALL.to_vec()
+    } else {
+        args.methods.clone()
+    };
+    methods.sort();
+    methods.dedup();
+    if let Err(e) = std::fs::create_dir_all(&args.out) {
+        eprintln!("error: cannot create {}: {e}", args.out.display());
+        std::process::exit(2);
+    }
+    plots::register_fonts();
+
+    let steps = scenes.len() * (methods.len() + 1) + if args.no_stability { 0 } else { 2 } + 1;
+    let bar = ProgressBar::with_draw_target(Some(steps as u64), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.enable_steady_tick(Duration::from_millis(200));
+
+    let mut results = Vec::new();
+    for scene in &scenes {
+        let r = measure::measure_scene(scene, &methods, settings, &bar);
+        let line = format!(
+            "{:<24} {} x {} px, ideal in {:.1} s, done at {:.1} s",
+            r.name,
+            r.out_size.0,
+            r.out_size.1,
+            r.ideal_secs,
+            started.elapsed().as_secs_f64()
+        );
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
+        results.push(r);
+    }
+
+    let (stab_rows, curves, stab_secs) = if args.no_stability {
+        (Vec::new(), Vec::new(), 0.0)
+    } else {
+        let t = Instant::now();
+        bar.set_message("stability: float32 cases");
+        let rows = stability::stability_rows(size);
+        bar.inc(1);
+        bar.set_message("stability: float32 error against table size");
+        let curves = stability::float32_error_vs_size(size);
+        bar.inc(1);
+        (rows, curves, t.elapsed().as_secs_f64())
+    };
+
+    bar.set_message("writing report");
+    let run = output::RunInfo {
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+        size,
+        repeats,
+        methods: methods.clone(),
+        stability_secs: stab_secs,
+        no_stability: args.no_stability,
+    };
+    let mut written = Vec::new();
+    let mut problems = Vec::new();
+    let mut note = |r: Result<PathBuf, String>| match r {
+        Ok(p) => written.push(p),
+        Err(e) => problems.push(e),
+    };
+    note(output::write_csv(&args.out, &results));
+    if !args.no_stability {
+        note(output::write_stability_csv(&args.out, &stab_rows));
+    }
+    note(plots::error_vs_time(&args.out, &results));
+    note(plots::error_vs_cost(&args.out, &results));
+    if !args.no_stability {
+        note(plots::float32_error_vs_size(&args.out, &curves));
+    }
+    for (scene, r) in scenes.iter().zip(&results) {
+        note(plots::render_strip(&args.out, scene, r));
+    }
+    let total = started.elapsed().as_secs_f64();
+    note(output::write_markdown(
+        &args.out, &run, &results, &stab_rows, &curves, total,
+    ));
+    bar.inc(1);
+    bar.finish_and_clear();
+
+    println!("{}", output::summary_text(&results));
+    for p in &written {
+        println!("wrote {}", p.display());
+    }
+    println!("total {total:.1} s");
+    if !problems.is_empty() {
+        for p in &problems {
+            eprintln!("error: {p}");
+        }
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,804 @@
+//! The box-filtered image pyramid ("mip map"): point-sampled (Dungan, Stenger and Sutty 1978)
+//! and trilinear (Williams 1983), as compared in Heckbert 1986, "Comparison of Prefiltering
+//! Methods": point-sampled pyramid 1 access / 0 multiplies, trilinear interpolation on a pyramid
+//! 8 accesses / 7 multiplies, memory 1.33 ("`1 + 1/4 + 1/16 + ... = 4/3` times that required for
+//! an unfiltered texture"); Crow 1984 §2.2 counts the trilinear as 8 reads, 7 multiplicative and
+//! 14 additive operations.
+//!
+//! # The pyramid
+//!
+//! Level 0 is the texture itself (borrowed, not copied). Level `l + 1` has
+//! `ceil(w_l / 2) x ceil(h_l / 2)` texels, down to `1 x 1`; so level `l` is
+//! `ceil(w / 2^l) x ceil(h / 2^l)` and texel `(i, j)` of level `l` stands for the base block
+//! `[i 2^l, (i + 1) 2^l) x [j 2^l, (j + 1) 2^l)`, *clipped to the texture*. Its value is the
+//! average of the base texels of that clipped block (odd and non-power-of-two sizes: the last
+//! column/row of a level averages fewer texels), computed from the exact integer sum of the
+//! **base** texels (not from the rounded level above) and rounded to nearest, ties up:
+//! `round(sum / count) = floor((2 sum + count) / (2 count))`. Every stored texel is within
+//! 1/2 LSB of the exact box average of the base texture; the error does not accumulate down the
+//! pyramid. The coarse levels live in caller storage of the texture's own texel type
+//! ([`MipPyramid::storage_needed`] elements), so the memory is the survey's 4/3 of the texture
+//! for square power-of-two sizes: `(4^(k+1) - 1) / 3` texels for a `2^k x 2^k` texture
+//! ([`MipPyramid::pyramid_texels`]); other sizes are `4/3 + O(1/n)` (255 x 255: 1.3359;
+//! 640 x 480: 1.33336). Elongated textures cost more once the short side has reached 1 and only
+//! the long axis halves: a `1 x n` pyramid approaches `2 n` texels (1 x 300: 603, ratio 2.01).
+//!
+//! Build cost (not a per-sample cost, not counted): every base texel is read once per coarse
+//! level, `w h (levels - 1)` texel reads, because each level is summed from the base texels.
+//! Per-level sums are exact in `u64` (refused with [`Error::TooWide`] if `2^(B+1) w h` could
+//! reach `2^64`: at least `2^47` texels of `u16`, `2^55` of `u8`).
+//!
+//! # Sampling
+//!
+//! The footprint `[x0, x1) x [y0, y1)` (fixed point, `F <= 24` fractional bits) gives the centre
+//! `c = ((x0 + x1) / 2, (y0 + y1) / 2)` and the diameter `d = max(W, H)` with `W = x1 - x0`,
+//! `H = y1 - y0` in texels (Heckbert: "the recommended formula for the diameter `d` of the
+//! square is the maximum of the side lengths"). The level of detail is
+//! `L = log2(d)` in fixed point with [`LOD_FRAC_BITS`] fraction bits from
+//! [`crate::filters::level::log2_fixed`] (the exact `floor(256 log2 d)` or one below it), clamped
+//! to `[0, top]` (`top` = the `1 x 1` level); `d = 0` and magnification (`d <= 1`) give level 0.
+//! See [`MipPyramid::lod`].
+//!
+//! * [`MipPyramid::point_sample`]: level `round(L) = (L_q + 128) >> 8` (ties up on the fixed
+//!   value; as `L_q` may be one unit low, a `log2 d` whose fraction is in `[0.5, 0.5 + 2^-7)` may
+//!   take the lower level), then the nearest texel of that level: index `floor(c / 2^l)`.
+//!   1 read, 0 multiplies, 0 additive operations. Exact output (`texel << 16`).
+//! * [`MipPyramid::trilinear`]: Williams' trilinear interpolation. Levels `l0 = floor(L)` and
+//!   `l1 = min(l0 + 1, top)`, lerp weight `t = frac(L)` (8 bits, exact). In each level a bilinear
+//!   interpolation at `c`: level texel centres are at `(i + 0.5) 2^l` in base coordinates, so
+//!   `u = c / 2^l - 1/2`, taps `floor(u)` and `floor(u) + 1` (per axis, through the boundary mode
+//!   at the level's own size), weight `a = frac(u)`.
+//!
+//! # Arithmetic of the trilinear, and its error bound
+//!
+//! Every lerp is Crow's `b + (c - b) alpha` (1 multiply, 2 additive operations); a bilinear is 3
+//! lerps (two along x, one along y), the trilinear two bilinears and one lerp: **8 reads,
+//! 7 multiplies, 14 additive operations** per channel of arithmetic (reads count all channels
+//! together; multiplies and additions count once per channel, as everywhere in the crate). The
+//! scale of `b` by a power of two is a shift (wiring) and not counted; nor is the final rounding
+//! to the output (as in [`crate::BoxSum::mean_rounded`]).
+//!
+//! The position weights are the fractions `a`, `b` truncated to [`WEIGHT_BITS`] = 32 bits
+//! (`alpha = floor(a 2^32)`; exact whenever `F + 1 + l <= 32`); the level weight is the exact
+//! 8-bit `frac(L)`. All products are then exact: row lerps `p 2^32 + (q - p) alpha` in `i64`
+//! (below `2^48`), the column lerp in `i128` (below `2^80`), the level lerp below `2^88`, and the
+//! result, in units of `2^-72`, is rounded to nearest (ties up) to `2^-16`.
+//!
+//! **Bound.** Against the same filter in exact (or `f64`) arithmetic on the same stored pyramid
+//! with the same `L`: a bilinear interpolation is linear in each weight with slope at most
+//! `m = 2^B - 1` (texel values lie in `[0, m]`), so truncating `a` and `b` by less than `2^-32`
+//! each moves it by less than `m 2^-31`; the level lerp is a convex combination and does not
+//! enlarge that; the output rounding adds at most `2^-17`. Hence
+//! `|trilinear / 2^16 - exact| < m 2^-31 + 2^-17` texel units ([`trilinear_error_bound`]), i.e.
+//! below `0.508` output units for `u8` and `2.5` for `u16`. Against the ideal (unrounded) box
+//! pyramid add the storage rounding, 1/2 LSB (convex combinations of texels each within 1/2).
+//!
+//! # Boundary modes
+//!
+//! A tap outside a level uses [`EdgeMode::texel_index`]`(i, n_l)` with that level's size `n_l`;
+//! under [`crate::Border`] it reads zero. For [`crate::Repeat`] and [`crate::MirroredRepeat`]
+//! each level wraps (reflects) at its own size: level `l` repeats with period `n_l 2^l` base
+//! texels, which is `n` only when `2^l` divides `n`. For other (odd, non-power-of-two) sizes the
+//! coarse levels are therefore an approximation of the filtered repeated texture near the seam
+//! (the last, clipped, block is a full texel of the level). Likewise the clipped edge texel's
+//! centre `(n_l - 1/2) 2^l` may lie past the texture's edge `n`.
+//!
+//! Costs are constant: a tap outside under [`crate::Border`] is still counted as a read (the unit
+//! issues the fetch slot), and at the top level (or when `L` is clamped there) the trilinear still
+//! evaluates both bilinears, reading the top level twice with `t = 0`: always 8 reads.
+
+use crate::cost::Counter;
+use crate::edge::EdgeMode;
+use crate::error::{Error, Quantity};
+use crate::filters::pyramid::{
+    check_dims, count_reads, fill_box_level, footprint, lerp, level_count, level_len,
+    level_position, split_level, split_position, Footprint,
+};
+use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
+use crate::rect::{Coord, Rect};
+use crate::texel::Texel;
+use crate::texture::Texture;
+#[cfg(test)]
+use crate::texture::MAX_DIMENSION;
+use crate::width::bits_of;
+
+/// Most levels a pyramid can have: sizes up to `2^31 - 1` halve to 1 in 31 steps, plus level 0.
+pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
+
+/// Fractional bits of the level of detail `L` ([`MipPyramid::lod`]).
+pub const LOD_FRAC_BITS: u32 = 8;
+
+/// Fractional bits of the bilinear position weights of [`MipPyramid::trilinear`] (truncated).
+pub const WEIGHT_BITS: u32 = 32;
+
+/// The error bound of [`MipPyramid::trilinear`] in texel units against the same filter computed
+/// exactly on the same stored pyramid with the same level of detail: `m 2^-31 + 2^-17` with
+/// `m = 2^texel_bits - 1` (module docs, "Arithmetic of the trilinear"). The bound is strict for
+/// the weight part; the rounding part `2^-17` is reached.
+pub fn trilinear_error_bound(texel_bits: u32) -> f64 {
+    let m = ((1u64 << texel_bits.min(16)) - 1) as f64;
+    m / (1u64 << 31) as f64 + 1.0 / (1u64 << 17) as f64
+}
+
+/// A box-filtered 2x2 pyramid over a borrowed texture: level 0 is the texture, the coarse levels
+/// live in caller storage (module docs).
+#[derive(Debug, Clone, Copy)]
+pub struct MipPyramid<'a, T: Texel, const C: usize = 1> {
+    base: Texture<'a, T, C>,
+    coarse: &'a [T],
+    sizes: [(usize, usize); MAX_LEVELS],
+    offsets: [usize; MAX_LEVELS],
+    count: usize,
+}
+
+/// Level sizes `(ceil(w / 2^l), ceil(h / 2^l))` down to `1 x 1`, and their number.
+fn level_sizes(w: usize, h: usize) -> Result<([(usize, usize); MAX_LEVELS], usize), Error> {
+    check_dims(w, h)?;
+    // w, h <= 2^31 - 1: at most 31 halvings reach 1, so count <= MAX_LEVELS.
+    let count = level_count(w.max(h)).min(MAX_LEVELS);
+    let mut sizes = [(0, 0); MAX_LEVELS];
+    for (l, s) in sizes[..count].iter_mut().enumerate() {
+        *s = (level_len(w, l), level_len(h, l));
+    }
+    Ok((sizes, count))
+}
+
+impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
+    /// Texels per channel of the whole pyramid of a `width x height` texture, level 0 included:
+    /// `sum_l ceil(w / 2^l) ceil(h / 2^l)`. For `2^k x 2^k` this is `(4^(k+1) - 1) / 3`; the
+    /// ratio to `w h` is the memory cost of the survey's table (4/3 for square textures).
+    pub fn pyramid_texels(width: usize, height: usize) -> Result<usize, Error> {
+        let (sizes, count) = level_sizes(width, height)?;
+        let mut total = 0usize;
+        for &(w, h) in &sizes[..count] {
+            total = w.checked_mul(h).and_then(|a| total.checked_add(a)).ok_or(
+                Error::TextureTooLarge {
+                    dimension: width.max(height),
+                },
+            )?;
+        }
+        Ok(total)
+    }
+
+    /// Elements of `T` the coarse levels (1 and up) need: `(pyramid_texels - w h) * C`. Level 0
+    /// is the texture and takes no storage.
+    pub fn storage_needed(width: usize, height: usize) -> Result<usize, Error> {
+        let too_large = Error::TextureTooLarge {
+            dimension: width.max(height),
+        };
+        let total = Self::pyramid_texels(width, height)?;
+        // pyramid_texels succeeded, so w h <= total does not overflow.
+        (total - width * height).checked_mul(C).ok_or(too_large)
+    }
+
+    /// The level sizes `(width, height)`, level 0 (the texture) first, down to `(1, 1)`.
+    pub fn levels(&self) -> &[(usize, usize)] {
+        &self.sizes[..self.count]
+    }
+
+    /// The number of levels (`1 + ceil(log2(max(w, h)))`).
+    pub fn level_count(&self) -> usize {
+        self.count
+    }
+
+    /// The storage elements in use (a prefix of the slice given to [`MipPyramid::build`]).
+    pub fn storage_len(&self) -> usize {
+        self.coarse.len()
+    }
+
+    /// Texel `(x, y)` of level `l` (all channels), or `None` outside the level or past the top.
+    pub fn level_texel(&self, l: usize, x: usize, y: usize) -> Option<[T; C]> {
+        let &(w, h) = self.sizes[..self.count].get(l)?;
+        if x >= w || y >= h {
+            return None;
+        }
+        let px = if l == 0 {
+            self.base.row(y)?.get(x * C..x * C + C)?
+        } else {
+            // x < w, y < h and w h C fits (storage_needed), so no overflow.
+            let at = self.offsets[l] + (y * w + x) * C;
+            self.coarse.get(at..at + C)?
+        };
+        Some(core::array::from_fn(|c| px[c]))
+    }
+
+    /// The level of detail of `rect`: `log2(max(W, H))` with [`LOD_FRAC_BITS`] fraction bits from
+    /// [`log2_fixed`](crate::filters::level::log2_fixed) (exact floor or one unit below), clamped
+    /// to `[0, (levels - 1) 2^8]`; `0` when the footprint is a point or a segment of length 0
+    /// (`d = 0`).
+    ///
+    /// Errors: [`Error::FracBitsUnsupported`] for `F > 24`, [`Error::InvertedBox`].
+    pub fn lod<X: Coord>(&self, rect: &Rect<X>) -> Result<u32, Error> {
+        Ok(self.footprint(rect)?.1)
+    }
+
+    /// The validated footprint (doubled centre, sides) and its clamped level of detail.
+    fn footprint<X: Coord>(&self, rect: &Rect<X>) -> Result<(Footprint, u32), Error> {
+        let fp = footprint(rect)?;
+        let lod = level_position(fp.w.max(fp.h), fp.f, LOD_FRAC_BITS, self.top());
+        Ok((fp, lod))
+    }
+
+    /// The top level's index.
+    fn top(&self) -> u32 {
+        (self.count - 1) as u32
+    }
+
+    /// Texel of level `l` at extended index `(i, j)` under `M`, as `i64` per channel (0 where
+    /// the mode gives no texel).
+    fn tap<M: EdgeMode>(&self, l: usize, i: i64, j: i64) -> [i64; C] {
+        let (w, h) = self.sizes[l];
+        match (M::texel_index(i, w), M::texel_index(j, h)) {
+            (Some(x), Some(y)) => match self.level_texel(l, x, y) {
+                Some(px) => core::array::from_fn(|c| px[c].to_u16() as i64),
+                None => [0; C],
+            },
+            _ => [0; C],
+        }
+    }
+
+    /// Dungan's point-sampled pyramid: the nearest texel of level `round(L)` to the footprint's
+    /// centre. 1 read, 0 multiplies, 0 additive operations (survey: "point sampled pyramid 1,0").
+    ///
+    /// Level `l = min((L_q + 128) >> 8, top)` with `L_q` = [`MipPyramid::lod`]; texel index
+    /// `floor(c / 2^l) = (x0 + x1) >> (F + 1 + l)` per axis (a centre on a level-texel boundary
+    /// takes the texel to the right / below), mapped by `M` at the level's size. Exact output:
+    /// `texel << 16`.
+    ///
+    /// Errors: [`Error::FracBitsUnsupported`] (`F > 24`), [`Error::InvertedBox`].
+    pub fn point_sample<X: Coord, M: EdgeMode, K: Counter>(
+        &self,
+        rect: &Rect<X>,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let _ = mode;
+        let (fp, lod) = self.footprint(rect)?;
+        let l = ((lod + (1 << (LOD_FRAC_BITS - 1))) >> LOD_FRAC_BITS).min(self.top());
+        let shift = fp.f + 1 + l;
+        // |x0 + x1| <= 2^64, shifted right by at least 1: in the i64 range.
+        let i = i64::try_from(fp.px >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
+        let j = i64::try_from(fp.py >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
+        count_reads::<T, C, K>(1, k);
+        let px = self.tap::<M>(l as usize, i, j);
+        Ok(Sample {
+            values: core::array::from_fn(|c| (px[c] as u64) << OUT_FRAC_BITS),
+        })
+    }
+
+    /// Williams' trilinear interpolation: bilinear at the footprint's centre in levels
+    /// `floor(L)` and `min(floor(L) + 1, top)`, then a lerp by `frac(L)`. 8 reads, 7 multiplies,
+    /// 14 additive operations per channel (survey "trilinear interp. on pyramid 8,7"; Crow §2.2).
+    ///
+    /// Output: per channel `round(v 2^16)` (ties up) of the fixed-point evaluation, within
+    /// [`trilinear_error_bound`] texel units of the same filter in exact arithmetic (module docs).
+    ///
+    /// Errors: [`Error::FracBitsUnsupported`] (`F > 24`), [`Error::InvertedBox`], and
+    /// [`Error::CoordinateOutOfRange`] only for a footprint centred at the very bottom of `i64`
+    /// (`F = 0`, `x0 = x1 = i64::MIN`), whose left tap index is below `i64::MIN`.
+    pub fn trilinear<X: Coord, M: EdgeMode, K: Counter>(
+        &self,
+        rect: &Rect<X>,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let _ = mode;
+        let (fp, lod) = self.footprint(rect)?;
+        // lod <= top 2^8, so at the top t = 0.
+        let (l0, l1, t) = split_level(lod, LOD_FRAC_BITS, self.top());
+        let v0 = self.bilinear::<M, K>(l0, &fp, k)?;
+        let v1 = self.bilinear::<M, K>(l1, &fp, k)?;
+        // Level lerp: units 2^-72, |v| < 2^80, so below 2^88.
+        let v = lerp(v0, v1, t as i128, LOD_FRAC_BITS, k);
+        let shift = 2 * WEIGHT_BITS + LOD_FRAC_BITS - OUT_FRAC_BITS;
+        let half = 1i128 << (shift - 1);
+        // v is a convex combination of texels: 0 <= v <= m 2^72.
+        Ok(Sample {
+            values: v.map(|v| ((v + half) >> shift) as u64),
+        })
+    }
+
+    /// Bilinear interpolation of level `l` at the footprint centre: 4 reads, 3 lerps per channel;
+    /// per channel the value in units of `2^-64`.
+    fn bilinear<M: EdgeMode, K: Counter>(
+        &self,
+        l: u32,
+        fp: &Footprint,
+        k: &mut K,
+    ) -> Result<[i128; C], Error> {
+        let g = fp.f + 1 + l; // fraction bits of c / 2^l: at most 24 + 1 + 31 = 56
+        let (i, a) = split(fp.px, g)?;
+        let (j, b) = split(fp.py, g)?;
+        // i, j <= 2^63 - 2 (split), so + 1 cannot overflow; checked anyway.
+        let i1 = i.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
+        let j1 = j.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
+        let l = l as usize;
+        count_reads::<T, C, K>(4, k);
+        let p00 = self.tap::<M>(l, i, j);
+        let p10 = self.tap::<M>(l, i1, j);
+        let p01 = self.tap::<M>(l, i, j1);
+        let p11 = self.tap::<M>(l, i1, j1);
+        // Row lerps, units 2^-32: |q - p| < 2^16, a < 2^32, so below 2^48 in i64.
+        let r0 = lerp(p00, p10, a, WEIGHT_BITS, k);
+        let r1 = lerp(p01, p11, a, WEIGHT_BITS, k);
+        // Column lerp, units 2^-64: below 2^80 in i128.
+        let (r0, r1) = (r0.map(i128::from), r1.map(i128::from));
+        Ok(lerp(r0, r1, b as i128, WEIGHT_BITS, k))
+    }
+
+    /// Builds the coarse levels of `texture` into `storage` (the first
+    /// [`MipPyramid::storage_needed`] elements; the rest is untouched).
+    ///
+    /// Each coarse texel is the exact box average of its clipped base block, rounded to nearest
+    /// with ties up (module docs). Errors: [`Error::StorageTooSmall`]; [`Error::TooWide`]
+    /// (`Quantity::Entry`) if `2^(B+1) w h >= 2^64`, where the exact sums could overflow `u64`.
+    pub fn build(texture: &Texture<'a, T, C>, storage: &'a mut [T]) -> Result<Self, Error> {
+        let (w, h) = (texture.width(), texture.height());
+        let (sizes, count) = level_sizes(w, h)?;
+        let needed = Self::storage_needed(w, h)?;
+        let got = storage.len();
+        let store = storage
+            .get_mut(..needed)
+            .ok_or(Error::StorageTooSmall { needed, got })?;
+        let bits_needed = bits_of(w as u128 * h as u128) + T::BITS + 1;
+        if bits_needed > 64 {
+            return Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed,
+                bits_available: 64,
+            });
+        }
+        let mut offsets = [0usize; MAX_LEVELS];
+        let mut at = 0usize;
+        for l in 1..count {
+            offsets[l] = at;
+            // Within `needed`, which did not overflow.
+            at += sizes[l].0 * sizes[l].1 * C;
+        }
+        for l in 1..count {
+            // Level l averages blocks of 2^l x 2^l base texels; 2 sum + count <= 2^(B+1) w h,
+            // below 2^64 (checked above).
+            fill_box_level(texture, &mut store[offsets[l]..], l, l)?;
+        }
+        let coarse: &'a [T] = store;
+        Ok(MipPyramid {
+            base: *texture,
+            coarse,
+            sizes,
+            offsets,
+            count,
+        })
+    }
+}
+
+/// Splits `u = s / 2^g - 1/2` (`s` = doubled centre, raw) into `floor(u)` and the fraction
+/// truncated to [`WEIGHT_BITS`] bits.
+///
+/// `s` lies in `[-2^64, 2^64 - 2]` and `g >= 1`, so `floor(u) <= 2^63 - 2`; it is below
+/// `i64::MIN` only for `s = -2^64`, `g = 1`: [`Error::CoordinateOutOfRange`].
+fn split(s: i128, g: u32) -> Result<(i64, i64), Error> {
+    let (i, w) = split_position(s, g, WEIGHT_BITS);
+    let i = i64::try_from(i).map_err(|_| Error::CoordinateOutOfRange)?;
+    Ok((i, w))
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::cost::{NoCount, Tally};
+    use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
+    use fixed::types::{I24F8, I32F32, I40F24, I64F0};
+    use std::vec;
+    use std::vec::Vec;
+
+    fn lcg(seed: &mut u64) -> u64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *seed >> 33
+    }
+
+    fn r8(x0: f64, y0: f64, x1: f64, y1: f64) -> Rect<I24F8> {
+        Rect::from_f64(x0, y0, x1, y1).unwrap()
+    }
+
+    /// The same trilinear in f64 on the stored pyramid, same lod; `mode` maps indices.
+    fn tri_f64<T: Texel, const C: usize>(
+        p: &MipPyramid<'_, T, C>,
+        raw: [i64; 4],
+        f: u32,
+        lod: u32,
+        idx: fn(i64, usize) -> Option<usize>,
+    ) -> Vec<f64> {
+        let top = p.level_count() - 1;
+        let l0 = (lod >> 8) as usize;
+        let l1 = (l0 + 1).min(top);
+        let t = (lod & 255) as f64 / 256.0;
+        let cx = (raw[0] as f64 + raw[2] as f64) / 2f64.powi(f as i32 + 1);
+        let cy = (raw[1] as f64 + raw[3] as f64) / 2f64.powi(f as i32 + 1);
+        let bil = |l: usize| -> Vec<f64> {
+            let (w, h) = p.levels()[l];
+            let s = (1u64 << l) as f64;
+            let (u, v) = (cx / s - 0.5, cy / s - 0.5);
+            let (i, j) = (u.floor(), v.floor());
+            let (a, b) = (u - i, v - j);
+            let get = |x: f64, y: f64, c: usize| -> f64 {
+                match (idx(x as i64, w), idx(y as i64, h)) {
+                    (Some(x), Some(y)) => p.level_texel(l, x, y).unwrap()[c].to_u16() as f64,
+                    _ => 0.0,
+                }
+            };
+            (0..C)
+                .map(|c| {
+                    let r0 = get(i, j, c) * (1.0 - a) + get(i + 1.0, j, c) * a;
+                    let r1 = get(i, j + 1.0, c) * (1.0 - a) + get(i + 1.0, j + 1.0, c) * a;
+                    r0 * (1.0 - b) + r1 * b
+                })
+                .collect()
+        };
+        let (v0, v1) = (bil(l0), bil(l1));
+        (0..C).map(|c| v0[c] * (1.0 - t) + v1[c] * t).collect()
+    }
+
+    #[test]
+    fn sizes_and_memory() {
+        let lv = |w: usize, h: usize| {
+            let (s, n) = level_sizes(w, h).unwrap();
+            s[..n].to_vec()
+        };
+        assert_eq!(lv(1, 1), vec![(1, 1)]);
+        assert_eq!(lv(5, 3), vec![(5, 3), (3, 2), (2, 1), (1, 1)]);
+        assert_eq!(lv(1, 300).len(), 10);
+        assert_eq!(lv(MAX_DIMENSION, 1).len(), 32);
+        for k in 0..=12u32 {
+            let n = 1usize << k;
+            let total = MipPyramid::<u8>::pyramid_texels(n, n).unwrap();
+            assert_eq!(total, ((1usize << (2 * k + 2)) - 1) / 3);
+            assert_eq!(
+                MipPyramid::<u8, 3>::storage_needed(n, n).unwrap(),
+                (total - n * n) * 3
+            );
+        }
+        assert_eq!(MipPyramid::<u8>::pyramid_texels(1, 300).unwrap(), 603);
+        assert_eq!(
+            MipPyramid::<u8>::storage_needed(0, 3),
+            Err(Error::EmptyTexture)
+        );
+        // 2^31 - 1 squared overflows a 32-bit usize but not a 64-bit one.
+        let big = MipPyramid::<u8, 4>::storage_needed(MAX_DIMENSION, MAX_DIMENSION);
+        assert!(
+            big.is_ok()
+                || big
+                    == Err(Error::TextureTooLarge {
+                        dimension: MAX_DIMENSION
+                    })
+        );
+    }
+
+    #[test]
+    fn levels_are_rounded_box_averages_of_the_base() {
+        let mut seed = 7;
+        for (w, h) in [
+            (1, 1),
+            (1, 7),
+            (7, 1),
+            (5, 3),
+            (6, 6),
+            (9, 13),
+            (16, 16),
+            (17, 5),
+        ] {
+            let data: Vec<u8> = (0..w * h * 2).map(|_| lcg(&mut seed) as u8).collect();
+            let t = Texture::<u8, 2>::new(&data, w, h).unwrap();
+            let mut st = vec![0u8; MipPyramid::<u8, 2>::storage_needed(w, h).unwrap() + 3];
+            let p = MipPyramid::build(&t, &mut st).unwrap();
+            assert_eq!(p.levels()[0], (w, h));
+            for (l, &(lw, lh)) in p.levels().iter().enumerate() {
+                for y in 0..lh {
+                    for x in 0..lw {
+                        let got = p.level_texel(l, x, y).unwrap();
+                        for c in 0..2 {
+                            let (mut s, mut n) = (0u64, 0u64);
+                            for by in (y << l)..((y + 1) << l).min(h) {
+                                for bx in (x << l)..((x + 1) << l).min(w) {
+                                    s += data[(by * w + bx) * 2 + c] as u64;
+                                    n += 1;
+                                }
+                            }
+                            assert_eq!(got[c] as u64, (2 * s + n) / (2 * n), "{w}x{h} l{l}");
+                        }
+                    }
+                }
+                assert_eq!(p.level_texel(l, lw, 0), None);
+            }
+            assert_eq!(p.level_texel(p.level_count(), 0, 0), None);
+        }
+    }
+
+    #[test]
+    fn build_refusals() {
+        let data = [0u16; 12];
+        let t = Texture::<u16>::new(&data, 4, 3).unwrap();
+        let need = MipPyramid::<u16>::storage_needed(4, 3).unwrap();
+        assert_eq!(need, 2 * 2 + 1);
+        let mut st = vec![0u16; need - 1];
+        assert_eq!(
+            MipPyramid::build(&t, &mut st).err(),
+            Some(Error::StorageTooSmall {
+                needed: need,
+                got: need - 1
+            })
+        );
+    }
+
+    #[test]
+    fn costs_are_the_surveys() {
+        let data: Vec<u8> = (0..64 * 3).map(|v| v as u8).collect();
+        let t = Texture::<u8, 3>::new(&data, 8, 8).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8, 3>::storage_needed(8, 8).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        for r in [
+            r8(1.0, 1.0, 3.5, 2.0),
+            r8(-20.0, -20.0, 40.0, 40.0),
+            r8(2.0, 2.0, 2.0, 2.0),
+            r8(7.9, 0.2, 8.4, 0.3),
+        ] {
+            let mut k = Tally::new();
+            p.point_sample(&r, Border, &mut k).unwrap();
+            assert_eq!((k.reads, k.muls, k.divs, k.adds), (1, 0, 0, 0));
+            assert_eq!(k.bits_read, 24);
+            let mut k = Tally::new();
+            p.trilinear(&r, Repeat, &mut k).unwrap();
+            // 8 reads; 7 multiplies and 14 additive operations per channel.
+            assert_eq!((k.reads, k.muls, k.divs, k.adds), (8, 21, 0, 42));
+        }
+        let d1: Vec<u16> = (0..36).collect();
+        let t1 = Texture::<u16>::new(&d1, 6, 6).unwrap();
+        let mut st1 = vec![0u16; MipPyramid::<u16>::storage_needed(6, 6).unwrap()];
+        let p1 = MipPyramid::build(&t1, &mut st1).unwrap();
+        let mut k = Tally::new();
+        p1.trilinear(&r8(1.0, 1.0, 3.5, 2.0), ClampToEdge, &mut k)
+            .unwrap();
+        assert_eq!((k.reads, k.multiplicative(), k.adds), (8, 7, 14));
+        assert_eq!(k.bits_read, 8 * 16);
+    }
+
+    #[test]
+    fn lod_selection() {
+        let data = [0u8; 256];
+        let t = Texture::<u8>::new(&data, 16, 16).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(16, 16).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        assert_eq!(p.level_count(), 5);
+        assert_eq!(p.lod(&r8(0.0, 0.0, 0.5, 0.25)).unwrap(), 0); // magnification
+        assert_eq!(p.lod(&r8(1.0, 1.0, 1.0, 1.0)).unwrap(), 0); // a point
+        assert_eq!(p.lod(&r8(0.0, 0.0, 4.0, 1.0)).unwrap(), 2 << 8); // max side
+        assert_eq!(p.lod(&r8(0.0, 0.0, 1.0, 8.0)).unwrap(), 3 << 8);
+        assert_eq!(p.lod(&r8(0.0, 0.0, 1000.0, 1.0)).unwrap(), 4 << 8); // clamped
+        let l = p.lod(&r8(0.0, 0.0, 3.0, 1.0)).unwrap() as f64 / 256.0;
+        assert!((l - 3f64.log2()).abs() < 2.0 / 256.0);
+        assert_eq!(p.lod(&r8(1.0, 0.0, 0.0, 1.0)), Err(Error::InvertedBox));
+        let r = Rect::new(I32F32::ZERO, I32F32::ZERO, I32F32::ONE, I32F32::ONE);
+        assert_eq!(
+            p.lod(&r),
+            Err(Error::FracBitsUnsupported {
+                frac_bits: 32,
+                max: 24
+            })
+        );
+    }
+
+    #[test]
+    fn point_sample_picks_level_and_texel() {
+        // 8 x 1 ramp 0, 10, .., 70: level 1 = [5, 25, 45, 65], level 2 = [15, 55], level 3 = 35.
+        let data: Vec<u8> = (0..8).map(|v| v * 10).collect();
+        let t = Texture::<u8>::new(&data, 8, 1).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(8, 1).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        assert_eq!(p.levels(), &[(8, 1), (4, 1), (2, 1), (1, 1)]);
+        let v = |r: Rect<I24F8>| {
+            p.point_sample(&r, ClampToEdge, &mut NoCount)
+                .unwrap()
+                .values[0]
+        };
+        assert_eq!(v(r8(2.5, 0.0, 3.0, 0.5)), 20 << 16); // level 0, texel 2
+        assert_eq!(v(r8(2.0, 0.0, 4.0, 0.5)), 25 << 16); // d = 2: level 1, texel 1
+        assert_eq!(p.level_texel(1, 1, 0), Some([25]));
+        // d = 2.75: log2 = 1.46 -> level 1; d = 2.875: 1.52 -> level 2.
+        assert_eq!(v(r8(0.0, 0.0, 2.75, 0.5)), 5 << 16);
+        assert_eq!(v(r8(0.0, 0.0, 2.875, 0.5)), 15 << 16); // level 2 texel 0: (0+..+30)/4
+                                                           // Level 0 equals point sampling of the texture.
+        #[cfg(feature = "filter-point")]
+        for r in [
+            r8(0.2, 0.0, 0.9, 0.7),
+            r8(-3.0, 2.0, -2.5, 2.5),
+            r8(7.6, 0.1, 8.5, 0.2),
+        ] {
+            use crate::filters::point::point;
+            let mut k = NoCount;
+            assert_eq!(
+                p.point_sample(&r, Repeat, &mut k),
+                point(&t, &r, Repeat, &mut k)
+            );
+            assert_eq!(
+                p.point_sample(&r, Border, &mut k),
+                point(&t, &r, Border, &mut k)
+            );
+            let (a, b) = (
+                p.point_sample(&r, MirroredRepeat, &mut k),
+                point(&t, &r, MirroredRepeat, &mut k),
+            );
+            assert_eq!(a, b);
+        }
+    }
+
+    #[test]
+    fn trilinear_exact_cases() {
+        // Constant texture: every filter returns the constant exactly (Clamp; Repeat).
+        let data = [77u8; 35];
+        let t = Texture::<u8>::new(&data, 7, 5).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(7, 5).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        for r in [
+            r8(0.3, 0.1, 0.6, 0.9),
+            r8(-9.0, 3.0, 30.0, 4.0),
+            r8(2.0, 2.0, 5.3, 4.1),
+        ] {
+            assert_eq!(
+                p.trilinear(&r, ClampToEdge, &mut NoCount).unwrap().values,
+                [77 << 16]
+            );
+            assert_eq!(
+                p.trilinear(&r, Repeat, &mut NoCount).unwrap().values,
+                [77 << 16]
+            );
+            assert_eq!(
+                p.trilinear(&r, MirroredRepeat, &mut NoCount)
+                    .unwrap()
+                    .values,
+                [77 << 16]
+            );
+        }
+        // A texel centre at level 0 with d <= 1 returns that texel.
+        let data: Vec<u8> = (0..35).map(|v| v * 7).collect();
+        let t = Texture::<u8>::new(&data, 7, 5).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(7, 5).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        let s = p
+            .trilinear(&r8(3.25, 2.25, 3.75, 2.75), Border, &mut NoCount)
+            .unwrap();
+        assert_eq!(s.values, [(data[2 * 7 + 3] as u64) << 16]);
+        // Halfway between texels 3 and 4 on row 2: the mean.
+        let s = p
+            .trilinear(&r8(3.75, 2.25, 4.25, 2.75), Border, &mut NoCount)
+            .unwrap();
+        assert_eq!(
+            s.values,
+            [(((data[17] as u64) + data[18] as u64) << 16) / 2]
+        );
+    }
+
+    #[test]
+    fn trilinear_within_bound_of_f64_u8() {
+        let mut seed = 11;
+        let mut worst = 0f64;
+        for (w, h) in [(1, 1), (1, 9), (9, 1), (5, 3), (8, 8), (13, 6)] {
+            let data: Vec<u8> = (0..w * h).map(|_| lcg(&mut seed) as u8).collect();
+            let t = Texture::<u8>::new(&data, w, h).unwrap();
+            let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(w, h).unwrap()];
+            let p = MipPyramid::build(&t, &mut st).unwrap();
+            for _ in 0..400 {
+                let x0 = (lcg(&mut seed) % 8000) as i64 - 3000;
+                let y0 = (lcg(&mut seed) % 8000) as i64 - 3000;
+                let ww = (lcg(&mut seed) % 6000) as i64;
+                let hh = (lcg(&mut seed) % 6000) as i64;
+                let raw = [x0, y0, x0 + ww, y0 + hh];
+                let r = Rect::new(
+                    I24F8::from_bits(raw[0] as i32),
+                    I24F8::from_bits(raw[1] as i32),
+                    I24F8::from_bits(raw[2] as i32),
+                    I24F8::from_bits(raw[3] as i32),
+                );
+                let lod = p.lod(&r).unwrap();
+                let mut check = |got: Sample<1>, idx: fn(i64, usize) -> Option<usize>| {
+                    let want = tri_f64(&p, raw, 8, lod, idx)[0];
+                    let err = (got.value_f64(0).unwrap() - want).abs();
+                    assert!(err <= trilinear_error_bound(8) + 1e-12, "{err}");
+                    worst = worst.max(err);
+                };
+                check(
+                    p.trilinear(&r, Border, &mut NoCount).unwrap(),
+                    Border::texel_index,
+                );
+                check(
+                    p.trilinear(&r, ClampToEdge, &mut NoCount).unwrap(),
+                    ClampToEdge::texel_index,
+                );
+                check(
+                    p.trilinear(&r, Repeat, &mut NoCount).unwrap(),
+                    Repeat::texel_index,
+                );
+                check(
+                    p.trilinear(&r, MirroredRepeat, &mut NoCount).unwrap(),
+                    MirroredRepeat::texel_index,
+                );
+            }
+        }
+        // The rounding half of the bound is reached.
+        assert!(worst >= 0.99 / (1u64 << 17) as f64, "{worst}");
+    }
+
+    #[test]
+    fn trilinear_weight_truncation_approaches_bound_u16() {
+        // Level l alternates 0 / 65535 in blocks of 2^l; F = 24 and l = 10 give
+        // F + 1 + l = 35 > 32 fraction bits, 3 of them truncated. Under Border the single row's
+        // vertical taps are 0 and the row, so both axes lose weight bits on a difference near m.
+        let l = 10u32;
+        let (w, h) = (1usize << (l + 2), 1usize);
+        let data: Vec<u16> = (0..w)
+            .map(|x| if (x >> l).is_multiple_of(2) { 0 } else { 65535 })
+            .collect();
+        let t = Texture::<u16>::new(&data, w, h).unwrap();
+        let mut st = vec![0u16; MipPyramid::<u16>::storage_needed(w, h).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        assert_eq!(p.level_texel(l as usize, 1, 0), Some([65535]));
+        let mut seed = 3;
+        let mut worst = 0f64;
+        let bound = trilinear_error_bound(16);
+        for _ in 0..3000 {
+            // x0 = 3 (mod 4), x1 = x0 + 2^(l+24) + 1: x0 + x1 = 7 (mod 8), so the 3 truncated
+            // bits of both weights are ones; the side 2^l + 2^-24 still has lod = l << 8 (t = 0).
+            let mut rnd = |n: u64| ((lcg(&mut seed) << 31) ^ lcg(&mut seed)) % n;
+            let x0 = rnd((w as u64) << 22) as i64 * 4 + 3;
+            let y0 = rnd(1u64 << (l + 23)) as i64 * 4 - (1i64 << (l + 24)) + 3;
+            let side = (1i64 << (l + 24)) + 1;
+            let raw = [x0, y0, x0 + side, y0 + side];
+            let r = Rect::new(
+                I40F24::from_bits(raw[0]),
+                I40F24::from_bits(raw[1]),
+                I40F24::from_bits(raw[2]),
+                I40F24::from_bits(raw[3]),
+            );
+            let lod = p.lod(&r).unwrap();
+            assert_eq!(lod, l << 8);
+            let got = p.trilinear(&r, Border, &mut NoCount).unwrap();
+            let want = tri_f64(&p, raw, 24, lod, Border::texel_index)[0];
+            let err = (got.value_f64(0).unwrap() - want).abs();
+            assert!(err <= bound + 1e-9, "{err} > {bound}");
+            worst = worst.max(err);
+        }
+        // Beyond the rounding part the weight truncation shows, most of the way to the bound
+        // (7/8 of the weight part plus the rounding part is about 0.9 of it).
+        assert!(worst > 0.8 * bound, "{worst} vs {bound}");
+    }
+
+    #[test]
+    fn top_level_and_extremes() {
+        let data: Vec<u8> = (0..15).map(|v| v * 17).collect();
+        let t = Texture::<u8>::new(&data, 5, 3).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(5, 3).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        let top = p.level_count() - 1;
+        let m = p.level_texel(top, 0, 0).unwrap()[0] as u64;
+        // d >= 8 puts L at (or clamps it to) the top: the 1 x 1 level, read by both bilinears.
+        for r in [r8(-1.5, -2.5, 6.5, 5.5), r8(-100.0, -100.0, 100.0, 100.0)] {
+            let mut k = Tally::new();
+            let s = p.trilinear(&r, ClampToEdge, &mut k).unwrap();
+            assert_eq!(s.values, [m << 16]);
+            assert_eq!(k.reads, 8);
+        }
+        // Extreme corners of the widest type: no panic; the single bad case is refused.
+        let all = Rect::new(I64F0::MIN, I64F0::MIN, I64F0::MAX, I64F0::MAX);
+        assert!(p.trilinear(&all, Repeat, &mut NoCount).is_ok());
+        assert!(p.point_sample(&all, MirroredRepeat, &mut NoCount).is_ok());
+        let hi = Rect::new(I64F0::MAX, I64F0::MAX, I64F0::MAX, I64F0::MAX);
+        assert!(p.trilinear(&hi, Repeat, &mut NoCount).is_ok());
+        let lo = Rect::new(I64F0::MIN, I64F0::MIN, I64F0::MIN, I64F0::MIN);
+        assert_eq!(
+            p.trilinear(&lo, Repeat, &mut NoCount),
+            Err(Error::CoordinateOutOfRange)
+        );
+        assert!(p.point_sample(&lo, Repeat, &mut NoCount).is_ok());
+    }
+}

@@ -1,0 +1,71 @@
+//! The filters the SAT is compared with (Heckbert 1986, "Comparison of Prefiltering Methods";
+//! Du and Wan, "Dipmap"), in the same fixed-point arithmetic and with the same cost counters.
+//!
+//! Each filter is its own module behind its own cargo feature, so a firmware build compiles in
+//! only what its scene needs:
+//!
+//! | feature | module | filter |
+//! |---|---|---|
+//! | `filter-point` | `point` | nearest texel |
+//! | `filter-mip` | `mip` | box-filtered 2x2 pyramid: point-sampled and trilinear (Williams) |
+//! | `filter-rip` | `rip` | 4-D pyramid (ripmap): u and v scaled independently, 4 bilinear probes |
+//! | `filter-dip` | `dip` | row and column pyramids (dipmap), bilinear and trilinear variants |
+//! | `filter-tent` | `tent` | repeated integration of order 2: the triangle filter |
+//! | `filter-variance` | `variance` | variance over a box from SATs of values and squares |
+//!
+//! (`filters` enables them all.) Every filter takes the footprint as the rectangle that bounds it
+//! ([`crate::Rect`] with fixed-point corners, as the box lookups do), a boundary mode, and a
+//! [`crate::Counter`]; it returns a [`Sample`]: per channel the filtered value in texel units with
+//! [`OUT_FRAC_BITS`] fractional bits. Costs are counted as Crow counts them (§2.2): texel or table
+//! reads, multiplies, divides, additive operations; level selection and addressing belong to the
+//! address unit and are not counted (Crow: "the necessary computation appears small next to the
+//! texture intensity calculation").
+
+#[cfg(any(
+    feature = "filter-mip",
+    feature = "filter-rip",
+    feature = "filter-dip",
+    feature = "filter-tent"
+))]
+pub mod level;
+
+#[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
+pub(crate) mod pyramid;
+
+#[cfg(feature = "filter-point")]
+pub mod point;
+
+#[cfg(feature = "filter-mip")]
+pub mod mip;
+
+#[cfg(feature = "filter-rip")]
+pub mod rip;
+
+#[cfg(feature = "filter-dip")]
+pub mod dip;
+
+#[cfg(feature = "filter-tent")]
+pub mod tent;
+
+#[cfg(feature = "filter-variance")]
+pub mod variance;
+
+/// Fractional bits of every filter's output value.
+pub const OUT_FRAC_BITS: u32 = 16;
+
+/// A filtered value per channel: `value * 2^OUT_FRAC_BITS`, rounded as the filter documents.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Sample<const C: usize> {
+    /// Per channel, the value in texel units times `2^OUT_FRAC_BITS`.
+    pub values: [u64; C],
+}
+
+impl<const C: usize> Sample<C> {
+    /// Channel `c` as `f64` texel units (host-side convenience; `None` past the channels).
+    pub fn value_f64(&self, c: usize) -> Option<f64> {
+        self.values
+            .get(c)
+            .map(|&v| v as f64 / (1u64 << OUT_FRAC_BITS) as f64)
+    }
+}

@@ -1,0 +1,199 @@
+//! Point sampling: the texel nearest the footprint's centre (Heckbert 1986, "Comparison of
+//! Prefiltering Methods": "point sampling", impulse filter, 1 access, 0 multiplies, memory 1).
+//!
+//! The footprint `[x0, x1) x [y0, y1)` is reduced to its centre
+//! `((x0 + x1) / 2, (y0 + y1) / 2)`; the sample is the texel `(floor(cx), floor(cy))` of the
+//! extended texture (the boundary mode's [`EdgeMode::texel_index`]), read straight from the
+//! [`Texture`] — no table. The survey: "the pixel nearest the desired sample point is used".
+//!
+//! **Ties.** Texel `i` covers `[i, i + 1)`, so a centre exactly on the boundary between texels
+//! `i - 1` and `i` (`cx = i`) samples texel `i` (the one to the right, below for `y`): the index
+//! is `floor`, not round-half-down. In raw units (`F` fractional bits) the index is the
+//! arithmetic shift `(x0 + x1) >> (F + 1)`, exact, no rounding beyond that floor.
+//!
+//! **Cost.** One read (all channels together), no multiplies, no additive operations: the centre
+//! and the address are the address unit's work (module docs of [`crate::filters`]). The read is
+//! counted also when [`crate::Border`] puts the centre outside the texture (the value is then the
+//! zero border): the cost is constant, as in the survey's table.
+//!
+//! **Output.** Exact: channel value `v` is returned as `v << OUT_FRAC_BITS`.
+
+use crate::cost::Counter;
+use crate::edge::EdgeMode;
+use crate::error::Error;
+use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::rect::{Coord, Rect};
+use crate::texel::Texel;
+use crate::texture::Texture;
+use crate::width::MAX_FRAC_BITS;
+
+/// The nearest texel to the centre of `rect` under boundary mode `M`: 1 read, 0 multiplies,
+/// 0 additive operations (Heckbert's "point sampling 1,0").
+///
+/// The centre is `((x0 + x1) / 2, (y0 + y1) / 2)`; the texel is `(floor(cx), floor(cy))`
+/// (a centre on a texel boundary takes the texel to the right / below), mapped through
+/// [`EdgeMode::texel_index`]; outside the texture under [`crate::Border`] the value is 0.
+/// The result is exact: `values[c] = texel[c] << OUT_FRAC_BITS`.
+///
+/// A zero-area footprint (a point) is accepted. Errors: [`Error::FracBitsUnsupported`] for
+/// `F > 24`, [`Error::InvertedBox`] for `x1 < x0` or `y1 < y0`. No panics: `x0 + x1` is formed in
+/// `i128` and `(x0 + x1) >> (F + 1)` lies in the `i64` range because `x0`, `x1` do.
+pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
+    texture: &Texture<'_, T, C>,
+    rect: &Rect<X>,
+    mode: M,
+    k: &mut K,
+) -> Result<Sample<C>, Error> {
+    let _ = mode;
+    let f = X::FRAC_BITS;
+    if f > MAX_FRAC_BITS {
+        return Err(Error::FracBitsUnsupported {
+            frac_bits: f,
+            max: MAX_FRAC_BITS,
+        });
+    }
+    let (x0, y0, x1, y1) = (rect.x0.raw(), rect.y0.raw(), rect.x1.raw(), rect.y1.raw());
+    if x1 < x0 || y1 < y0 {
+        return Err(Error::InvertedBox);
+    }
+    let ix = centre_index(x0, x1, f)?;
+    let iy = centre_index(y0, y1, f)?;
+    k.reads(1, T::BITS * C as u32);
+    k.words((T::BITS * C as u32).div_ceil(32));
+    let mut values = [0u64; C];
+    if let (Some(x), Some(y)) = (
+        M::texel_index(ix, texture.width()),
+        M::texel_index(iy, texture.height()),
+    ) {
+        if let Some(px) = texture.row(y).and_then(|r| r.get(x * C..x * C + C)) {
+            for (v, t) in values.iter_mut().zip(px) {
+                *v = (t.to_u16() as u64) << OUT_FRAC_BITS;
+            }
+        }
+    }
+    Ok(Sample { values })
+}
+
+/// `floor((lo + hi) / 2^(f + 1))`: the index of the texel holding the centre of `[lo, hi)`.
+fn centre_index(lo: i64, hi: i64, f: u32) -> Result<i64, Error> {
+    let s = lo as i128 + hi as i128;
+    i64::try_from(s >> (f + 1)).map_err(|_| Error::CoordinateOutOfRange)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::cost::{NoCount, Tally};
+    use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
+    use fixed::types::{I24F8, I32F0, I32F32, I40F24, I64F0};
+    use std::vec::Vec;
+
+    fn r8(x0: f64, y0: f64, x1: f64, y1: f64) -> Rect<I24F8> {
+        Rect::from_f64(x0, y0, x1, y1).unwrap()
+    }
+
+    #[test]
+    fn cost_is_one_read_no_arithmetic() {
+        let data: Vec<u8> = (0..12).collect();
+        let t = Texture::<u8, 3>::new(&data, 2, 2).unwrap();
+        let mut k = Tally::new();
+        point(&t, &r8(0.0, 0.0, 1.0, 1.0), Border, &mut k).unwrap();
+        assert_eq!((k.reads, k.muls, k.divs, k.adds), (1, 0, 0, 0));
+        assert_eq!(k.bits_read, 24);
+        // Outside under Border: still one read (constant cost), value zero.
+        let s = point(&t, &r8(5.0, 5.0, 6.0, 6.0), Border, &mut k).unwrap();
+        assert_eq!(s.values, [0; 3]);
+        assert_eq!(k.reads, 2);
+    }
+
+    #[test]
+    fn nearest_texel_and_ties() {
+        let data: Vec<u8> = (0..12).collect(); // 4 x 3, value = x + 4y
+        let t = Texture::<u8>::new(&data, 4, 3).unwrap();
+        let v = |r: Rect<I24F8>| point(&t, &r, ClampToEdge, &mut NoCount).unwrap().values[0];
+        assert_eq!(v(r8(1.0, 1.0, 2.0, 2.0)), 5 << 16);
+        // Centre (1.0, 1.0) on a boundary: the texel to the right and below.
+        assert_eq!(v(r8(0.5, 0.5, 1.5, 1.5)), 5 << 16);
+        // Just left of it.
+        assert_eq!(v(r8(0.5, 0.5, 1.49609375, 1.5)), 4 << 16);
+        // A point footprint.
+        assert_eq!(v(r8(3.75, 2.25, 3.75, 2.25)), 11 << 16);
+        // Clamp far outside.
+        assert_eq!(v(r8(-100.0, 50.0, -99.0, 51.0)), 8 << 16);
+    }
+
+    #[test]
+    fn modes() {
+        let data: Vec<u16> = (0..6).map(|v| v * 1000 + 7).collect(); // 3 x 2
+        let t = Texture::<u16>::new(&data, 3, 2).unwrap();
+        let r = r8(-1.5, 2.25, -1.0, 2.75); // centre (-1.25, 2.5): texel (-2, 2)
+        let at = |x: usize, y: usize| ((data[y * 3 + x]) as u64) << 16;
+        assert_eq!(point(&t, &r, Border, &mut NoCount).unwrap().values[0], 0);
+        assert_eq!(
+            point(&t, &r, ClampToEdge, &mut NoCount).unwrap().values[0],
+            at(0, 1)
+        );
+        assert_eq!(
+            point(&t, &r, Repeat, &mut NoCount).unwrap().values[0],
+            at(1, 0)
+        );
+        // Mirror: x -2 -> 1, y 2 -> period 4, r = 2 >= 2 -> 2*2-1-2 = 1.
+        assert_eq!(
+            point(&t, &r, MirroredRepeat, &mut NoCount).unwrap().values[0],
+            at(1, 1)
+        );
+    }
+
+    #[test]
+    fn refusals_and_extremes() {
+        let data = [1u8, 2, 3, 4];
+        let t = Texture::<u8>::new(&data, 2, 2).unwrap();
+        assert_eq!(
+            point(&t, &r8(1.0, 0.0, 0.5, 1.0), Border, &mut NoCount),
+            Err(Error::InvertedBox)
+        );
+        let r = Rect::new(I32F32::ZERO, I32F32::ZERO, I32F32::ONE, I32F32::ONE);
+        assert_eq!(
+            point(&t, &r, Border, &mut NoCount),
+            Err(Error::FracBitsUnsupported {
+                frac_bits: 32,
+                max: 24
+            })
+        );
+        // The widest corner type: centres at the extremes stay in range.
+        let lo = Rect::new(I64F0::MIN, I64F0::MIN, I64F0::MIN, I64F0::MIN);
+        let hi = Rect::new(I64F0::MAX, I64F0::MAX, I64F0::MAX, I64F0::MAX);
+        let all = Rect::new(I64F0::MIN, I64F0::MIN, I64F0::MAX, I64F0::MAX);
+        for r in [lo, hi, all] {
+            for s in [
+                point(&t, &r, Border, &mut NoCount),
+                point(&t, &r, ClampToEdge, &mut NoCount),
+                point(&t, &r, Repeat, &mut NoCount),
+                point(&t, &r, MirroredRepeat, &mut NoCount),
+            ] {
+                assert!(s.is_ok());
+            }
+        }
+        // (MIN + MAX) / 2 = -0.5 -> texel -1; clamp gives texel 0.
+        assert_eq!(
+            point(&t, &all, ClampToEdge, &mut NoCount).unwrap().values[0],
+            1 << 16
+        );
+        let r = Rect::new(
+            I32F0::from_num(1),
+            I32F0::ZERO,
+            I32F0::from_num(2),
+            I32F0::ONE,
+        );
+        assert_eq!(
+            point(&t, &r, Border, &mut NoCount).unwrap().values[0],
+            2 << 16
+        );
+        let r = Rect::new(I40F24::ZERO, I40F24::ONE, I40F24::ONE, I40F24::from_num(2));
+        assert_eq!(
+            point(&t, &r, Border, &mut NoCount).unwrap().values[0],
+            3 << 16
+        );
+    }
+}

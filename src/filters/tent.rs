@@ -1,0 +1,1547 @@
+//! Repeated integration of order 2: the triangle (tent) filter over a rectangle (Heckbert 1986,
+//! "Filtering by Repeated Integration"; Perlin 1985; Ferrari et al. 1986; survey section
+//! "repeated integration filtering", row "repeated integration (order 2): 36,31; or 9,4").
+//!
+//! ## What is stored
+//!
+//! Per axis, with `t` the piecewise-constant texture line (texel `i` covers `[i, i+1)`), let
+//! `S1(x) = integral_0^x t` (the SAT's corner function) and `S2(x) = integral_0^x S1`. At integer
+//! points `S2` is a multiple of `1/2` (trapezoid rule, exact because `S1` is linear in each cell):
+//!
+//! `s(X) := 2 S2(X) = sum_{i < X} (2X - 2i - 1) t(i)`.
+//!
+//! The table stores the tensor product of this in x and y, `Q(X, Y) = 4 T2(X, Y)` with
+//! `T2(X, Y) = integral_0^X integral_0^Y S(u, v) du dv` (`S` the corner function): an exact
+//! integer, the least integer multiple of `T2`. `Q` is stored for the texture *padded with one
+//! zero column and row*, `1 <= X <= w + 1`, `1 <= Y <= h + 1` (`Q(0, .) = Q(., 0) = 0` are not
+//! stored and cost no read, as in the SAT). The padding gives the slopes the extended texture
+//! needs outside: `S1(n) = S2(n + 1) - S2(n)`, `t(n - 1) = 2 (S2(n+1) - 2 S2(n) + S2(n-1))`.
+//!
+//! Build: per axis `W(X+1) = W(X) + 2 V(X) + t(X)`, `V(X+1) = V(X) + t(X)` (`V` the running
+//! first integral): 3 additions per entry and axis (the doubling is a shift), 6 per entry in all.
+//! Two additions per pass are not possible for an *exact* `Q`: the generating function of `s` is
+//! `z (1 + z) / (1 - z)^2`, two integrators plus the trapezoid's `(1 + z)`. (Storing the plain
+//! discrete double prefix sum `D(X) = sum (X - i) t(i)` would take 2 additions per axis, but
+//! `s(X) = D(X) + D(X - 1)`, so every lookup point would need 4 reads instead of 1.) The running
+//! column sums of the y pass live in the table's last row until that row is written, so the
+//! build needs no scratch storage.
+//!
+//! ## The filter
+//!
+//! The footprint rectangle `[x0, x1) x [y0, y1)` gives the centre `c = (x0 + x1) / 2` and the
+//! half-widths `a = (x1 - x0) / 2`, `b = (y1 - y0) / 2`. The triangle of half-width `a` is
+//! `box(a) * box(a)` normalised, `K(u) = (a - |u - c|)+ / a^2`, and per axis
+//! `integral t K = (S2(c + a) - 2 S2(c) + S2(c - a)) / a^2`. In 2-D the sample is the second
+//! central difference of `T2` over the 3 x 3 points `(c + {-a, 0, a}, c' + {-b, 0, b})` with
+//! weights `(1, -2, 1) x (1, -2, 1)`, divided by `a^2 b^2`:
+//!
+//! * [`TentTable::sample_int`]: integer centre and half-widths: 9 reads, 3 multiplies (`a^2`,
+//!   `b^2`, `a^2 b^2`) and 1 divide per sample, 8 additive operations per channel — the survey's
+//!   "9,4". The weights 2 and 4 are shifts.
+//! * [`TentTable::sample`]: fixed-point corners (`F` fractional bits; the centre and half-widths
+//!   then have `G = F + 1`). Paper-faithful: 9 bilinear interpolations of `Q` (Crow form, 4 reads
+//!   and 3 multiplies each), then the same combination: 36 reads, 27 + 3 multiplies and 1 divide
+//!   (the survey's "36,31"), 62 additive operations per channel.
+//!   **Bilinear interpolation of `T2` is not exact**: `S2` is quadratic in every cell. Per axis
+//!   `S2(i + α) = (1 - α^2) S2(i) + α^2 S2(i+1) + α (1 - α) S1(i)`, so the lerp overshoots by
+//!   `α (1 - α) t(i) / 2`. The result's error against the exact filter is bounded by
+//!   [`paper_error_bound`]: `m/4 (1/a^2 + 1/b^2 + 1/(2 a^2 b^2))` texel units (`m = 2^b - 1`);
+//!   the separable part `m / (4 a^2)` is reached (tests). Results below zero are clamped to 0.
+//! * [`TentTable::sample_exact`]: the exact filter for fixed-point corners. Per point,
+//!   `Q_exact = L_x L_y Q - α(1-α) L_y Cy - β(1-β) L_x Rx + α(1-α) β(1-β) t` where `L` is the
+//!   lerp, `Cy` the per-column order-2 integral in y ([`TentLines`]), `Rx` the per-row one in x,
+//!   and `t` the texel of the point's cell. That is 9 reads per point (4 of `Q`, 2 of `Cy`, 2 of
+//!   `Rx`, 1 texel): 81 reads per sample. Folding the fraction products out of the second
+//!   differences: 27 (paper) + 6 (fraction products `α(1-α)`) + 12 (columns) + 12 (rows) + 12
+//!   (texels) + 3 (`a^2 b^2`) = 72 multiplies and 1 divide. The result is exact before the
+//!   final rounding: `round(value * 2^16)`, ties up.
+//!
+//! ## Boundary modes
+//!
+//! Every mode of [`crate::edge`] is exact, in bounded arithmetic. Per axis the extended
+//! `2 S2_ext(X)` at an integer `X` is an integer combination of at most 3 stored values:
+//!
+//! * Border (zero outside): `0` for `X <= 0`; `s(X)` up to `n + 1`; beyond, linear:
+//!   `(n + 1 - X) s(n) + (X - n) s(n + 1)`. Bilinear interpolation is exact there, so the paper
+//!   form lerps cell `n` with an extended fraction (still 4 reads per point).
+//! * ClampToEdge: `X^2 s(1)` for `X <= 0` (`s(1) = t(0)`); for `X = n + d > n`:
+//!   `s(n) + d (s(n+1) - s(n)) + d^2 (s(n+1) - 2 s(n) + s(n-1))`.
+//! * Repeat (`X = q n + r`): `s(r) + q s(n) + q (n (q - 1) + 2 r) / 2 * (s(n+1) - s(n))`.
+//! * MirroredRepeat (`X = q 2n + r`): `s_ext(r) + (2n q^2 + 2 q r) (s(n+1) - s(n))` with
+//!   `s_ext(r) = s(r)` for `r <= n`, `2 (r - n)(s(n+1) - s(n)) + s(2n - r)` above.
+//!
+//! These grow with `X`, so the centre is first moved by whole texels or periods to where the
+//! weights stay small, which changes neither the exact nor the bilinear result: Border
+//! footprints entirely outside return 0 with no reads; clamp footprints entirely left of 0
+//! (right of `n`) move to touch the edge (`S2_ext` is one quadratic there); repeat and mirror
+//! centres move into the first period (`S2_ext(x + P) - S2_ext(x)` is linear in `x`, which the
+//! second difference annihilates). Points outside the table then cost more reads and multiplies
+//! than the survey's interior figures (counted as performed: one multiply per weight that is not
+//! a power of two). All lookup arithmetic is checked `i128`; a footprint too large for it is
+//! [`Error::TooWide`] (`LookupAccumulator`, or `MeanNumerator` for `a^2 b^2 >= 2^127`), never a
+//! wrapped value.
+//!
+//! ## Widths and memory
+//!
+//! The largest entry is `Q(w+1, h+1) = m w (w + 2) h (h + 2)` for the all-`m` texture (each
+//! axis: `sum_{i<w} (2w + 1 - 2i) = w (w + 2)`), so [`tent_entry_bits`] is exact. Entries are
+//! [`TentEntry`]: `u32`, `u64` or `u128` (at most 127 bits used, so any entry converts to the
+//! lookups' `i128`). 8-bit texels: `u64` holds up to 16 399 x 16 399 (16 400 is refused);
+//! 16-bit texels: 4 095 x 4 095. 256 x 256 at 8 bits needs 41 bits. Memory for 8-bit
+//! 256 x 256 in `u64`: `257^2 * 64` bits over `256^2 * 8` = 8.06x the texture (5.2x at the exact
+//! 41 bits; the survey says 2-6x). The exact variant adds [`TentLines`] (`w (h+1) + (w+1) h`
+//! entries of [`tent_line_bits`] bits, its own entry type: 25 bits at 256 x 256, so `u32`,
+//! another 8.03x) and reads the texture itself.
+
+use crate::cost::Counter;
+use crate::edge::{Border, ClampToEdge, EdgeMode, MirroredRepeat, Repeat};
+use crate::error::{Error, Quantity};
+use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::rect::{Coord, Rect};
+use crate::texel::Texel;
+use crate::texture::Texture;
+use crate::width::{bits_of, check_texel_bits, max_texel, MAX_FRAC_BITS};
+
+/// An unsigned entry of the order-2 tables: `u32`, `u64` or `u128`.
+///
+/// Local to this module because the core's [`crate::Entry`] stops at `u64`, and `Q` outgrows
+/// `u64` from 16 400 x 16 400 8-bit texels (4 096 x 4 096 16-bit texels) on.
+pub trait TentEntry: Copy + Default + PartialEq + core::fmt::Debug + 'static {
+    /// Storage bits per entry and channel.
+    const BITS: u32;
+    /// Value bits the width check allows: `BITS`, but 127 for `u128` so every entry converts
+    /// losslessly to the lookups' `i128`.
+    const VALUE_BITS: u32;
+    /// Zero.
+    const ZERO: Self;
+    /// A texel.
+    fn from_u16(v: u16) -> Self;
+    /// Addition; the build only adds where [`tent_entry_bits`] has proved the sum fits.
+    fn plus(self, o: Self) -> Self;
+    /// The entry as `i128` (lossless below `2^VALUE_BITS`).
+    fn to_i128(self) -> i128;
+}
+
+macro_rules! impl_tent_entry {
+    ($t:ty, $vb:expr) => {
+        impl TentEntry for $t {
+            const BITS: u32 = <$t>::BITS;
+            const VALUE_BITS: u32 = $vb;
+            const ZERO: Self = 0;
+            #[inline(always)]
+            fn from_u16(v: u16) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn plus(self, o: Self) -> Self {
+                self + o
+            }
+            #[inline(always)]
+            fn to_i128(self) -> i128 {
+                self as i128
+            }
+        }
+    };
+}
+
+impl_tent_entry!(u32, 32);
+impl_tent_entry!(u64, 64);
+impl_tent_entry!(u128, 127);
+
+/// Exact bits of the largest `Q` entry of a `w x h` texture of `b`-bit texels:
+/// `bits_of((2^b - 1) * w (w + 2) * h (h + 2))` (saturating at 128 bits, which no entry holds).
+///
+/// Proof: `Q(X, Y) = sum_{i<X, j<Y} (2X - 2i - 1)(2Y - 2j - 1) t(i, j)` has non-negative
+/// coefficients growing with `X` and `Y`, so the largest entry is `Q(w+1, h+1)` (the padded
+/// corner) of the all-`m` texture, and each axis sums `sum_{i<w} (2w + 1 - 2i) = w (w + 2)`.
+/// Every intermediate of the build is bounded by an entry (see [`TentTable::build`]).
+pub const fn tent_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
+    let wx = (width as u128).saturating_mul(width as u128 + 2);
+    let hy = (height as u128).saturating_mul(height as u128 + 2);
+    bits_of(max_texel(texel_bits).saturating_mul(wx).saturating_mul(hy))
+}
+
+/// Exact bits of the largest entry of the per-line order-2 integrals of [`TentLines`] for lines
+/// of `n` texels: `bits_of((2^b - 1) * n (n + 2))`.
+pub const fn tent_line_bits(texel_bits: u32, n: usize) -> u32 {
+    let nn = (n as u128).saturating_mul(n as u128 + 2);
+    bits_of(max_texel(texel_bits).saturating_mul(nn))
+}
+
+/// The error bound of [`TentTable::sample`] (bilinear interpolation of `T2`, the survey's
+/// "36,31") against the exact triangle filter, in texel units, for half-widths `a`, `b` in texels:
+/// `m/4 * (1/a^2 + 1/b^2 + 1/(2 a^2 b^2))`, `m = 2^b - 1` (plus the output rounding
+/// `2^-17`).
+///
+/// Derivation: per axis the lerp of `s = 2 S2` exceeds the exact value by `δ = α(1-α) t(i)`.
+/// `L_x L_y - E_x E_y = δ_x E_y + E_x δ_y + δ_x δ_y`; under the second differences the first term
+/// is `2 sum_p w_p α_p(1-α_p) Ψ_p` with `Ψ_p in [0, m b^2]` the exact triangle integral in y of
+/// column `i_p`, hence in `[-m b^2, m b^2]`; likewise the second; the third is
+/// `sum w_p w_q α_p(1-α_p) β_q(1-β_q) t` with positive and negative weights summing to 8 each,
+/// in `[-m/2, m/2]`. Divided by `4 a^2 b^2`. The first term alone reaches `m / (4 a^2)`: columns
+/// `i_{-1}`, `i_1` full, column `i_0` empty, all fractions `1/2`.
+pub fn paper_error_bound(texel_bits: u32, a: f64, b: f64) -> f64 {
+    let m = max_texel(texel_bits.min(64)) as f64;
+    m / 4.0 * (1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (2.0 * a * a * b * b))
+}
+
+/// Which boundary mode a [`TentMode`] is (selects the per-axis extension formulas).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TentModeKind {
+    /// [`Border`].
+    Border,
+    /// [`ClampToEdge`].
+    Clamp,
+    /// [`Repeat`].
+    Repeat,
+    /// [`MirroredRepeat`].
+    Mirror,
+}
+
+/// A boundary mode the order-2 lookups support: all four of [`crate::edge`].
+pub trait TentMode: EdgeMode {
+    /// The mode's extension formulas (module docs, "Boundary modes").
+    const KIND: TentModeKind;
+}
+
+impl TentMode for Border {
+    const KIND: TentModeKind = TentModeKind::Border;
+}
+impl TentMode for ClampToEdge {
+    const KIND: TentModeKind = TentModeKind::Clamp;
+}
+impl TentMode for Repeat {
+    const KIND: TentModeKind = TentModeKind::Repeat;
+}
+impl TentMode for MirroredRepeat {
+    const KIND: TentModeKind = TentModeKind::Mirror;
+}
+
+fn acc_overflow() -> Error {
+    Error::TooWide {
+        what: Quantity::LookupAccumulator,
+        bits_needed: 128,
+        bits_available: 127,
+    }
+}
+
+#[inline]
+fn ck(v: Option<i128>) -> Result<i128, Error> {
+    v.ok_or_else(acc_overflow)
+}
+
+fn entries_needed<const C: usize>(cols: usize, rows: usize) -> Result<usize, Error> {
+    cols.checked_mul(rows)
+        .and_then(|v| v.checked_mul(C))
+        .ok_or(Error::TextureTooLarge {
+            dimension: cols.max(rows),
+        })
+}
+
+/// The second-order integrated table `Q = 4 T2` of a texture padded with one zero column and row.
+#[derive(Debug, Clone, Copy)]
+pub struct TentTable<'a, E: TentEntry, const C: usize = 1> {
+    table: &'a [E],
+    width: usize,
+    height: usize,
+    texel_bits: u32,
+}
+
+impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
+    /// Entries the table of a `width x height` texture needs: `(w + 1)(h + 1) C`.
+    pub fn storage_needed(width: usize, height: usize) -> Result<usize, Error> {
+        entries_needed::<C>(width.saturating_add(1), height.saturating_add(1))
+    }
+
+    /// Builds `Q` into `storage` (its first `(w+1)(h+1) C` entries) after proving from the texel
+    /// width that no entry overflows `E` ([`tent_entry_bits`] against [`TentEntry::VALUE_BITS`]);
+    /// nothing is written if the proof or the storage size fails.
+    ///
+    /// Per entry and channel: x pass `W += 2V + t`, `V += t` (3 additions, the doubling a
+    /// shift), y pass `Q = Q_above + 2 Vy + W`, `Vy += W` (3 additions). Every intermediate is at
+    /// most an entry: `V(X) <= W(X+1)`, `W_j(X) <= Q(X, Y)` for `j < Y`, `Vy_Y <= Q(X, Y)`,
+    /// `2 Vy + W + Q_above = Q`. The running column sums `Vy` are kept in the last table row
+    /// until it is written.
+    pub fn build<T: Texel>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+    ) -> Result<Self, Error> {
+        let (w, h) = (texture.width(), texture.height());
+        check_texel_bits(T::BITS)?;
+        let bits = tent_entry_bits(T::BITS, w, h);
+        if bits > E::VALUE_BITS {
+            return Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: bits,
+                bits_available: E::VALUE_BITS,
+            });
+        }
+        let needed = Self::storage_needed(w, h)?;
+        if storage.len() < needed {
+            return Err(Error::StorageTooSmall {
+                needed,
+                got: storage.len(),
+            });
+        }
+        let row_len = (w + 1) * C;
+        let (body, last) = storage[..needed].split_at_mut(h * row_len);
+        last.fill(E::ZERO);
+        for y in 0..=h {
+            let texels = if y < h {
+                Some(texture.row(y).ok_or(Error::EmptyTexture)?)
+            } else {
+                None
+            };
+            let mut v = [E::ZERO; C];
+            let mut wx = [E::ZERO; C];
+            for xi in 0..=w {
+                for c in 0..C {
+                    let t = match texels {
+                        Some(r) if xi < w => E::from_u16(r[xi * C + c].to_u16()),
+                        _ => E::ZERO,
+                    };
+                    wx[c] = wx[c].plus(v[c].plus(v[c])).plus(t);
+                    v[c] = v[c].plus(t);
+                    let idx = xi * C + c;
+                    let vy = last[idx];
+                    let above = if y == 0 {
+                        E::ZERO
+                    } else {
+                        body[(y - 1) * row_len + idx]
+                    };
+                    let q = above.plus(vy.plus(vy)).plus(wx[c]);
+                    if y < h {
+                        body[y * row_len + idx] = q;
+                        last[idx] = vy.plus(wx[c]);
+                    } else {
+                        last[idx] = q;
+                    }
+                }
+            }
+        }
+        Ok(TentTable {
+            table: &storage[..needed],
+            width: w,
+            height: h,
+            texel_bits: T::BITS,
+        })
+    }
+
+    /// Width of the texture in texels (the table has `w + 1` columns).
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height of the texture in texels (the table has `h + 1` rows).
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Bits per texel of the source texture.
+    pub fn texel_bits(&self) -> u32 {
+        self.texel_bits
+    }
+
+    /// The stored entries `Q(X, Y)`, `1 <= X <= w+1`, `1 <= Y <= h+1`, row-major, channels
+    /// interleaved.
+    pub fn entries(&self) -> &'a [E] {
+        self.table
+    }
+
+    /// Table bytes as stored.
+    pub fn table_bytes(&self) -> usize {
+        core::mem::size_of_val(self.table)
+    }
+
+    /// `Q(X, Y) = 4 T2(X, Y)` for `X <= w + 1`, `Y <= h + 1` (`None` outside); zero on `X = 0`
+    /// and `Y = 0`.
+    pub fn corner(&self, x: usize, y: usize) -> Option<[E; C]> {
+        if x > self.width + 1 || y > self.height + 1 {
+            return None;
+        }
+        let mut out = [E::ZERO; C];
+        if x != 0 && y != 0 {
+            let base = ((y - 1) * (self.width + 1) + (x - 1)) * C;
+            out.copy_from_slice(&self.table[base..base + C]);
+        }
+        Some(out)
+    }
+
+    /// `Q(x, y)` as `i128`, with the read counted (free on the zero row and column).
+    fn read<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [i128; C] {
+        let mut out = [0i128; C];
+        if x != 0 && y != 0 && x <= self.width + 1 && y <= self.height + 1 {
+            k.reads(1, E::BITS * C as u32);
+            k.words((E::BITS * C as u32).div_ceil(32));
+            let base = ((y - 1) * (self.width + 1) + (x - 1)) * C;
+            for (o, e) in out.iter_mut().zip(&self.table[base..base + C]) {
+                *o = e.to_i128();
+            }
+        }
+        out
+    }
+
+    /// The triangle filter with integer centre `(cx, cy)` and integer half-widths `a`, `b`
+    /// (support `[cx - a, cx + a] x [cy - b, cy + b]`), under boundary mode `M`, exact before
+    /// the output rounding (`round(value * 2^16)`, ties up).
+    ///
+    /// In range: 9 reads, 3 multiplies + 1 divide (the survey's "9,4"), 8 additive operations
+    /// per channel. Zero half-widths are [`Error::ZeroArea`].
+    pub fn sample_int<M: TentMode, K: Counter>(
+        &self,
+        cx: i32,
+        cy: i32,
+        a: u32,
+        b: u32,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let _ = mode;
+        if a == 0 || b == 0 {
+            return Err(Error::ZeroArea);
+        }
+        let (a, b) = (a as i128, b as i128);
+        let Some(cx) = canonical_centre(M::KIND, cx as i128, a, self.width, 0) else {
+            return Ok(Sample { values: [0; C] });
+        };
+        let Some(cy) = canonical_centre(M::KIND, cy as i128, b, self.height, 0) else {
+            return Ok(Sample { values: [0; C] });
+        };
+        let mut ax = [Axis::Zero; 3];
+        let mut ay = [Axis::Zero; 3];
+        for p in 0..3 {
+            let d = p as i128 - 1;
+            ax[p] = Axis::Terms(s2_terms(M::KIND, cx + d * a, self.width)?);
+            ay[p] = Axis::Terms(s2_terms(M::KIND, cy + d * b, self.height)?);
+        }
+        let n = self.paper_numerator(&ax, &ay, 1, k)?;
+        // value = N / (4 a^2 b^2); output = round(N 2^(16 - 2) / (a^2 b^2)).
+        finish(&n, a as u128, b as u128, OUT_FRAC_BITS - 2, k)
+    }
+
+    /// The paper-faithful triangle filter over the footprint rectangle `r` (fixed-point corners,
+    /// `F <= 24` fractional bits): 9 bilinear interpolations of `Q`, then the second
+    /// differences. In range: 36 reads, 30 multiplies + 1 divide (the survey's "36,31"), 62
+    /// additive operations per channel. Not exact: within [`paper_error_bound`] of
+    /// [`TentTable::sample_exact`]; negative results are clamped to 0.
+    ///
+    /// Inverted rectangles are [`Error::InvertedBox`], zero-width or zero-height ones
+    /// [`Error::ZeroArea`].
+    pub fn sample<X: Coord, M: TentMode, K: Counter>(
+        &self,
+        r: &Rect<X>,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let _ = mode;
+        let Some(fp) = self.footprint::<X, M>(r)? else {
+            return Ok(Sample { values: [0; C] });
+        };
+        let n = self.paper_numerator(&fp.ax, &fp.ay, fp.s, k)?;
+        // value = N 2^2G / (4 a^2 b^2) (N scaled by s^2, a and b in units 2^-G).
+        finish(
+            &n,
+            fp.a as u128,
+            fp.b as u128,
+            2 * fp.g + OUT_FRAC_BITS - 2,
+            k,
+        )
+    }
+
+    /// The exact triangle filter over the footprint rectangle `r` (fixed-point corners,
+    /// `F <= 24`): the paper lookup plus the exact in-cell correction from `lines` (built from
+    /// the same texture; its entry type may be narrower than the table's) and the texels of
+    /// `texture` (module docs). In range: 81 reads
+    /// (36 of `Q`, 18 of each line table, 9 texels), 72 multiplies + 1 divide. The result is
+    /// `round(value * 2^16)` of the exact filtered value, ties up.
+    ///
+    /// The intermediates are scaled by `2^4G` (`G = F + 1`): with `u64` entries this fits `i128`
+    /// for `F <= 8` and tables up to the `u64` limit; larger combinations may be refused with
+    /// [`Error::TooWide`]. A `lines` or `texture` of other dimensions than the table is
+    /// [`Error::RowLength`] (expected the table's `width * C`, or `height` for heights).
+    pub fn sample_exact<T: Texel, L: TentEntry, X: Coord, M: TentMode, K: Counter>(
+        &self,
+        lines: &TentLines<'_, L, C>,
+        texture: &Texture<'_, T, C>,
+        r: &Rect<X>,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let _ = mode;
+        for (got, expected) in [
+            (lines.width * C, self.width * C),
+            (texture.width() * C, self.width * C),
+            (lines.height, self.height),
+            (texture.height(), self.height),
+        ] {
+            if got != expected {
+                return Err(Error::RowLength { expected, got });
+            }
+        }
+        let Some(fp) = self.footprint::<X, M>(r)? else {
+            return Ok(Sample { values: [0; C] });
+        };
+        let s = fp.s;
+        let g = fp.g;
+        let paper = self.paper_numerator(&fp.ax, &fp.ay, s, k)?;
+        let w = [1i128, -2, 1];
+        // Cells and fraction products α(1-α) (scaled by s^2) of the three x and y positions.
+        let mut ix = [0i128; 3];
+        let mut iy = [0i128; 3];
+        let mut pa = [0i128; 3];
+        let mut pb = [0i128; 3];
+        for p in 0..3 {
+            ix[p] = fp.px[p] >> g;
+            iy[p] = fp.py[p] >> g;
+            let fa = fp.px[p] - (ix[p] << g);
+            let fb = fp.py[p] - (iy[p] << g);
+            pa[p] = fa * (s - fa);
+            pb[p] = fb * (s - fb);
+        }
+        k.muls(6);
+        let cols: [Option<usize>; 3] = core::array::from_fn(|p| texel_at::<M>(ix[p], self.width));
+        let rows: [Option<usize>; 3] = core::array::from_fn(|p| texel_at::<M>(iy[p], self.height));
+        let cu = C as u32;
+        // sX = sum_p w_p pa_p sum_q w_q L_y Cy(col_p)(y_q)   (scale s^3)
+        let mut sx = [0i128; C];
+        for p in 0..3 {
+            let mut xp = [0i128; C];
+            if let Some(col) = cols[p] {
+                for (ayq, &wq) in fp.ay.iter().zip(&w) {
+                    let v = eval1::<C, K>(ayq, s, &mut |iyy, k| Ok(lines.col(col, iyy, k)), k)?;
+                    for c in 0..C {
+                        xp[c] = ck(xp[c].checked_add(ck(v[c].checked_mul(wq))?))?;
+                    }
+                }
+            }
+            k.adds(2 * cu);
+            k.muls(cu);
+            k.adds(cu);
+            for c in 0..C {
+                let t = ck(ck(xp[c].checked_mul(pa[p]))?.checked_mul(w[p]))?;
+                sx[c] = ck(sx[c].checked_add(t))?;
+            }
+        }
+        let mut sy = [0i128; C];
+        for q in 0..3 {
+            let mut yq = [0i128; C];
+            if let Some(row) = rows[q] {
+                for (axp, &wp) in fp.ax.iter().zip(&w) {
+                    let v = eval1::<C, K>(axp, s, &mut |ixx, k| Ok(lines.row(ixx, row, k)), k)?;
+                    for c in 0..C {
+                        yq[c] = ck(yq[c].checked_add(ck(v[c].checked_mul(wp))?))?;
+                    }
+                }
+            }
+            k.adds(2 * cu);
+            k.muls(cu);
+            k.adds(cu);
+            for c in 0..C {
+                let t = ck(ck(yq[c].checked_mul(pb[q]))?.checked_mul(w[q]))?;
+                sy[c] = ck(sy[c].checked_add(t))?;
+            }
+        }
+        // Texel term: sum_p w_p pa_p sum_q w_q pb_q t(i_p, j_q)   (scale s^4)
+        let mut st = [0i128; C];
+        for p in 0..3 {
+            let mut inner = [0i128; C];
+            for q in 0..3 {
+                if let (Some(col), Some(row)) = (cols[p], rows[q]) {
+                    k.reads(1, T::BITS * cu);
+                    let texels = texture.row(row).ok_or(Error::EmptyTexture)?;
+                    for c in 0..C {
+                        let t = texels[col * C + c].to_u16() as i128;
+                        inner[c] = ck(inner[c].checked_add(ck((t * pb[q]).checked_mul(w[q]))?))?;
+                    }
+                }
+                k.muls(cu);
+            }
+            k.adds(2 * cu + cu);
+            k.muls(cu);
+            for c in 0..C {
+                let t = ck(ck(inner[c].checked_mul(pa[p]))?.checked_mul(w[p]))?;
+                st[c] = ck(st[c].checked_add(t))?;
+            }
+        }
+        k.adds(3 * cu);
+        let mut n = [0i128; C];
+        for c in 0..C {
+            let hi = ck(paper[c].checked_mul(s * s))?;
+            let mid = ck(ck(sx[c].checked_add(sy[c]))?.checked_mul(s))?;
+            n[c] = ck(ck(hi.checked_sub(mid))?.checked_add(st[c]))?;
+        }
+        // value = N / (4 a^2 b^2) (N scaled by s^4).
+        finish(&n, fp.a as u128, fp.b as u128, OUT_FRAC_BITS - 2, k)
+    }
+
+    /// Validates a fixed-point footprint and places its three x and y positions (`None`: a
+    /// Border footprint entirely outside, whose sample is 0).
+    fn footprint<X: Coord, M: TentMode>(&self, r: &Rect<X>) -> Result<Option<Footprint>, Error> {
+        let f = X::FRAC_BITS;
+        if f > MAX_FRAC_BITS {
+            return Err(Error::FracBitsUnsupported {
+                frac_bits: f,
+                max: MAX_FRAC_BITS,
+            });
+        }
+        let (x0, y0, x1, y1) = (
+            r.x0.raw() as i128,
+            r.y0.raw() as i128,
+            r.x1.raw() as i128,
+            r.y1.raw() as i128,
+        );
+        if x1 < x0 || y1 < y0 {
+            return Err(Error::InvertedBox);
+        }
+        if x1 == x0 || y1 == y0 {
+            return Err(Error::ZeroArea);
+        }
+        let g = f + 1;
+        let s = 1i128 << g;
+        let (a, b) = (x1 - x0, y1 - y0);
+        let Some(cx) = canonical_centre(M::KIND, x0 + x1, a, self.width, g) else {
+            return Ok(None);
+        };
+        let Some(cy) = canonical_centre(M::KIND, y0 + y1, b, self.height, g) else {
+            return Ok(None);
+        };
+        let px = [cx - a, cx, cx + a];
+        let py = [cy - b, cy, cy + b];
+        let mut ax = [Axis::Zero; 3];
+        let mut ay = [Axis::Zero; 3];
+        for p in 0..3 {
+            ax[p] = axis_paper(M::KIND, px[p], self.width, g)?;
+            ay[p] = axis_paper(M::KIND, py[p], self.height, g)?;
+        }
+        Ok(Some(Footprint {
+            ax,
+            ay,
+            px,
+            py,
+            a,
+            b,
+            g,
+            s,
+        }))
+    }
+
+    /// `N = sum_{p,q} w_p w_q V(p, q)` with `V` the (bilinear or integer) value of `Q` at each
+    /// of the 9 points, scaled by `s^2`. Counts the 8 additive operations of the combination.
+    fn paper_numerator<K: Counter>(
+        &self,
+        ax: &[Axis; 3],
+        ay: &[Axis; 3],
+        s: i128,
+        k: &mut K,
+    ) -> Result<[i128; C], Error> {
+        let w = [1i128, -2, 1];
+        let mut n = [0i128; C];
+        for q in 0..3 {
+            let mut row = [0i128; C];
+            for p in 0..3 {
+                let v = eval1::<C, K>(
+                    &ay[q],
+                    s,
+                    &mut |iyy, k| {
+                        eval1::<C, K>(&ax[p], s, &mut |ixx, k| Ok(self.read(ixx, iyy, k)), k)
+                    },
+                    k,
+                )?;
+                for c in 0..C {
+                    row[c] = ck(row[c].checked_add(ck(v[c].checked_mul(w[p]))?))?;
+                }
+            }
+            for c in 0..C {
+                n[c] = ck(n[c].checked_add(ck(row[c].checked_mul(w[q]))?))?;
+            }
+        }
+        k.adds(8 * C as u32);
+        Ok(n)
+    }
+}
+
+/// The per-line order-2 integrals the exact variant needs: for every texel column `i` the
+/// column's `2 S2` in y at `Y = 1..=h+1`, and for every texel row `j` the row's `2 S2` in x at
+/// `X = 1..=w+1` (each line padded with one zero texel, like [`TentTable`]).
+#[derive(Debug, Clone, Copy)]
+pub struct TentLines<'a, E: TentEntry, const C: usize = 1> {
+    cols: &'a [E],
+    rows: &'a [E],
+    width: usize,
+    height: usize,
+}
+
+impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
+    /// Entries needed: `(w (h + 1) + (w + 1) h) C`.
+    pub fn storage_needed(width: usize, height: usize) -> Result<usize, Error> {
+        let a = entries_needed::<C>(width, height.saturating_add(1))?;
+        let b = entries_needed::<C>(width.saturating_add(1), height)?;
+        a.checked_add(b).ok_or(Error::TextureTooLarge {
+            dimension: width.max(height),
+        })
+    }
+
+    /// Builds both line tables into `storage` after proving that the longer line's worst case
+    /// ([`tent_line_bits`]) fits `E`. 3 additions per entry (`W += 2V + t`, `V += t`); the
+    /// column pass keeps its running sums in its last row until that row is written.
+    pub fn build<T: Texel>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+    ) -> Result<Self, Error> {
+        let (w, h) = (texture.width(), texture.height());
+        check_texel_bits(T::BITS)?;
+        let bits = tent_line_bits(T::BITS, w.max(h));
+        if bits > E::VALUE_BITS {
+            return Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: bits,
+                bits_available: E::VALUE_BITS,
+            });
+        }
+        let needed = Self::storage_needed(w, h)?;
+        if storage.len() < needed {
+            return Err(Error::StorageTooSmall {
+                needed,
+                got: storage.len(),
+            });
+        }
+        let ncols = w * (h + 1) * C;
+        let (cols, rest) = storage[..needed].split_at_mut(ncols);
+        // Columns: row Y-1 of `cols` is Y; the last row holds the running sums V until written.
+        let row_len = w * C;
+        let (body, last) = cols.split_at_mut(h * row_len);
+        last.fill(E::ZERO);
+        for y in 0..=h {
+            let texels = if y < h {
+                Some(texture.row(y).ok_or(Error::EmptyTexture)?)
+            } else {
+                None
+            };
+            for idx in 0..row_len {
+                let t = match texels {
+                    Some(r) => E::from_u16(r[idx].to_u16()),
+                    None => E::ZERO,
+                };
+                let v = last[idx];
+                let above = if y == 0 {
+                    E::ZERO
+                } else {
+                    body[(y - 1) * row_len + idx]
+                };
+                let q = above.plus(v.plus(v)).plus(t);
+                if y < h {
+                    body[y * row_len + idx] = q;
+                    last[idx] = v.plus(t);
+                } else {
+                    last[idx] = q;
+                }
+            }
+        }
+        // Rows.
+        let rlen = (w + 1) * C;
+        for y in 0..h {
+            let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
+            let out = &mut rest[y * rlen..(y + 1) * rlen];
+            let mut v = [E::ZERO; C];
+            let mut acc = [E::ZERO; C];
+            for xi in 0..=w {
+                for c in 0..C {
+                    let t = if xi < w {
+                        E::from_u16(texels[xi * C + c].to_u16())
+                    } else {
+                        E::ZERO
+                    };
+                    acc[c] = acc[c].plus(v[c].plus(v[c])).plus(t);
+                    v[c] = v[c].plus(t);
+                    out[xi * C + c] = acc[c];
+                }
+            }
+        }
+        let (cols, rows) = storage[..needed].split_at(ncols);
+        Ok(TentLines {
+            cols,
+            rows,
+            width: w,
+            height: h,
+        })
+    }
+
+    /// Table bytes as stored (both line tables).
+    pub fn table_bytes(&self) -> usize {
+        core::mem::size_of_val(self.cols) + core::mem::size_of_val(self.rows)
+    }
+
+    /// Column `i`'s `2 S2` at `Y` (`Y <= h + 1`; 0 at `Y = 0`), read counted.
+    fn col<K: Counter>(&self, i: usize, y: usize, k: &mut K) -> [i128; C] {
+        let mut out = [0i128; C];
+        if y != 0 && y <= self.height + 1 && i < self.width {
+            k.reads(1, E::BITS * C as u32);
+            k.words((E::BITS * C as u32).div_ceil(32));
+            let base = ((y - 1) * self.width + i) * C;
+            for (o, e) in out.iter_mut().zip(&self.cols[base..base + C]) {
+                *o = e.to_i128();
+            }
+        }
+        out
+    }
+
+    /// Row `j`'s `2 S2` at `X` (`X <= w + 1`; 0 at `X = 0`), read counted.
+    fn row<K: Counter>(&self, x: usize, j: usize, k: &mut K) -> [i128; C] {
+        let mut out = [0i128; C];
+        if x != 0 && x <= self.width + 1 && j < self.height {
+            k.reads(1, E::BITS * C as u32);
+            k.words((E::BITS * C as u32).div_ceil(32));
+            let base = (j * (self.width + 1) + x - 1) * C;
+            for (o, e) in out.iter_mut().zip(&self.rows[base..base + C]) {
+                *o = e.to_i128();
+            }
+        }
+        out
+    }
+}
+
+/// A placed fixed-point footprint: the three positions per axis (units `2^-G`), their axis
+/// evaluations, the half-widths and `G`, `s = 2^G`.
+struct Footprint {
+    ax: [Axis; 3],
+    ay: [Axis; 3],
+    px: [i128; 3],
+    py: [i128; 3],
+    a: i128,
+    b: i128,
+    g: u32,
+    s: i128,
+}
+
+/// The texel the extended texture shows at integer position `i` (`None`: zero).
+fn texel_at<M: TentMode>(i: i128, n: usize) -> Option<usize> {
+    let i = i64::try_from(i).ok()?;
+    M::texel_index(i, n)
+}
+
+/// Up to 6 `(index, weight)` pairs: `value = sum weight * f(index)`; index 0 (a zero value) and
+/// zero weights are dropped.
+#[derive(Debug, Clone, Copy, Default)]
+struct Terms {
+    t: [(usize, i128); 6],
+    len: usize,
+}
+
+impl Terms {
+    fn push(&mut self, idx: usize, w: i128) -> Result<(), Error> {
+        if w == 0 || idx == 0 {
+            return Ok(());
+        }
+        if let Some(e) = self.t[..self.len].iter_mut().find(|e| e.0 == idx) {
+            e.1 = ck(e.1.checked_add(w))?;
+        } else if self.len < self.t.len() {
+            self.t[self.len] = (idx, w);
+            self.len += 1;
+        } else {
+            return Err(acc_overflow());
+        }
+        Ok(())
+    }
+
+    fn add_scaled(&mut self, o: &Terms, s: i128) -> Result<(), Error> {
+        for &(i, w) in &o.t[..o.len] {
+            self.push(i, ck(w.checked_mul(s))?)?;
+        }
+        Ok(())
+    }
+}
+
+/// How one axis of one point is evaluated.
+#[derive(Debug, Clone, Copy)]
+enum Axis {
+    /// The value is 0 (Border, left of the texture): no reads.
+    Zero,
+    /// Crow's lerp `f(i) s + (f(i+1) - f(i)) a`: 2 reads, 1 multiply, 2 additive operations.
+    Crow { i: usize, a: i128 },
+    /// A general weighted sum (weights already scaled by `s`).
+    Terms(Terms),
+}
+
+/// A line of values `index -> f(index)` that counts its own reads.
+type LineFn<'f, K, const C: usize> = dyn FnMut(usize, &mut K) -> Result<[i128; C], Error> + 'f;
+
+/// Evaluates one axis over `f`; the result is scaled by `s`.
+fn eval1<const C: usize, K: Counter>(
+    ax: &Axis,
+    s: i128,
+    f: &mut LineFn<'_, K, C>,
+    k: &mut K,
+) -> Result<[i128; C], Error> {
+    let cu = C as u32;
+    let mut out = [0i128; C];
+    match *ax {
+        Axis::Zero => {}
+        Axis::Crow { i, a } => {
+            let v0 = f(i, k)?;
+            let v1 = f(i + 1, k)?;
+            k.muls(cu);
+            k.adds(2 * cu);
+            for c in 0..C {
+                let d = ck(v1[c].checked_sub(v0[c]))?;
+                out[c] = ck(ck(v0[c].checked_mul(s))?.checked_add(ck(d.checked_mul(a))?))?;
+            }
+        }
+        Axis::Terms(t) => {
+            let mut used = 0u32;
+            for &(idx, w) in &t.t[..t.len] {
+                if w == 0 {
+                    continue;
+                }
+                let v = f(idx, k)?;
+                if !w.unsigned_abs().is_power_of_two() {
+                    k.muls(cu);
+                }
+                used += 1;
+                for c in 0..C {
+                    out[c] = ck(out[c].checked_add(ck(v[c].checked_mul(w))?))?;
+                }
+            }
+            if used > 1 {
+                k.adds((used - 1) * cu);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// `2 S2_ext(X)` at an integer `X` as terms over the padded line values `s(0..=n+1)`
+/// (module docs, "Boundary modes").
+fn s2_terms(kind: TentModeKind, x: i128, n: usize) -> Result<Terms, Error> {
+    let nn = n as i128;
+    let mut t = Terms::default();
+    match kind {
+        TentModeKind::Border => {
+            if x <= 0 {
+            } else if x <= nn + 1 {
+                t.push(x as usize, 1)?;
+            } else {
+                t.push(n, nn + 1 - x)?;
+                t.push(n + 1, x - nn)?;
+            }
+        }
+        TentModeKind::Clamp => {
+            if x <= 0 {
+                t.push(1, ck(x.checked_mul(x))?)?;
+            } else if x <= nn {
+                t.push(x as usize, 1)?;
+            } else {
+                let d = x - nn;
+                let d2 = ck(d.checked_mul(d))?;
+                t.push(n + 1, ck(d.checked_add(d2))?)?;
+                t.push(
+                    n,
+                    ck(ck(1i128.checked_sub(d))?.checked_sub(ck(d2.checked_mul(2))?))?,
+                )?;
+                t.push(n - 1, d2)?;
+            }
+        }
+        TentModeKind::Repeat => {
+            let q = x.div_euclid(nn);
+            let r = x.rem_euclid(nn);
+            // q (n (q - 1) + 2 r) is even: n q (q - 1) and 2 q r are.
+            let c1 = ck(q.checked_mul(ck(ck(nn.checked_mul(q - 1))?.checked_add(2 * r))?))? / 2;
+            t.push(n + 1, c1)?;
+            t.push(n, ck(q.checked_sub(c1))?)?;
+            t.push(r as usize, 1)?;
+        }
+        TentModeKind::Mirror => {
+            let p = 2 * nn;
+            let q = x.div_euclid(p);
+            let r = x.rem_euclid(p);
+            let mut c = ck(ck(p.checked_mul(q))?.checked_mul(q))?;
+            c = ck(c.checked_add(ck((2 * q).checked_mul(r))?))?;
+            let idx = if r <= nn {
+                r
+            } else {
+                c = ck(c.checked_add(2 * (r - nn)))?;
+                p - r
+            };
+            t.push(n + 1, c)?;
+            t.push(n, -c)?;
+            t.push(idx as usize, 1)?;
+        }
+    }
+    Ok(t)
+}
+
+/// Moves the centre `c` (units `2^-g`, half-width `a`) to an equivalent position with small
+/// weights (module docs); `None` for a Border footprint entirely outside `[0, n]`.
+fn canonical_centre(kind: TentModeKind, c: i128, a: i128, n: usize, g: u32) -> Option<i128> {
+    let end = (n as i128) << g;
+    match kind {
+        TentModeKind::Border => {
+            if c + a <= 0 || c - a >= end {
+                None
+            } else {
+                Some(c)
+            }
+        }
+        TentModeKind::Clamp => {
+            if c + a <= 0 {
+                Some(c + (((-(c + a)) >> g) << g))
+            } else if c - a >= end {
+                Some(c - (((c - a - end) >> g) << g))
+            } else {
+                Some(c)
+            }
+        }
+        TentModeKind::Repeat => Some(c.rem_euclid(end)),
+        TentModeKind::Mirror => Some(c.rem_euclid(2 * end)),
+    }
+}
+
+/// The paper (bilinear) evaluation of one axis at `x` (units `2^-g`).
+fn axis_paper(kind: TentModeKind, x: i128, n: usize, g: u32) -> Result<Axis, Error> {
+    let s = 1i128 << g;
+    let i = x >> g;
+    let a = x - (i << g);
+    let nn = n as i128;
+    Ok(match kind {
+        TentModeKind::Border => {
+            if i < 0 {
+                Axis::Zero
+            } else if i > nn {
+                // Linear beyond n: the lerp of cell n with an extended fraction is exact.
+                Axis::Crow {
+                    i: n,
+                    a: x - (nn << g),
+                }
+            } else {
+                Axis::Crow { i: i as usize, a }
+            }
+        }
+        _ => {
+            if (0..nn).contains(&i) {
+                Axis::Crow { i: i as usize, a }
+            } else if i == nn && a == 0 {
+                Axis::Crow { i: n - 1, a: s }
+            } else {
+                let mut t = Terms::default();
+                t.add_scaled(&s2_terms(kind, i, n)?, s - a)?;
+                t.add_scaled(&s2_terms(kind, i + 1, n)?, a)?;
+                Axis::Terms(t)
+            }
+        }
+    })
+}
+
+/// Per channel `round(N * 2^shift / (a^2 b^2))` (negative `N` gives 0), counting `a^2`, `b^2`,
+/// `a^2 b^2` and one divide per channel.
+fn finish<const C: usize, K: Counter>(
+    n: &[i128; C],
+    a: u128,
+    b: u128,
+    shift: u32,
+    k: &mut K,
+) -> Result<Sample<C>, Error> {
+    k.muls(3);
+    let wide = Error::TooWide {
+        what: Quantity::MeanNumerator,
+        bits_needed: 2 * bits_of(a) + 2 * bits_of(b),
+        bits_available: 127,
+    };
+    let d = a
+        .checked_mul(a)
+        .and_then(|a2| b.checked_mul(b).and_then(|b2| a2.checked_mul(b2)))
+        .filter(|&d| d < 1u128 << 127)
+        .ok_or(wide)?;
+    let mut out = [0u64; C];
+    for c in 0..C {
+        k.divs(1);
+        out[c] = div_round_shift(n[c].max(0) as u128, shift, d)?;
+    }
+    Ok(Sample { values: out })
+}
+
+/// `round(num * 2^shift / den)`, ties up, for `0 < den < 2^127`, by restoring division (no
+/// intermediate wider than `2 den`); a quotient above `u64` is [`Error::TooWide`].
+pub(crate) fn div_round_shift(num: u128, shift: u32, den: u128) -> Result<u64, Error> {
+    let wide = || Error::TooWide {
+        what: Quantity::MeanNumerator,
+        bits_needed: 65,
+        bits_available: 64,
+    };
+    let mut q = num / den;
+    let mut r = num % den;
+    for _ in 0..shift {
+        q = q.checked_mul(2).ok_or_else(wide)?;
+        r <<= 1;
+        if r >= den {
+            r -= den;
+            q += 1;
+        }
+    }
+    if r >= den - r {
+        q += 1;
+    }
+    u64::try_from(q).map_err(|_| wide())
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::{NoCount, Tally};
+    use fixed::types::{I16F16, I24F8, I28F4};
+    use std::vec;
+    use std::vec::Vec;
+
+    fn lcg(seed: &mut u64) -> u64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *seed >> 33
+    }
+
+    /// `2 s^2 R_i(x)`: the second integral of texel `i`'s indicator at `x` (units `2^-g`).
+    fn r2(i: i128, x: i128, g: u32) -> i128 {
+        let s = 1i128 << g;
+        let d = x - i * s;
+        if d <= 0 {
+            0
+        } else if d <= s {
+            d * d
+        } else {
+            2 * d * s - s * s
+        }
+    }
+
+    /// Direct convolution: `N = sum_ij t_ext(i, j) WX_i WY_j` with per-texel weights scaled by
+    /// `2 s^2` each; the exact output is `round(N 2^14 / (a^2 b^2))`.
+    fn direct<M: TentMode>(
+        tex: &[u8],
+        w: usize,
+        h: usize,
+        c: (i128, i128),
+        ab: (i128, i128),
+        g: u32,
+    ) -> u64 {
+        let s = 1i128 << g;
+        let wts = |cc: i128, a: i128| -> Vec<(i128, i128)> {
+            let lo = ((cc - a) >> g) - 1;
+            let hi = ((cc + a) >> g) + 1;
+            (lo..=hi)
+                .map(|i| (i, r2(i, cc + a, g) - 2 * r2(i, cc, g) + r2(i, cc - a, g)))
+                .filter(|&(_, v)| v != 0)
+                .collect()
+        };
+        let _ = s;
+        let (wx, wy) = (wts(c.0, ab.0), wts(c.1, ab.1));
+        let mut n = 0i128;
+        for &(j, vy) in &wy {
+            let Some(jj) = M::texel_index(j as i64, h) else {
+                continue;
+            };
+            for &(i, vx) in &wx {
+                let Some(ii) = M::texel_index(i as i64, w) else {
+                    continue;
+                };
+                n += tex[jj * w + ii] as i128 * vx * vy;
+            }
+        }
+        div_round_shift(n as u128, 14, (ab.0 * ab.0 * ab.1 * ab.1) as u128).unwrap()
+    }
+
+    fn tex(w: usize, h: usize, seed: u64) -> Vec<u8> {
+        let mut s = seed;
+        (0..w * h).map(|_| lcg(&mut s) as u8).collect()
+    }
+
+    #[test]
+    fn table_matches_formula() {
+        for (w, h) in [(1, 1), (1, 5), (5, 1), (3, 4), (7, 5)] {
+            let t = tex(w, h, 7);
+            let texture = Texture::<u8>::new(&t, w, h).unwrap();
+            let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+            let tt = TentTable::build(&texture, &mut st).unwrap();
+            for y in 0..=h + 1 {
+                for x in 0..=w + 1 {
+                    let mut want = 0u64;
+                    for j in 0..h.min(y) {
+                        for i in 0..w.min(x) {
+                            want += (2 * (x - i) as u64 - 1)
+                                * (2 * (y - j) as u64 - 1)
+                                * t[j * w + i] as u64;
+                        }
+                    }
+                    assert_eq!(tt.corner(x, y).unwrap()[0], want, "{w}x{h} at {x},{y}");
+                }
+            }
+        }
+    }
+
+    fn every_int<M: TentMode>(mode: M) {
+        for (w, h) in [(1, 1), (1, 4), (4, 1), (3, 5), (5, 3)] {
+            let t = tex(w, h, (w * 10 + h) as u64);
+            let texture = Texture::<u8>::new(&t, w, h).unwrap();
+            let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+            let tt = TentTable::build(&texture, &mut st).unwrap();
+            for cx in -8i32..=w as i32 + 8 {
+                for cy in -7i32..=h as i32 + 7 {
+                    for a in 1u32..=7 {
+                        for b in [1u32, 2, 5] {
+                            let got = tt.sample_int(cx, cy, a, b, mode, &mut NoCount).unwrap();
+                            let want = direct::<M>(
+                                &t,
+                                w,
+                                h,
+                                (cx as i128, cy as i128),
+                                (a as i128, b as i128),
+                                0,
+                            );
+                            assert_eq!(
+                                got.values[0],
+                                want,
+                                "{} {w}x{h} c=({cx},{cy}) a={a} b={b}",
+                                M::NAME
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn integer_exact_every_mode() {
+        every_int(Border);
+        every_int(ClampToEdge);
+        every_int(Repeat);
+        every_int(MirroredRepeat);
+    }
+
+    fn exact_random<M: TentMode>(mode: M) {
+        let mut seed = 99u64;
+        for (w, h) in [(1, 1), (1, 6), (6, 1), (5, 4), (9, 7)] {
+            let t = tex(w, h, (w * 3 + h) as u64);
+            let texture = Texture::<u8>::new(&t, w, h).unwrap();
+            let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+            let tt = TentTable::build(&texture, &mut st).unwrap();
+            let mut ls = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
+            let lines = TentLines::build(&texture, &mut ls).unwrap();
+            for _ in 0..400 {
+                let span = 16 * 4 * (w.max(h) as i64 + 4);
+                let x0 = -2 * span / 3 + (lcg(&mut seed) as i64 % span);
+                let y0 = -2 * span / 3 + (lcg(&mut seed) as i64 % span);
+                let x1 = x0 + 1 + (lcg(&mut seed) as i64 % (span / 2));
+                let y1 = y0 + 1 + (lcg(&mut seed) as i64 % (span / 2));
+                let r = Rect::new(
+                    I28F4::from_bits(x0 as i32),
+                    I28F4::from_bits(y0 as i32),
+                    I28F4::from_bits(x1 as i32),
+                    I28F4::from_bits(y1 as i32),
+                );
+                let got = tt
+                    .sample_exact(&lines, &texture, &r, mode, &mut NoCount)
+                    .unwrap();
+                let want = direct::<M>(
+                    &t,
+                    w,
+                    h,
+                    ((x0 + x1) as i128, (y0 + y1) as i128),
+                    ((x1 - x0) as i128, (y1 - y0) as i128),
+                    5,
+                );
+                assert_eq!(got.values[0], want, "{} {w}x{h} {r:?}", M::NAME);
+                // Paper within its bound of the exact value.
+                let p = tt.sample(&r, mode, &mut NoCount).unwrap();
+                let a = (x1 - x0) as f64 / 32.0;
+                let b = (y1 - y0) as f64 / 32.0;
+                let bound = paper_error_bound(8, a, b) + 2.0 / 65536.0;
+                let err = (p.values[0] as f64 - got.values[0] as f64).abs() / 65536.0;
+                assert!(
+                    err <= bound,
+                    "{} paper err {err} > {bound} for {r:?}",
+                    M::NAME
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn exact_matches_direct_every_mode() {
+        exact_random(Border);
+        exact_random(ClampToEdge);
+        exact_random(Repeat);
+        exact_random(MirroredRepeat);
+    }
+
+    #[test]
+    fn costs_9_4_and_36_31() {
+        let (w, h) = (16, 16);
+        let t = tex(w, h, 3);
+        let texture = Texture::<u8>::new(&t, w, h).unwrap();
+        let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+        let tt = TentTable::build(&texture, &mut st).unwrap();
+        let mut k = Tally::new();
+        tt.sample_int(8, 7, 3, 4, Border, &mut k).unwrap();
+        assert_eq!(
+            (k.reads, k.muls, k.divs, k.multiplicative(), k.adds),
+            (9, 3, 1, 4, 8)
+        );
+        let mut k = Tally::new();
+        let r = Rect::new(
+            I24F8::from_num(3.3),
+            I24F8::from_num(4.1),
+            I24F8::from_num(9.7),
+            I24F8::from_num(8.6),
+        );
+        tt.sample(&r, Border, &mut k).unwrap();
+        assert_eq!(
+            (k.reads, k.muls, k.divs, k.multiplicative(), k.adds),
+            (36, 30, 1, 31, 62)
+        );
+        let mut ls = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
+        let lines = TentLines::build(&texture, &mut ls).unwrap();
+        let mut k = Tally::new();
+        let e64 = tt
+            .sample_exact(&lines, &texture, &r, Border, &mut k)
+            .unwrap();
+        assert_eq!((k.reads, k.muls, k.divs), (81, 72, 1));
+        // Narrower line tables give the same result.
+        let mut ls32 = vec![0u32; TentLines::<u32>::storage_needed(w, h).unwrap()];
+        let lines32 = TentLines::build(&texture, &mut ls32).unwrap();
+        let e32 = tt
+            .sample_exact(&lines32, &texture, &r, Border, &mut NoCount)
+            .unwrap();
+        assert_eq!(e32, e64);
+        // Same counts in every mode for an interior footprint.
+        let mut k2 = Tally::new();
+        tt.sample(&r, MirroredRepeat, &mut k2).unwrap();
+        assert_eq!((k2.reads, k2.multiplicative()), (36, 31));
+    }
+
+    #[test]
+    fn paper_error_bound_is_approached() {
+        // Columns i-a and i+a full, column i empty, centre on a texel centre: every fraction is
+        // 1/2 and the error is m / (4 a^2) (b large, ClampToEdge makes the columns infinite).
+        let (w, h) = (9usize, 3usize);
+        for a in 1..=4i32 {
+            let mut t = vec![0u8; w * h];
+            for y in 0..h {
+                t[y * w + (4 - a) as usize] = 255;
+                t[y * w + (4 + a) as usize] = 255;
+            }
+            let texture = Texture::<u8>::new(&t, w, h).unwrap();
+            let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+            let tt = TentTable::build(&texture, &mut st).unwrap();
+            let mut ls = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
+            let lines = TentLines::build(&texture, &mut ls).unwrap();
+            let b = 400.0;
+            let r = Rect::new(
+                I24F8::from_num(4.5 - a as f64),
+                I24F8::from_num(1.5 - b),
+                I24F8::from_num(4.5 + a as f64),
+                I24F8::from_num(1.5 + b),
+            );
+            let p = tt.sample(&r, ClampToEdge, &mut NoCount).unwrap().values[0] as f64;
+            let e = tt
+                .sample_exact(&lines, &texture, &r, ClampToEdge, &mut NoCount)
+                .unwrap()
+                .values[0] as f64;
+            let err = (p - e) / 65536.0;
+            let bound = paper_error_bound(8, a as f64, b);
+            let sep = 255.0 / (4.0 * (a * a) as f64);
+            assert!((err - sep).abs() < 2.0 / 65536.0, "a={a}: {err} vs {sep}");
+            assert!(
+                err <= bound && err >= 0.99 * bound,
+                "a={a}: {err} vs bound {bound}"
+            );
+        }
+    }
+
+    #[test]
+    fn integer_footprints_agree() {
+        // A rectangle with even integer sides has an integer centre: paper = exact = integer.
+        let (w, h) = (7, 6);
+        let t = tex(w, h, 5);
+        let texture = Texture::<u8>::new(&t, w, h).unwrap();
+        let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+        let tt = TentTable::build(&texture, &mut st).unwrap();
+        let mut ls = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
+        let lines = TentLines::build(&texture, &mut ls).unwrap();
+        let r = Rect::new(
+            I16F16::from_num(1),
+            I16F16::from_num(0),
+            I16F16::from_num(5),
+            I16F16::from_num(6),
+        );
+        let a = tt.sample_int(3, 3, 2, 3, Repeat, &mut NoCount).unwrap();
+        let b = tt.sample(&r, Repeat, &mut NoCount).unwrap();
+        let c = tt
+            .sample_exact(&lines, &texture, &r, Repeat, &mut NoCount)
+            .unwrap();
+        assert_eq!(a, b);
+        assert_eq!(a, c);
+    }
+
+    #[test]
+    fn constant_texture_is_reproduced() {
+        let (w, h) = (5, 4);
+        let t = vec![200u8; w * h];
+        let texture = Texture::<u8>::new(&t, w, h).unwrap();
+        let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+        let tt = TentTable::build(&texture, &mut st).unwrap();
+        let mut ls = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
+        let lines = TentLines::build(&texture, &mut ls).unwrap();
+        let r = Rect::new(
+            I24F8::from_num(-3.3),
+            I24F8::from_num(1.1),
+            I24F8::from_num(40.7),
+            I24F8::from_num(2.6),
+        );
+        for v in [
+            tt.sample_exact(&lines, &texture, &r, ClampToEdge, &mut NoCount)
+                .unwrap(),
+            tt.sample_exact(&lines, &texture, &r, Repeat, &mut NoCount)
+                .unwrap(),
+            tt.sample_exact(&lines, &texture, &r, MirroredRepeat, &mut NoCount)
+                .unwrap(),
+        ] {
+            assert_eq!(v.values[0], 200 << 16);
+        }
+    }
+
+    #[test]
+    fn widths_and_refusals() {
+        // u64 at 8-bit texels: 16399 x 16399 fits, 16400 x 16400 does not; 16-bit: 4095.
+        assert_eq!(tent_entry_bits(8, 16399, 16399), 64);
+        assert_eq!(tent_entry_bits(8, 16400, 16400), 65);
+        assert_eq!(tent_entry_bits(16, 4095, 4095), 64);
+        assert_eq!(tent_entry_bits(16, 4096, 4096), 65);
+        assert_eq!(tent_entry_bits(8, 256, 256), 41);
+        assert_eq!(tent_line_bits(8, 256), 25);
+        let texture = Texture::<u16>::new(&[0u16; 64 * 64], 64, 64).unwrap();
+        let mut st = vec![0u32; TentTable::<u32>::storage_needed(64, 64).unwrap()];
+        assert_eq!(
+            TentTable::build(&texture, &mut st).err(),
+            Some(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: tent_entry_bits(16, 64, 64),
+                bits_available: 32
+            })
+        );
+        assert!(st.iter().all(|&v| v == 0));
+        let mut st = vec![0u128; TentTable::<u128>::storage_needed(64, 64).unwrap()];
+        assert!(TentTable::build(&texture, &mut st).is_ok());
+        let mut short = vec![0u64; 10];
+        assert!(matches!(
+            TentTable::build(&texture, &mut short),
+            Err(Error::StorageTooSmall { .. })
+        ));
+        // Memory: 8-bit 256 x 256 in u64.
+        let t = vec![1u8; 256 * 256];
+        let texture = Texture::<u8>::new(&t, 256, 256).unwrap();
+        let mut st = vec![0u64; TentTable::<u64>::storage_needed(256, 256).unwrap()];
+        let tt = TentTable::build(&texture, &mut st).unwrap();
+        let ratio = tt.table_bytes() as f64 / (256.0 * 256.0);
+        assert!((ratio - 8.06).abs() < 0.01, "{ratio}");
+    }
+
+    #[test]
+    fn channels_u128_and_16_bit() {
+        // Two channels of 16-bit texels in u128 entries agree with each channel alone in u64.
+        let (w, h) = (5usize, 3usize);
+        let mut seed = 11u64;
+        let t: Vec<u16> = (0..w * h * 2).map(|_| lcg(&mut seed) as u16).collect();
+        let texture = Texture::<u16, 2>::new(&t, w, h).unwrap();
+        let mut st = vec![0u128; TentTable::<u128, 2>::storage_needed(w, h).unwrap()];
+        let tt = TentTable::build(&texture, &mut st).unwrap();
+        let mut ls = vec![0u128; TentLines::<u128, 2>::storage_needed(w, h).unwrap()];
+        let lines = TentLines::build(&texture, &mut ls).unwrap();
+        let r = Rect::new(
+            I24F8::from_num(-0.7),
+            I24F8::from_num(0.3),
+            I24F8::from_num(4.1),
+            I24F8::from_num(2.9),
+        );
+        let mut k = Tally::new();
+        let both = tt
+            .sample_exact(&lines, &texture, &r, MirroredRepeat, &mut k)
+            .unwrap();
+        let both_p = tt.sample(&r, MirroredRepeat, &mut NoCount).unwrap();
+        for c in 0..2 {
+            let ch: Vec<u16> = t.iter().skip(c).step_by(2).copied().collect();
+            let tex1 = Texture::<u16>::new(&ch, w, h).unwrap();
+            let mut st1 = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+            let t1 = TentTable::build(&tex1, &mut st1).unwrap();
+            let mut ls1 = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
+            let l1 = TentLines::build(&tex1, &mut ls1).unwrap();
+            let one = t1
+                .sample_exact(&l1, &tex1, &r, MirroredRepeat, &mut NoCount)
+                .unwrap();
+            assert_eq!(both.values[c], one.values[0]);
+            let one_p = t1.sample(&r, MirroredRepeat, &mut NoCount).unwrap();
+            assert_eq!(both_p.values[c], one_p.values[0]);
+        }
+        // Mismatched lines are refused.
+        let mut ls2 = vec![0u128; TentLines::<u128, 2>::storage_needed(w, h + 1).unwrap()];
+        let t2: Vec<u16> = vec![0; w * (h + 1) * 2];
+        let tex2 = Texture::<u16, 2>::new(&t2, w, h + 1).unwrap();
+        let lines2 = TentLines::build(&tex2, &mut ls2).unwrap();
+        assert!(matches!(
+            tt.sample_exact(&lines2, &texture, &r, Border, &mut NoCount),
+            Err(Error::RowLength { .. })
+        ));
+    }
+
+    #[test]
+    fn errors_and_degenerate() {
+        let t = [1u8, 2, 3, 4];
+        let texture = Texture::<u8>::new(&t, 2, 2).unwrap();
+        let mut st = [0u64; 9];
+        let tt = TentTable::build(&texture, &mut st).unwrap();
+        assert_eq!(
+            tt.sample_int(0, 0, 0, 1, Border, &mut NoCount),
+            Err(Error::ZeroArea)
+        );
+        let inv = Rect::new(I24F8::ONE, I24F8::ZERO, I24F8::ZERO, I24F8::ONE);
+        assert_eq!(
+            tt.sample(&inv, Border, &mut NoCount),
+            Err(Error::InvertedBox)
+        );
+        let zero = Rect::new(I24F8::ONE, I24F8::ZERO, I24F8::ONE, I24F8::ONE);
+        assert_eq!(tt.sample(&zero, Border, &mut NoCount), Err(Error::ZeroArea));
+        // Far outside under Border: 0 with no reads.
+        let mut k = Tally::new();
+        let far = tt.sample_int(i32::MIN, 0, 3, 3, Border, &mut k).unwrap();
+        assert_eq!((far.values[0], k.reads), (0, 0));
+        // Huge footprints: a value or a typed refusal, never a panic.
+        for mode_i in 0..4 {
+            let r = Rect::new(I24F8::MIN, I24F8::MIN, I24F8::MAX, I24F8::MAX);
+            let res = match mode_i {
+                0 => tt.sample(&r, Border, &mut NoCount),
+                1 => tt.sample(&r, ClampToEdge, &mut NoCount),
+                2 => tt.sample(&r, Repeat, &mut NoCount),
+                _ => tt.sample(&r, MirroredRepeat, &mut NoCount),
+            };
+            let _ = res;
+            let res = match mode_i {
+                0 => tt.sample_int(i32::MAX, i32::MIN, u32::MAX, u32::MAX, Border, &mut NoCount),
+                1 => tt.sample_int(
+                    i32::MAX,
+                    i32::MIN,
+                    u32::MAX,
+                    u32::MAX,
+                    ClampToEdge,
+                    &mut NoCount,
+                ),
+                2 => tt.sample_int(i32::MAX, i32::MIN, u32::MAX, u32::MAX, Repeat, &mut NoCount),
+                _ => tt.sample_int(
+                    i32::MAX,
+                    i32::MIN,
+                    u32::MAX,
+                    u32::MAX,
+                    MirroredRepeat,
+                    &mut NoCount,
+                ),
+            };
+            let _ = res;
+        }
+    }
+}

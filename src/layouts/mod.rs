@@ -1,0 +1,81 @@
+//! Table layouts: how the corner function `S(x, y)` is stored, and what reading it costs.
+//!
+//! Every layout implements [`Layout`]: "give me `S(x, y)` for `0 <= x <= w`, `0 <= y <= h`,
+//! and count what you read". The lookups ([`crate::BoxLookup`]: 4-read, 16-read in both forms,
+//! the shortcut, every boundary mode) are written once against this trait.
+//!
+//! | layout | what is stored | `S(x, y)` costs |
+//! |---|---|---|
+//! | [`crate::Sat`] | the flat table in native words (`u16`/`u32`/`u64`) | 1 read |
+//! | [`Tiled`] | a hierarchy of tiles: local sums, edge strips and corners, each packed at its exact width (no levels: the flat table packed at its exact width) | one field per level pair, 1 to 3 words each |
+//! | [`Modular`] | the flat table modulo `2^k`, packed at `k` bits | 1 field |
+//!
+//! See `docs/layouts.md` for the derivations, bits per entry and reads per lookup.
+
+mod modular;
+pub mod packed;
+mod tiled;
+
+pub use modular::{modulus_bits_for, Modular, ModularBuilder};
+pub use tiled::{AxisLevels, Tiled, TiledBuilder, TiledSpec, MAX_LEVELS};
+
+use crate::cost::Counter;
+use crate::table::Sat;
+use crate::texel::Entry;
+
+/// Storage of the corner function of a texture with `C` channels.
+pub trait Layout<const C: usize> {
+    /// The type corner values are returned in.
+    type Value: Entry;
+    /// Width of the texture in texels.
+    fn width(&self) -> usize;
+    /// Height of the texture in texels.
+    fn height(&self) -> usize;
+    /// Bits per texel.
+    fn texel_bits(&self) -> u32;
+    /// Bits of the largest corner value the lookups may see (the whole-texture sum; for a
+    /// modular layout, `k`).
+    fn value_bits(&self) -> u32;
+    /// `Some(k)` if values are residues modulo `2^k` (see [`Modular`]): the lookups then reduce
+    /// every box-bounded difference modulo `2^k` and refuse boxes whose sums may reach `2^k`.
+    /// `None` (the default) for layouts that store `S` itself.
+    #[inline(always)]
+    fn modulus(&self) -> Option<u32> {
+        None
+    }
+    /// Bits of storage the layout occupies (all channels), for bits per entry.
+    fn storage_bits(&self) -> u64;
+    /// `S(x, y)` per channel (mod `2^k` for a modular layout), for `x <= w` and `y <= h`;
+    /// reports the words it reads to `k`. `S(0, y) = S(x, 0) = 0` are never stored or read.
+    fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [Self::Value; C];
+    /// Bits per texel and channel: `storage_bits / (w h C)`.
+    fn bits_per_entry(&self) -> f64 {
+        self.storage_bits() as f64 / (self.width() as f64 * self.height() as f64 * C as f64)
+    }
+}
+
+impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
+    type Value = E;
+    fn width(&self) -> usize {
+        Sat::width(self)
+    }
+    fn height(&self) -> usize {
+        Sat::height(self)
+    }
+    fn texel_bits(&self) -> u32 {
+        Sat::texel_bits(self)
+    }
+    fn value_bits(&self) -> u32 {
+        self.total_bits()
+    }
+    fn storage_bits(&self) -> u64 {
+        self.table_bytes() as u64 * 8
+    }
+    #[inline(always)]
+    fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
+        self.read(x, y, k)
+    }
+}
+
+#[cfg(test)]
+mod tests;
