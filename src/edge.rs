@@ -120,6 +120,7 @@ pub struct MirroredRepeat;
 
 impl EdgeMode for Border {
     const NAME: &'static str = "border";
+    #[inline]
     fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
         let end = (n as i128) << f;
         let (lo, hi) = (lo.clamp(0, end), hi.clamp(0, end));
@@ -143,6 +144,7 @@ impl EdgeMode for Border {
 
 impl EdgeMode for ClampToEdge {
     const NAME: &'static str = "clamp";
+    #[inline]
     fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
         if lo >= 0 && hi <= (n as i128) << f {
             AxisPlacement::InRange(lo, hi)
@@ -174,6 +176,7 @@ impl EdgeMode for ClampToEdge {
 
 impl EdgeMode for Repeat {
     const NAME: &'static str = "repeat";
+    #[inline]
     fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
         let period = (n as i128) << f;
         let shift = lo.div_euclid(period) * period;
@@ -200,6 +203,7 @@ impl EdgeMode for Repeat {
 
 impl EdgeMode for MirroredRepeat {
     const NAME: &'static str = "mirror";
+    #[inline]
     fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
         let half = (n as i128) << f;
         let period = 2 * half;
@@ -248,6 +252,7 @@ pub(crate) enum Placement {
     Outside(RawBox),
 }
 
+#[inline]
 pub(crate) fn place<M: EdgeMode>(b: RawBox, w: usize, h: usize, f: u32) -> Placement {
     use AxisPlacement as A;
     let px = M::place_axis(b.x0, b.x1, w, f);

@@ -304,14 +304,39 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
 ///
 /// For sources larger than RAM (a sensor, a flash image): push each texture row; each call
 /// returns the finished table row, which the caller stores wherever the table lives (external
-/// RAM, flash, an RTL test vector file). The rows are bit-identical to [`Sat::build`]'s, since
-/// both run the same row kernel. The width check runs in [`RowStreamBuilder::new`].
+/// RAM, flash, an RTL test vector file). The rows are bit-identical to [`Sat::build`]'s: the
+/// same two additions per entry in the same order, in place (host-tests compare them bit for
+/// bit). The width check runs in [`RowStreamBuilder::new`]; rows of texels no wider than the
+/// bits given there use unchecked additions, wider ones checked additions.
 #[derive(Debug)]
 pub struct RowStreamBuilder<'a, E: Entry, const C: usize = 1> {
     row: &'a mut [E],
     width: usize,
     height: usize,
+    texel_bits: u32,
     rows_done: usize,
+}
+
+/// One row of the build in place: `row` holds the row above on entry (ignored for the first row)
+/// and the new row on exit. The same additions as [`build_row`], in the same order.
+#[inline]
+fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
+    texels: &[T],
+    row: &mut [E],
+    first: bool,
+) -> Result<(), ()> {
+    let mut run = [E::ZERO; C];
+    for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+        for c in 0..C {
+            run[c] = add::<E, CHECKED>(run[c], E::from(t[c].to_u16()))?;
+            o[c] = if first {
+                run[c]
+            } else {
+                add::<E, CHECKED>(run[c], o[c])?
+            };
+        }
+    }
+    Ok(())
 }
 
 impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
@@ -343,6 +368,7 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             row: &mut row_storage[..needed],
             width,
             height,
+            texel_bits,
             rows_done: 0,
         })
     }
@@ -359,26 +385,22 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
                 got: texels.len(),
             });
         }
-        // The kernel reads the row above and writes the new row; with one buffer the new row
-        // overwrites the old in place, which is safe because entry i only needs above[i].
+        // The new row overwrites the old in place, which is safe because entry i only needs
+        // above[i]. `new` proved the worst case for `texel_bits`; texels of at most that many
+        // bits take the plain additions, wider ones (whose values may exceed the proof) the
+        // checked ones.
         let overflow = Error::TooWide {
             what: Quantity::Entry,
             bits_needed: E::BITS + 1,
             bits_available: E::BITS,
         };
-        if self.rows_done == 0 {
-            build_row::<T, E, C, true>(texels, None, self.row).map_err(|_| overflow)?;
+        let first = self.rows_done == 0;
+        if T::BITS <= self.texel_bits {
+            build_row_in_place::<T, E, C, false>(texels, self.row, first)
         } else {
-            // Same additions as `build_row` (running sum, then plus the entry above).
-            let mut run = [E::ZERO; C];
-            for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-                for c in 0..C {
-                    run[c] =
-                        add::<E, true>(run[c], E::from(t[c].to_u16())).map_err(|_| overflow)?;
-                    o[c] = add::<E, true>(run[c], o[c]).map_err(|_| overflow)?;
-                }
-            }
+            build_row_in_place::<T, E, C, true>(texels, self.row, first)
         }
+        .map_err(|_| overflow)?;
         self.rows_done += 1;
         Ok(self.row)
     }

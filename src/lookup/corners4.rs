@@ -23,7 +23,9 @@ impl Form for Corners4 {
     fn modular_headroom_bits(_frac_bits: u32) -> u32 {
         0
     }
-    #[inline]
+    // Inlined: an out-of-line call returning i128 sums through memory dominated the lookup
+    // (docs/benchmarks.md, finding 1).
+    #[inline(always)]
     fn in_range<L: Layout<C>, const C: usize, K: Counter>(
         t: &L,
         b: &RawBox,

@@ -50,7 +50,9 @@ impl Form for Paper {
         // Corner values are known mod 2^k only, so the whole scaled result must be below 2^k.
         2 * frac_bits
     }
-    #[inline]
+    // Inlined: an out-of-line call returning i128 sums through memory dominated the lookup
+    // (docs/benchmarks.md, finding 1).
+    #[inline(always)]
     fn in_range<L: Layout<C>, const C: usize, K: Counter>(
         t: &L,
         b: &RawBox,

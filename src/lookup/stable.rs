@@ -65,7 +65,9 @@ impl Form for Stable {
         // Every quantity reduced modulo 2^k is a sum over part of the box's cells.
         0
     }
-    #[inline]
+    // Inlined: an out-of-line call returning i128 sums through memory dominated the lookup
+    // (docs/benchmarks.md, finding 1).
+    #[inline(always)]
     fn in_range<L: Layout<C>, const C: usize, K: Counter>(
         t: &L,
         b: &RawBox,
