@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
-use crate::texture::{Texture, MAX_DIMENSION};
+use crate::texture::{check_dimensions, Texture};
 use crate::width::{self, bits_of};
 
 /// A summed-area table over borrowed storage.
@@ -182,14 +182,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         height: usize,
         texel_bits: u32,
     ) -> Result<Self, Error> {
-        if width == 0 || height == 0 || C == 0 {
-            return Err(Error::EmptyTexture);
-        }
-        if width > MAX_DIMENSION || height > MAX_DIMENSION {
-            return Err(Error::TextureTooLarge {
-                dimension: width.max(height),
-            });
-        }
+        check_dimensions(width, height, C)?;
         width::check_texel_bits(texel_bits)?;
         let needed = entries_needed::<C>(width, height)?;
         if table.len() < needed {
@@ -348,14 +341,7 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
         texel_bits: u32,
         row_storage: &'a mut [E],
     ) -> Result<Self, Error> {
-        if width == 0 || height == 0 || C == 0 {
-            return Err(Error::EmptyTexture);
-        }
-        if width > MAX_DIMENSION || height > MAX_DIMENSION {
-            return Err(Error::TextureTooLarge {
-                dimension: width.max(height),
-            });
-        }
+        check_dimensions(width, height, C)?;
         width::check_entry_worst_case(texel_bits, width, height, E::BITS)?;
         let needed = entries_needed::<C>(width, 1)?;
         if row_storage.len() < needed {

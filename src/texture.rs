@@ -6,6 +6,20 @@ use crate::texel::Texel;
 /// Largest width or height accepted (coordinates stay far inside `i64`/`i128` arithmetic).
 pub(crate) const MAX_DIMENSION: usize = (1 << 31) - 1;
 
+/// The size check every table, layout and texture shares: both sides in `1..=2^31 - 1` and at
+/// least one channel.
+pub(crate) fn check_dimensions(width: usize, height: usize, channels: usize) -> Result<(), Error> {
+    if width == 0 || height == 0 || channels == 0 {
+        return Err(Error::EmptyTexture);
+    }
+    if width > MAX_DIMENSION || height > MAX_DIMENSION {
+        return Err(Error::TextureTooLarge {
+            dimension: width.max(height),
+        });
+    }
+    Ok(())
+}
+
 /// A texture of `width x height` texels with `C` interleaved channels (`1..=4` in practice).
 ///
 /// Texel `(x, y)` channel `c` is `data[y * stride + x * C + c]`; `stride` is in elements and at
@@ -31,14 +45,7 @@ impl<'a, T: Texel, const C: usize> Texture<'a, T, C> {
         height: usize,
         stride: usize,
     ) -> Result<Self, Error> {
-        if width == 0 || height == 0 || C == 0 {
-            return Err(Error::EmptyTexture);
-        }
-        if width > MAX_DIMENSION || height > MAX_DIMENSION {
-            return Err(Error::TextureTooLarge {
-                dimension: width.max(height),
-            });
-        }
+        check_dimensions(width, height, C)?;
         let row = width
             .checked_mul(C)
             .ok_or(Error::TextureTooLarge { dimension: width })?;

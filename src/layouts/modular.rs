@@ -16,7 +16,7 @@ use super::Layout;
 use crate::cost::Counter;
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
-use crate::texture::{Texture, MAX_DIMENSION};
+use crate::texture::{check_dimensions, Texture};
 use crate::width::{self, bits_of};
 
 /// The flat table modulo `2^k`, `k`-bit fields packed in 32-bit words.
@@ -80,9 +80,7 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
         k: u32,
     ) -> Result<Self, Error> {
         check_k::<E>(texel_bits, k)?;
-        if width == 0 || height == 0 {
-            return Err(Error::EmptyTexture);
-        }
+        check_dimensions(width, height, C)?;
         let need = Self::words_needed(width, height, k);
         if words.len() < need {
             return Err(Error::StorageTooSmall {
@@ -174,14 +172,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         row: &'s mut [E],
     ) -> Result<Self, Error> {
         check_k::<E>(texel_bits, k)?;
-        if width == 0 || height == 0 {
-            return Err(Error::EmptyTexture);
-        }
-        if width > MAX_DIMENSION || height > MAX_DIMENSION {
-            return Err(Error::TextureTooLarge {
-                dimension: width.max(height),
-            });
-        }
+        check_dimensions(width, height, C)?;
         let need = Modular::<E, C>::words_needed(width, height, k);
         if words.len() < need {
             return Err(Error::StorageTooSmall {

@@ -30,7 +30,7 @@ use super::Layout;
 use crate::cost::Counter;
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
-use crate::texture::{Texture, MAX_DIMENSION};
+use crate::texture::{check_dimensions, Texture};
 use crate::width::{self, bits_of};
 
 /// The most block levels per axis.
@@ -242,19 +242,12 @@ impl Geometry {
         texel_bits: u32,
         channels: usize,
     ) -> Result<Self, Error> {
-        if width == 0 || height == 0 || channels == 0 {
-            return Err(Error::EmptyTexture);
-        }
+        check_dimensions(width, height, channels)?;
         width::check_texel_bits(texel_bits)?;
         if let Some(k) = spec.modulus {
             if k < texel_bits || k == 0 || k > 64 {
                 return Err(Error::InvalidModulus { bits: k });
             }
-        }
-        if width > MAX_DIMENSION || height > MAX_DIMENSION {
-            return Err(Error::TextureTooLarge {
-                dimension: width.max(height),
-            });
         }
         let m = width::max_texel(texel_bits);
         let mut comps = [[Component::default(); N]; N];
