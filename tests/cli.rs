@@ -6,6 +6,8 @@
 //! test to need the binary runs `cargo build --example sat` for the same profile and target
 //! directory (with `--features filters`, for `--filter`); set `SAT_BIN` to test another binary.
 
+mod common;
+
 use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -17,42 +19,7 @@ use std::sync::OnceLock;
 
 fn sat_bin() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        if let Some(bin) = std::env::var_os("SAT_BIN") {
-            return PathBuf::from(bin);
-        }
-        // target/<profile>/deps/cli-XXXX -> target/<profile>/examples/sat
-        let exe = std::env::current_exe().expect("current_exe");
-        let profile_dir = exe
-            .parent()
-            .and_then(Path::parent)
-            .expect("target/<profile>");
-        let target_dir = profile_dir.parent().expect("target dir");
-        let mut cmd = Command::new(env!("CARGO"));
-        // The comparison filters (`--filter`) are behind the crate's `filters` feature.
-        cmd.args([
-            "build",
-            "--quiet",
-            "--example",
-            "sat",
-            "--features",
-            "filters",
-        ])
-        .arg("--manifest-path")
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
-        .arg("--target-dir")
-        .arg(target_dir);
-        if profile_dir.file_name().is_some_and(|n| n == "release") {
-            cmd.arg("--release");
-        }
-        let status = cmd.status().expect("running cargo build --example sat");
-        assert!(status.success(), "cargo build --example sat failed");
-        let bin = profile_dir
-            .join("examples")
-            .join(format!("sat{}", std::env::consts::EXE_SUFFIX));
-        assert!(bin.exists(), "{} not found after building", bin.display());
-        bin
-    })
+    BIN.get_or_init(|| common::example_bin("sat", "SAT_BIN", &["filters"]))
 }
 
 fn run(args: &[&str], stdin: &str) -> Output {

@@ -8,6 +8,8 @@
 //! profile and target directory first (as `tests/cli.rs` does); set `REPORT_BIN` to test
 //! another binary.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -47,33 +49,7 @@ const EXACT: [&str; 8] = [
 
 fn report_bin() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        if let Some(bin) = std::env::var_os("REPORT_BIN") {
-            return PathBuf::from(bin);
-        }
-        // target/<profile>/deps/report-XXXX -> target/<profile>/examples/report
-        let exe = std::env::current_exe().expect("current_exe");
-        let profile_dir = exe
-            .parent()
-            .and_then(Path::parent)
-            .expect("target/<profile>");
-        let target_dir = profile_dir.parent().expect("target dir");
-        let mut cmd = Command::new(env!("CARGO"));
-        cmd.args(["build", "--quiet", "--example", "report", "--manifest-path"])
-            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
-            .arg("--target-dir")
-            .arg(target_dir);
-        if profile_dir.file_name().is_some_and(|n| n == "release") {
-            cmd.arg("--release");
-        }
-        let status = cmd.status().expect("running cargo build --example report");
-        assert!(status.success(), "cargo build --example report failed");
-        let bin = profile_dir
-            .join("examples")
-            .join(format!("report{}", std::env::consts::EXE_SUFFIX));
-        assert!(bin.exists(), "{} not found after building", bin.display());
-        bin
-    })
+    BIN.get_or_init(|| common::example_bin("report", "REPORT_BIN", &[]))
 }
 
 struct TempDir(PathBuf);
