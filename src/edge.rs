@@ -1,105 +1,144 @@
 //! Texture boundary modes (Crow §2.4): what a box reaching outside `[0, w) x [0, h)` sums.
 //!
-//! Each mode is a zero-sized type, passed by value to the lookups, so only the modes a build
-//! names are compiled in. Every mode defines an *extended texture* over the whole plane and the
-//! lookups return its exact integral over the box:
+//! Each mode is a zero-sized type, passed by value to the lookups, so a build that names one
+//! mode compiles only its branch: [`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`].
+//! [`EdgeKind`] is the same choice as a run-time value (a tool that reads the mode from its
+//! command line compiles one lookup for all four). [`EdgeMode`] is sealed; its one piece of
+//! behaviour is [`EdgeMode::kind`], and everything a mode means is written once, on
+//! [`EdgeKind`]: the texel an index shows ([`EdgeKind::texel_index`]) and, crate-internally, how
+//! a box is placed against the table.
+//!
+//! Every mode defines an *extended texture* over the whole plane, and the lookups return its exact
+//! integral over the box:
 //!
 //! * [`Border`]: zero outside. The box is clipped to the texture; the area of the mean stays the
 //!   unclipped box's (Crow: "truncate texture image coordinates while calculating the area from
 //!   the unmodified coordinates").
 //! * [`ClampToEdge`]: texel `(clamp(i, 0, w-1), clamp(j, 0, h-1))`.
-//! * [`Repeat`]: texel `(i mod w, j mod h)`. Whole periods add whole-table sums (Crow: "values
+//! * [`Repeat`]: texel `(i mod w, j mod h)`. Whole periods add whole-period sums (Crow: "values
 //!   lying to the right or above a boundary must be increased by the value at the boundary"),
 //!   in constant time however many periods the box covers.
 //! * [`MirroredRepeat`]: period `2w` (`2h`), the second half reflected.
 //!
-//! Implementation: a box is first *placed*. If an equivalent box inside `[0, w] x [0, h]` exists
-//! (the clip for `Border`; a shift by whole periods for `Repeat`; a shift and a reflection for
-//! `MirroredRepeat`; the box itself for `ClampToEdge`) the ordinary 4- or 16-read lookup answers.
-//! Otherwise each corner is a signed combination of in-range corner values: per axis the prefix
-//! integral `P(x) = integral_0^x` of the extended texture is a weighted sum of at most three
-//! table columns (rows), and `S_ext(x, y)` is the tensor product of the two axes' weights (see
-//! [`EdgeMode::axis_terms`]). Those lookups run in checked `i128` arithmetic.
+//! ## Placement (crate-internal)
+//! Per axis, an interval `[lo, hi)` (raw, `F` fractional bits) is *placed*:
+//!
+//! * in range: an equivalent interval inside `[0, n 2^F]` exists (the clip for `Border`; the
+//!   interval itself for `ClampToEdge`; a shift by whole periods for `Repeat`; a shift and a
+//!   reflection for `MirroredRepeat`). This is the common case and costs comparisons only when
+//!   `lo` lies in the first period (`Repeat`) or the first two half-periods (`MirroredRepeat`),
+//!   else one 64-bit division;
+//! * split: no such interval. The axis is cut into at most three in-range pieces, each with a
+//!   multiplicity, following Crow §2.4: for `Repeat`/`MirroredRepeat` the head of the first
+//!   period, `q` whole periods (the whole axis, `q` times) and the tail of the last (one more
+//!   division when `q > 0`); for `ClampToEdge` the part left of the texture (the first texel
+//!   column, as many times as the part is long), the part inside, and the part right of it.
+//!
+//! A box's sum is then the sum over the product of both axes' pieces of `mult_x mult_y` times an
+//! ordinary in-range lookup: every quantity stays a sum over (part of) the box, so the same narrow
+//! accumulator and the same modular bound serve, and nothing needs 128 bits.
 
-use crate::rect::RawBox;
+use crate::error::Error;
 
-/// At most three `(index, weight)` pairs: `2^F * P(x) = sum weight * S(index, .)`.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct AxisTerms {
-    /// `(corner index in 0..=n, weight scaled by 2^F)`; only the first `len` are used.
-    pub terms: [(usize, i128); 3],
-    /// Number of terms.
-    pub len: usize,
+/// The boundary mode as a run-time value. Implements [`EdgeMode`] by a `match`; the zero-sized
+/// types compile the same code with the branch fixed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EdgeKind {
+    /// [`Border`]: zero outside.
+    #[default]
+    Border,
+    /// [`ClampToEdge`].
+    Clamp,
+    /// [`Repeat`].
+    Repeat,
+    /// [`MirroredRepeat`].
+    Mirror,
 }
 
-impl AxisTerms {
-    /// Adds `weight * S(index)`, merging with a term at the same index. Index 0 (the zero
-    /// column of the corner function) and zero weights are dropped: they cost no read.
-    fn push(&mut self, index: usize, weight: i128) {
-        if weight == 0 || index == 0 {
-            return;
+impl EdgeKind {
+    /// All four modes.
+    pub const ALL: [EdgeKind; 4] = [
+        EdgeKind::Border,
+        EdgeKind::Clamp,
+        EdgeKind::Repeat,
+        EdgeKind::Mirror,
+    ];
+
+    /// A short name: `border`, `clamp`, `repeat`, `mirror`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            EdgeKind::Border => "border",
+            EdgeKind::Clamp => "clamp",
+            EdgeKind::Repeat => "repeat",
+            EdgeKind::Mirror => "mirror",
         }
-        if let Some(term) = self.terms[..self.len].iter_mut().find(|(i, _)| *i == index) {
-            term.1 += weight;
-        } else if self.len < 3 {
-            self.terms[self.len] = (index, weight);
-            self.len += 1;
-        }
     }
 
-    /// The terms in use.
-    pub fn as_slice(&self) -> &[(usize, i128)] {
-        &self.terms[..self.len]
+    /// The mode named by [`EdgeKind::name`].
+    pub fn from_name(name: &str) -> Option<EdgeKind> {
+        EdgeKind::ALL.into_iter().find(|k| k.name() == name)
     }
 
-    /// The in-range interpolation `P(x) = (1 - a) S(i) + a S(i + 1)` for `0 <= x <= n * 2^F`.
-    fn lerp(x: i128, n: usize, f: u32, sign: i128) -> Self {
-        let s = 1i128 << f;
-        let (i, a) = split(x, n, f);
-        let mut t = AxisTerms::default();
-        t.push(i, sign * (s - a as i128));
-        t.push(i + 1, sign * a as i128);
-        t
-    }
-}
-
-/// Splits an in-range raw coordinate `0 <= x <= n * 2^F` into cell `i <= n - 1` and fraction
-/// `a <= 2^F` (the right edge `x = n` is cell `n - 1` with `a = 2^F`, so `i + 1 <= n`).
-#[inline(always)]
-pub(crate) fn split(x: i128, n: usize, f: u32) -> (usize, u32) {
-    let i = (x >> f) as usize;
-    if i >= n {
-        (n - 1, 1u32 << f)
-    } else {
-        (i, (x & ((1i128 << f) - 1)) as u32)
-    }
-}
-
-/// Where one axis of a box lands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AxisPlacement {
-    /// An equivalent interval inside `[0, n * 2^F]`.
-    InRange(i128, i128),
-    /// The interval sums to zero (clipped away by [`Border`]).
-    Empty,
-    /// No in-range equivalent: the weighted path takes this (possibly shifted) interval.
-    Outside(i128, i128),
-}
-
-/// A boundary mode. Implemented by zero-sized types only.
-pub trait EdgeMode: Copy + Default {
-    /// A short name (`border`, `clamp`, `repeat`, `mirror`).
-    const NAME: &'static str;
-    /// Places the interval `[lo, hi)` (raw, `hi >= lo`) against an axis of `n` texels and `F`
-    /// fractional bits.
-    fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement;
-    /// The prefix integral of the extended texture at `x` (raw) as weights on the in-range corner
-    /// function: `2^F * integral_0^x t_ext = sum weight * S(index)`, valid for any `x`.
-    fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms;
     /// The texel index the extended texture shows at integer position `i` of an axis of `n`
-    /// texels, or `None` where it is zero ([`Border`] outside the texture). Used by the
-    /// texel-fetching filters (point, pyramids).
-    fn texel_index(i: i64, n: usize) -> Option<usize>;
+    /// texels, or `None` where it is zero ([`Border`] outside the texture) or the axis is empty
+    /// (`n = 0`). No division when `i` lies in `[0, n)` (or `[0, 2n)` for the mirror).
+    pub const fn texel_index(self, i: i64, n: usize) -> Option<usize> {
+        if n == 0 || n > i64::MAX as usize / 2 {
+            return None;
+        }
+        let n = n as i64;
+        let inside = i >= 0 && i < n;
+        let k = match self {
+            EdgeKind::Border => {
+                if inside {
+                    i
+                } else {
+                    return None;
+                }
+            }
+            EdgeKind::Clamp => {
+                if i < 0 {
+                    0
+                } else if i >= n {
+                    n - 1
+                } else {
+                    i
+                }
+            }
+            EdgeKind::Repeat => {
+                if inside {
+                    i
+                } else {
+                    i.rem_euclid(n)
+                }
+            }
+            EdgeKind::Mirror => {
+                let r = if i >= 0 && i < 2 * n {
+                    i
+                } else {
+                    i.rem_euclid(2 * n)
+                };
+                if r < n {
+                    r
+                } else {
+                    2 * n - 1 - r
+                }
+            }
+        };
+        Some(k as usize)
+    }
+}
+
+mod sealed {
+    pub trait Sealed {}
+}
+
+/// A boundary mode: one of [`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`] (zero-sized)
+/// or [`EdgeKind`] (chosen at run time). Sealed.
+pub trait EdgeMode: Copy + sealed::Sealed {
+    /// Which mode this is. Constant for the zero-sized types, so their lookups compile one branch.
+    fn kind(self) -> EdgeKind;
 }
 
 /// Outside the texture is zero; the area of the mean is the unclipped box's (Crow §2.4).
@@ -118,150 +157,257 @@ pub struct Repeat;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct MirroredRepeat;
 
-impl EdgeMode for Border {
-    const NAME: &'static str = "border";
-    #[inline]
-    fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
-        let end = (n as i128) << f;
-        let (lo, hi) = (lo.clamp(0, end), hi.clamp(0, end));
-        if lo >= hi {
-            AxisPlacement::Empty
-        } else {
-            AxisPlacement::InRange(lo, hi)
+macro_rules! zst_mode {
+    ($t:ty, $k:expr) => {
+        impl sealed::Sealed for $t {}
+        impl EdgeMode for $t {
+            #[inline(always)]
+            fn kind(self) -> EdgeKind {
+                $k
+            }
         }
-    }
-    fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms {
-        AxisTerms::lerp(x.clamp(0, (n as i128) << f), n, f, 1)
-    }
-    fn texel_index(i: i64, n: usize) -> Option<usize> {
-        if i >= 0 && (i as u64) < n as u64 {
-            Some(i as usize)
-        } else {
-            None
-        }
+    };
+}
+
+zst_mode!(Border, EdgeKind::Border);
+zst_mode!(ClampToEdge, EdgeKind::Clamp);
+zst_mode!(Repeat, EdgeKind::Repeat);
+zst_mode!(MirroredRepeat, EdgeKind::Mirror);
+
+impl sealed::Sealed for EdgeKind {}
+impl EdgeMode for EdgeKind {
+    #[inline(always)]
+    fn kind(self) -> EdgeKind {
+        self
     }
 }
 
-impl EdgeMode for ClampToEdge {
-    const NAME: &'static str = "clamp";
-    #[inline]
-    fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
-        if lo >= 0 && hi <= (n as i128) << f {
-            AxisPlacement::InRange(lo, hi)
-        } else {
-            AxisPlacement::Outside(lo, hi)
+/// One in-range piece of a split axis: `[lo, hi)` inside `[0, n 2^F]`, counted `mult` times;
+/// `unit` pieces are one texel wide and stand for a clamped run `mult` raw units long, so their
+/// contribution is divided by `2^F` (exactly: a one-texel-wide integral is a multiple of `2^F`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct AxisPiece {
+    pub lo: i64,
+    pub hi: i64,
+    pub mult: u64,
+    pub unit: bool,
+}
+
+/// At most three pieces.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct AxisPieces {
+    pieces: [AxisPiece; 3],
+    len: usize,
+}
+
+impl AxisPieces {
+    fn push(&mut self, lo: i64, hi: i64, mult: u64, unit: bool) {
+        if hi <= lo || mult == 0 {
+            return;
+        }
+        if let Some(p) = self.pieces.get_mut(self.len) {
+            *p = AxisPiece { lo, hi, mult, unit };
+            self.len += 1;
         }
     }
-    fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms {
-        let s = 1i128 << f;
-        let end = (n as i128) << f;
-        let mut t = AxisTerms::default();
-        if x < 0 {
-            // integral_0^x of the constant first texel = x * t(0) = x * S(1).
-            t.push(1, x);
-        } else if x > end {
-            // S(n) + (x - n) * t(n - 1), and t(n - 1) = S(n) - S(n - 1).
-            let over = x - end;
-            t.push(n, s + over);
-            t.push(n - 1, -over);
-        } else {
-            return AxisTerms::lerp(x, n, f, 1);
-        }
-        t
-    }
-    fn texel_index(i: i64, n: usize) -> Option<usize> {
-        Some(i.clamp(0, n as i64 - 1) as usize)
+
+    pub fn as_slice(&self) -> &[AxisPiece] {
+        self.pieces.get(..self.len).unwrap_or(&[])
     }
 }
 
-impl EdgeMode for Repeat {
-    const NAME: &'static str = "repeat";
-    #[inline]
-    fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
-        let period = (n as i128) << f;
-        let shift = lo.div_euclid(period) * period;
-        let (lo, hi) = (lo - shift, hi - shift);
-        if hi <= period {
-            AxisPlacement::InRange(lo, hi)
-        } else {
-            AxisPlacement::Outside(lo, hi)
-        }
-    }
-    fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms {
-        // x = q * n + r: q whole periods plus the prefix up to r.
-        let period = (n as i128) << f;
-        let q = x.div_euclid(period);
-        let r = x.rem_euclid(period);
-        let mut t = AxisTerms::lerp(r, n, f, 1);
-        t.push(n, q << f);
-        t
-    }
-    fn texel_index(i: i64, n: usize) -> Option<usize> {
-        Some(i.rem_euclid(n as i64) as usize)
-    }
-}
-
-impl EdgeMode for MirroredRepeat {
-    const NAME: &'static str = "mirror";
-    #[inline]
-    fn place_axis(lo: i128, hi: i128, n: usize, f: u32) -> AxisPlacement {
-        let half = (n as i128) << f;
-        let period = 2 * half;
-        let shift = lo.div_euclid(period) * period;
-        let (lo, hi) = (lo - shift, hi - shift);
-        if hi <= half {
-            AxisPlacement::InRange(lo, hi)
-        } else if lo >= half && hi <= period {
-            AxisPlacement::InRange(period - hi, period - lo)
-        } else {
-            AxisPlacement::Outside(lo, hi)
-        }
-    }
-    fn axis_terms(x: i128, n: usize, f: u32) -> AxisTerms {
-        // x = q * 2n + r. Each whole period adds 2 S(n); r <= n adds S(r); r > n adds
-        // S(n) + (S(n) - S(2n - r)) = 2 S(n) - S(2n - r).
-        let half = (n as i128) << f;
-        let period = 2 * half;
-        let q = x.div_euclid(period);
-        let r = x.rem_euclid(period);
-        let mut t;
-        let mut whole = 2 * q;
-        if r <= half {
-            t = AxisTerms::lerp(r, n, f, 1);
-        } else {
-            t = AxisTerms::lerp(period - r, n, f, -1);
-            whole += 2;
-        }
-        t.push(n, whole << f);
-        t
-    }
-    fn texel_index(i: i64, n: usize) -> Option<usize> {
-        let r = i.rem_euclid(2 * n as i64);
-        Some(if r < n as i64 {
-            r
-        } else {
-            2 * n as i64 - 1 - r
-        } as usize)
-    }
-}
-
-/// Places a box: both axes in range, empty, or the weighted path.
-pub(crate) enum Placement {
-    InRange(RawBox),
+/// Where one axis of a box lands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum AxisPlan {
+    /// An equivalent interval inside `[0, n 2^F]`.
+    InRange(i64, i64),
+    /// The interval sums to zero (clipped away by [`Border`]).
     Empty,
-    Outside(RawBox),
+    /// Pieces, each in range (see the module docs).
+    Split(AxisPieces),
 }
 
-#[inline]
-pub(crate) fn place<M: EdgeMode>(b: RawBox, w: usize, h: usize, f: u32) -> Placement {
-    use AxisPlacement as A;
-    let px = M::place_axis(b.x0, b.x1, w, f);
-    let py = M::place_axis(b.y0, b.y1, h, f);
-    match (px, py) {
-        (A::Empty, _) | (_, A::Empty) => Placement::Empty,
-        (A::InRange(x0, x1), A::InRange(y0, y1)) => Placement::InRange(RawBox { x0, y0, x1, y1 }),
-        (A::InRange(x0, x1) | A::Outside(x0, x1), A::InRange(y0, y1) | A::Outside(y0, y1)) => {
-            Placement::Outside(RawBox { x0, y0, x1, y1 })
+/// The width `hi - lo` of an interval with `hi >= lo`, exact in `u64`.
+#[inline(always)]
+pub(crate) fn width_u64(lo: i64, hi: i64) -> u64 {
+    (hi as u64).wrapping_sub(lo as u64)
+}
+
+/// `(q, r)` with `x = q p + r`, `0 <= r < p`, for `p > 0`: comparisons only when `x` lies in
+/// `[0, p)` or `[p, 2p)`, else one division.
+#[inline(always)]
+fn periods(x: i64, p: i64) -> (i64, i64) {
+    if x >= 0 && x < p {
+        (0, x)
+    } else if x >= p && x - p < p {
+        (1, x - p)
+    } else {
+        (x.div_euclid(p), x.rem_euclid(p))
+    }
+}
+
+/// Places `[lo, hi)` (raw, `hi >= lo`) against an axis of `n >= 1` texels at `F = f`
+/// (`n 2^F <= 2^55`, guaranteed by the layouts' size check and `F <= 24`).
+#[inline(always)]
+pub(crate) fn place_axis(
+    kind: EdgeKind,
+    lo: i64,
+    hi: i64,
+    n: usize,
+    f: u32,
+) -> Result<AxisPlan, Error> {
+    let p = (n as i64) << f;
+    if lo >= 0 && hi <= p {
+        return Ok(AxisPlan::InRange(lo, hi));
+    }
+    match kind {
+        EdgeKind::Border => {
+            let (lo, hi) = (lo.clamp(0, p), hi.clamp(0, p));
+            Ok(if lo >= hi {
+                AxisPlan::Empty
+            } else {
+                AxisPlan::InRange(lo, hi)
+            })
+        }
+        EdgeKind::Clamp => Ok(split_clamp(lo, hi, p, f)),
+        EdgeKind::Repeat | EdgeKind::Mirror => place_periodic(kind == EdgeKind::Mirror, lo, hi, p),
+    }
+}
+
+#[inline(never)]
+fn split_clamp(lo: i64, hi: i64, p: i64, f: u32) -> AxisPlan {
+    let one = 1i64 << f;
+    let mut s = AxisPieces::default();
+    if lo < 0 {
+        s.push(0, one, width_u64(lo, hi.min(0)), true);
+    }
+    s.push(lo.max(0), hi.min(p), 1, false);
+    if hi > p {
+        s.push(p - one, p, width_u64(lo.max(p), hi), true);
+    }
+    AxisPlan::Split(s)
+}
+
+/// `Repeat` (period `p`) or `MirroredRepeat` (half-period `p`, odd halves reflected).
+#[inline(always)]
+fn place_periodic(mirror: bool, lo: i64, hi: i64, p: i64) -> Result<AxisPlan, Error> {
+    let (q0, r0) = periods(lo, p);
+    let odd = mirror && q0 & 1 != 0;
+    // Reflection of [a, b) inside an odd half: [p - b, p - a).
+    let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
+    let d = width_u64(lo, hi);
+    let end = (r0 as u64)
+        .checked_add(d)
+        .ok_or(Error::CoordinateOutOfRange)?;
+    if end <= p as u64 {
+        let (a, b) = map(r0, end as i64, odd);
+        return Ok(AxisPlan::InRange(a, b));
+    }
+    Ok(split_periodic(mirror, odd, r0, end - p as u64, p))
+}
+
+#[inline(never)]
+fn split_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> AxisPlan {
+    let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
+    let mut s = AxisPieces::default();
+    let (a, b) = map(r0, p, odd);
+    s.push(a, b, 1, false);
+    let pu = p as u64;
+    let (whole, tail) = if rest <= pu {
+        (0, rest)
+    } else {
+        (rest / pu, rest % pu)
+    };
+    s.push(0, p, whole, false);
+    // The tail lies in the half (period) after the head and the whole ones.
+    let tail_odd = mirror && (odd ^ (whole & 1 == 0));
+    let (a, b) = map(0, tail as i64, tail_odd);
+    s.push(a, b, 1, false);
+    AxisPlan::Split(s)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// The extended texture's prefix sum of a 1-D texture along one axis, by summing texels:
+    /// the reference for the pieces.
+    fn direct(kind: EdgeKind, t: &[u64], lo: i64, hi: i64) -> u64 {
+        (lo..hi)
+            .map(|i| kind.texel_index(i, t.len()).map_or(0, |k| t[k]))
+            .sum()
+    }
+
+    fn by_plan(kind: EdgeKind, t: &[u64], lo: i64, hi: i64) -> u64 {
+        // f = 0: a piece [a, b) sums t[a..b].
+        let seg = |a: i64, b: i64| -> u64 { t[a as usize..b as usize].iter().sum() };
+        match place_axis(kind, lo, hi, t.len(), 0).unwrap() {
+            AxisPlan::Empty => 0,
+            AxisPlan::InRange(a, b) => seg(a, b),
+            AxisPlan::Split(s) => s
+                .as_slice()
+                .iter()
+                .map(|pc| seg(pc.lo, pc.hi) * pc.mult)
+                .sum(),
+        }
+    }
+
+    #[test]
+    fn pieces_sum_like_the_extended_texture() {
+        for n in 1..6usize {
+            let t: Vec<u64> = (0..n as u64).map(|i| 1 + i * i * 7).collect();
+            for kind in EdgeKind::ALL {
+                for lo in -25i64..25 {
+                    for hi in lo..lo + 30 {
+                        assert_eq!(
+                            by_plan(kind, &t, lo, hi),
+                            direct(kind, &t, lo, hi),
+                            "{kind:?} n={n} [{lo},{hi})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn at_most_three_pieces_and_in_range() {
+        for kind in EdgeKind::ALL {
+            for (lo, hi) in [
+                (-1000i64, 1000i64),
+                (i64::MIN / 2, i64::MAX / 2),
+                (-7, 3),
+                (5, 9),
+            ] {
+                if let Ok(AxisPlan::Split(s)) = place_axis(kind, lo, hi, 4, 0) {
+                    assert!(s.as_slice().len() <= 3);
+                    for p in s.as_slice() {
+                        assert!(0 <= p.lo && p.lo < p.hi && p.hi <= 4, "{kind:?} {p:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn texel_index_zero_width_axis_is_none() {
+        // Regression: the public edge methods panicked on a zero-width axis (fuzz finding,
+        // edge.rs:173, 182, 200, 239 before the sealed API).
+        for kind in EdgeKind::ALL {
+            assert_eq!(kind.texel_index(3, 0), None);
+            assert_eq!(kind.texel_index(i64::MIN, 0), None);
+        }
+        assert_eq!(EdgeKind::Mirror.texel_index(i64::MIN, 3), Some(1));
+        assert_eq!(EdgeKind::Repeat.texel_index(i64::MAX, 3), Some(1));
+        assert_eq!(EdgeKind::Clamp.texel_index(i64::MIN, 3), Some(0));
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for k in EdgeKind::ALL {
+            assert_eq!(EdgeKind::from_name(k.name()), Some(k));
         }
     }
 }

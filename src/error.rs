@@ -112,6 +112,10 @@ pub enum Error {
         /// `k` given
         bits: u32,
     },
+    /// A lookup on lent storage (a table or layout wrapped without full validation, such as
+    /// [`crate::layouts::Tiled::from_words`]) produced a negative box sum: the storage is
+    /// corrupt. Valid storage never gives this.
+    CorruptStorage,
     /// Texel widths must be 1 to 16 bits.
     InvalidTexelBits {
         /// the width given
@@ -183,6 +187,10 @@ impl fmt::Display for Error {
             Error::InvalidModulus { bits } => write!(
                 f,
                 "modular width {bits} must be at least the texel bits and at most the value type's bits"
+            ),
+            Error::CorruptStorage => write!(
+                f,
+                "lookup gave a negative box sum: the lent table storage is corrupt"
             ),
             Error::InvalidTexelBits { bits } => {
                 write!(f, "texel width {bits} bits is outside 1..=16")

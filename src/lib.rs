@@ -61,17 +61,21 @@ mod rect;
 pub mod table;
 pub mod texel;
 mod texture;
+pub mod wide;
 pub mod width;
 
 pub use cost::{Counter, NoCount, Tally};
-pub use edge::{Border, ClampToEdge, EdgeMode, MirroredRepeat, Repeat};
+pub use edge::{Border, ClampToEdge, EdgeKind, EdgeMode, MirroredRepeat, Repeat};
 pub use error::{Error, Quantity};
 pub use layouts::Layout;
-pub use lookup::{BoxLookup, BoxSum, Form, Paper, Shortcut, ShortcutMean, Stable};
-pub use rect::{Coord, Rect};
+pub use lookup::{
+    BoxLookup, BoxSum, Form, FormKind, Paper, Shortcut, ShortcutMean, Stable, WideOf,
+};
+pub use rect::{Coord, FracBits, Rect};
 pub use table::{RowStreamBuilder, Sat};
-pub use texel::{Entry, Texel};
+pub use texel::{Acc, Entry, Texel};
 pub use texture::Texture;
+pub use wide::Wide;
 
 /// The default corner type: `F = 8` fractional bits, like a GPU's sub-texel precision
 /// (`fixed::types::I24F8`, range about +-8.4 million texels). Any `fixed` type whose raw bits fit

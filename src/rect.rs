@@ -64,12 +64,72 @@ impl<X: Fixed> Rect<X> {
     }
 }
 
-/// (Crate-internal; unnameable outside.) A box in raw fixed-point units (`value * 2^F`), wide enough that shifts by whole periods and
-/// reflections cannot overflow.
+/// The fractional bits `F` of a lookup's corners, checked once: `0 <= F <=`
+/// [`MAX_FRAC_BITS`](crate::width::MAX_FRAC_BITS).
+///
+/// The lookups take corners as raw fixed-point integers (`value * 2^F`, [`Rect<i64>`]) with
+/// their `F` as a value ([`crate::BoxLookup::box_sum_raw`]), so one compiled lookup serves every
+/// `F`; the `fixed`-typed API ([`crate::BoxLookup::box_sum`]) is a thin wrapper that takes `F`
+/// from the type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FracBits(u32);
+
+impl FracBits {
+    /// Integer corners (`F = 0`).
+    pub const ZERO: FracBits = FracBits(0);
+
+    /// `F`, refused with [`Error::FracBitsUnsupported`] above
+    /// [`MAX_FRAC_BITS`](crate::width::MAX_FRAC_BITS).
+    pub const fn new(frac_bits: u32) -> Result<Self, Error> {
+        if frac_bits > crate::width::MAX_FRAC_BITS {
+            Err(Error::FracBitsUnsupported {
+                frac_bits,
+                max: crate::width::MAX_FRAC_BITS,
+            })
+        } else {
+            Ok(FracBits(frac_bits))
+        }
+    }
+
+    /// `F` of the coordinate type `X`.
+    pub const fn of<X: Coord>() -> Result<Self, Error> {
+        Self::new(X::FRAC_BITS)
+    }
+
+    /// `F`.
+    pub const fn get(self) -> u32 {
+        self.0
+    }
+}
+
+impl<X: Coord> Rect<X> {
+    /// The corners as raw integers (`value * 2^F`), for [`crate::BoxLookup::box_sum_raw`].
+    #[inline(always)]
+    pub fn to_raw(&self) -> Rect<i64> {
+        Rect::new(self.x0.raw(), self.y0.raw(), self.x1.raw(), self.y1.raw())
+    }
+}
+
+impl Rect<i32> {
+    /// The corners as `i64` (integer corners are raw coordinates with `F = 0`).
+    #[inline(always)]
+    pub fn to_raw_int(&self) -> Rect<i64> {
+        Rect::new(
+            i64::from(self.x0),
+            i64::from(self.y0),
+            i64::from(self.x1),
+            i64::from(self.y1),
+        )
+    }
+}
+
+/// (Crate-internal: public in a private module, so unnameable outside.) A box in raw fixed-point units (`value * 2^F`) inside
+/// `[0, w 2^F] x [0, h 2^F]` once placed (at most `2^31 * 2^24`, far inside `i64`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawBox {
-    pub x0: i128,
-    pub y0: i128,
-    pub x1: i128,
-    pub y1: i128,
+    pub x0: i64,
+    pub y0: i64,
+    pub x1: i64,
+    pub y1: i64,
 }

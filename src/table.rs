@@ -48,9 +48,9 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     match above {
         None => {
             for (o, t) in out.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-                for c in 0..C {
-                    run[c] = add::<E, CHECKED>(run[c], E::from(t[c].to_u16()))?;
-                    o[c] = run[c];
+                for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+                    *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+                    *o = *r;
                 }
             }
         }
@@ -60,9 +60,9 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
                 .zip(texels.chunks_exact(C))
                 .zip(above.chunks_exact(C))
             {
-                for c in 0..C {
-                    run[c] = add::<E, CHECKED>(run[c], E::from(t[c].to_u16()))?;
-                    o[c] = add::<E, CHECKED>(run[c], a[c])?;
+                for (((o, t), a), r) in o.iter_mut().zip(t).zip(a).zip(run.iter_mut()) {
+                    *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+                    *o = add::<E, CHECKED>(*r, *a)?;
                 }
             }
         }
@@ -71,23 +71,32 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
 }
 
 /// `w * h * C` entries, or an error if that overflows `usize` (a 32-bit target, a corrupt header).
-pub(crate) fn entries_needed<const C: usize>(width: usize, height: usize) -> Result<usize, Error> {
-    width
-        .checked_mul(height)
-        .and_then(|v| v.checked_mul(C))
-        .ok_or(Error::TextureTooLarge {
-            dimension: width.max(height),
-        })
+pub(crate) const fn entries_needed<const C: usize>(
+    width: usize,
+    height: usize,
+) -> Result<usize, Error> {
+    let too_large = Error::TextureTooLarge {
+        dimension: if width > height { width } else { height },
+    };
+    match width.checked_mul(height) {
+        Some(v) => match v.checked_mul(C) {
+            Some(n) => Ok(n),
+            None => Err(too_large),
+        },
+        None => Err(too_large),
+    }
 }
 
 /// Exact bits of the largest channel total of a texture (the error path of the checked build).
 fn actual_total_bits<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> u32 {
+    // At most 2^31 x 2^31 texels of 16 bits x 4 channels: below 2^80, so u128 (an error path,
+    // never a lookup's) cannot overflow; saturating anyway.
     let mut totals = [0u128; C];
     for y in 0..texture.height() {
         if let Some(row) = texture.row(y) {
             for px in row.chunks_exact(C) {
-                for c in 0..C {
-                    totals[c] += px[c].to_u16() as u128;
+                for (t, p) in totals.iter_mut().zip(px) {
+                    *t = t.saturating_add(u128::from(p.to_u16()));
                 }
             }
         }
@@ -132,15 +141,12 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         storage: &'a mut [E],
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
-        let row_len = w * C; // checked by `Texture`
         let needed = entries_needed::<C>(w, h)?;
-        if storage.len() < needed {
-            return Err(Error::StorageTooSmall {
-                needed,
-                got: storage.len(),
-            });
-        }
-        let table = &mut storage[..needed];
+        let row_len = needed / h; // = w * C; `h >= 1` by `Texture`
+        let got = storage.len();
+        let Some(table) = storage.get_mut(..needed) else {
+            return Err(Error::StorageTooSmall { needed, got });
+        };
         let overflow = Error::TooWide {
             what: Quantity::Entry,
             bits_needed: E::BITS + 1,
@@ -150,26 +156,57 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         let mut rest: &mut [E] = table;
         for y in 0..h {
             let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
-            let (out, tail) = rest.split_at_mut(row_len);
+            let Some((out, tail)) = rest.split_at_mut_checked(row_len) else {
+                return Err(Error::StorageTooSmall { needed, got });
+            };
             build_row::<T, E, C, CHECKED>(texels, above, out).map_err(|_| overflow)?;
             above = Some(out);
             rest = tail;
         }
-        let table: &'a [E] = &storage[..needed];
-        Ok(Self::from_parts(table, w, h, T::BITS))
+        let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
+        Self::from_parts(table, w, h, T::BITS)
     }
 
-    fn from_parts(table: &'a [E], width: usize, height: usize, texel_bits: u32) -> Self {
-        let mut total = [E::ZERO; C];
-        let last = (width * height - 1) * C;
-        total.copy_from_slice(&table[last..last + C]);
-        Sat {
+    /// The table over exactly `w * h * C` entries; its last entry per channel is the total.
+    fn from_parts(
+        table: &'a [E],
+        width: usize,
+        height: usize,
+        texel_bits: u32,
+    ) -> Result<Self, Error> {
+        let total = table
+            .last_chunk::<C>()
+            .copied()
+            .ok_or(Error::StorageTooSmall {
+                needed: C,
+                got: table.len(),
+            })?;
+        Ok(Sat {
             table,
             width,
             height,
             texel_bits,
             total,
+        })
+    }
+
+    /// Entries a `width x height` table with `C` channels needs, for sizing a `static` at
+    /// compile time: `w * h * C`, or [`Error::TextureTooLarge`] if that overflows `usize` (or a
+    /// side is zero or above `2^31 - 1`).
+    ///
+    /// ```
+    /// use texsat::Sat;
+    /// const ENTRIES: usize = match Sat::<u32, 1>::entries_needed(64, 64) {
+    ///     Ok(n) => n,
+    ///     Err(_) => panic!("texture too large"),
+    /// };
+    /// static mut TABLE: [u32; ENTRIES] = [0; ENTRIES];
+    /// ```
+    pub const fn entries_needed(width: usize, height: usize) -> Result<usize, Error> {
+        if let Err(e) = check_dimensions(width, height, C) {
+            return Err(e);
         }
+        entries_needed::<C>(width, height)
     }
 
     /// Wraps a table built elsewhere (in flash, by [`RowStreamBuilder`], by an RTL model),
@@ -191,34 +228,39 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
                 got: table.len(),
             });
         }
-        let max = width::max_texel(texel_bits) as i128;
-        let at = |x: usize, y: usize, c: usize| -> i128 {
-            if x == 0 || y == 0 {
-                0
-            } else {
-                table[((y - 1) * width + (x - 1)) * C + c].to_u128() as i128
-            }
-        };
-        for y in 1..=height {
-            for x in 1..=width {
+        let table = table.get(..needed).unwrap_or(&[]);
+        // The implied texel `S(x,y) - S(x-1,y) - S(x,y-1) + S(x-1,y-1)` must lie in [0, max]:
+        // checked as `S(x,y) + S(x-1,y-1) - S(x,y-1)` (`D`) against `S(x-1,y)` (`B`), so that
+        // `B <= D <= B + max`, in the entry type with checked arithmetic (an overflow means an
+        // invalid table), and nothing wider.
+        let max = E::max_texel(texel_bits);
+        let zero_row = [E::ZERO; 0];
+        let mut above: &[E] = &zero_row;
+        for (y, row) in table.chunks_exact((width * C).max(1)).enumerate() {
+            for x in 0..width {
                 for c in 0..C {
-                    let t = at(x, y, c) - at(x - 1, y, c) - at(x, y - 1, c) + at(x - 1, y - 1, c);
-                    if t < 0 || t > max {
-                        return Err(Error::InvalidTable {
-                            x: x - 1,
-                            y: y - 1,
-                            channel: c,
-                        });
+                    let at = |r: &[E], x: usize| -> E {
+                        if x == 0 {
+                            E::ZERO
+                        } else {
+                            r.get((x - 1) * C + c).copied().unwrap_or(E::ZERO)
+                        }
+                    };
+                    let (s, sl, su, sul) =
+                        (at(row, x + 1), at(row, x), at(above, x + 1), at(above, x));
+                    let ok = s
+                        .checked_add(sul)
+                        .and_then(|d| d.checked_sub(su))
+                        .and_then(|d| d.checked_sub(sl))
+                        .is_some_and(|t| t <= max);
+                    if !ok {
+                        return Err(Error::InvalidTable { x, y, channel: c });
                     }
                 }
             }
+            above = row;
         }
-        Ok(Self::from_parts(
-            &table[..needed],
-            width,
-            height,
-            texel_bits,
-        ))
+        Self::from_parts(table, width, height, texel_bits)
     }
 
     /// Width in texels.
@@ -251,7 +293,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     pub fn total_bits(&self) -> u32 {
         self.total
             .iter()
-            .map(|t| bits_of(t.to_u128()))
+            .map(|t| crate::width::bits_of_u64(t.to_u64()))
             .max()
             .unwrap_or(0)
     }
@@ -272,14 +314,20 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     }
 
     /// `S(x, y)` for `x <= w`, `y <= h` (callers guarantee the range).
+    ///
+    /// No panic path: the index is in range by construction (`x <= w`, `y <= h` and the table
+    /// holds `w h C` entries); an index outside would read as zero.
     #[inline(always)]
     pub(crate) fn s(&self, x: usize, y: usize) -> [E; C] {
-        let mut out = [E::ZERO; C];
-        if x != 0 && y != 0 {
-            let base = ((y - 1) * self.width + (x - 1)) * C;
-            out.copy_from_slice(&self.table[base..base + C]);
+        if x == 0 || y == 0 {
+            return [E::ZERO; C];
         }
-        out
+        let base = ((y - 1) * self.width + (x - 1)) * C;
+        self.table
+            .get(base..)
+            .and_then(|t| t.first_chunk::<C>())
+            .copied()
+            .unwrap_or([E::ZERO; C])
     }
 
     /// `S(x, y)` with its read counted (reads of the zero row and column are free).
@@ -320,12 +368,12 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
 ) -> Result<(), ()> {
     let mut run = [E::ZERO; C];
     for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-        for c in 0..C {
-            run[c] = add::<E, CHECKED>(run[c], E::from(t[c].to_u16()))?;
-            o[c] = if first {
-                run[c]
+        for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+            *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+            *o = if first {
+                *r
             } else {
-                add::<E, CHECKED>(run[c], o[c])?
+                add::<E, CHECKED>(*r, *o)?
             };
         }
     }
@@ -344,14 +392,12 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
         check_dimensions(width, height, C)?;
         width::check_entry_worst_case(texel_bits, width, height, E::BITS)?;
         let needed = entries_needed::<C>(width, 1)?;
-        if row_storage.len() < needed {
-            return Err(Error::StorageTooSmall {
-                needed,
-                got: row_storage.len(),
-            });
-        }
+        let got = row_storage.len();
+        let Some(row) = row_storage.get_mut(..needed) else {
+            return Err(Error::StorageTooSmall { needed, got });
+        };
         Ok(RowStreamBuilder {
-            row: &mut row_storage[..needed],
+            row,
             width,
             height,
             texel_bits,
@@ -365,9 +411,9 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
         if self.rows_done >= self.height {
             return Err(Error::TooManyRows);
         }
-        if texels.len() != self.width * C {
+        if texels.len() != self.row.len() {
             return Err(Error::RowLength {
-                expected: self.width * C,
+                expected: self.row.len(),
                 got: texels.len(),
             });
         }
@@ -389,6 +435,11 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
         .map_err(|_| overflow)?;
         self.rows_done += 1;
         Ok(self.row)
+    }
+
+    /// Width of the texture in texels.
+    pub fn width(&self) -> usize {
+        self.width
     }
 
     /// Rows pushed so far.

@@ -2,8 +2,8 @@
 //!
 //! A [`Texel`] is an unsigned integer sample (`u8`, `u16`). An [`Entry`] is the unsigned integer a
 //! table stores per channel (`u16`, `u32`, `u64`); each entry type names a signed accumulator
-//! ([`Entry::Acc`]) wide enough for the lookups the width analysis accepts (`i64` for `u16` and
-//! `u32`, `i128` for `u64`).
+//! ([`Entry::Acc`]) exactly as wide as the width analysis needs: `i32` for `u16`, `i64` for
+//! `u32`, and `i128` only for `u64` entries.
 
 use core::ops::{Add, Mul, Shl, Sub};
 
@@ -43,7 +43,9 @@ impl Texel for u16 {
     }
 }
 
-/// The signed accumulator of the lookups: `i64` or `i128`.
+/// The signed accumulator of the lookups: `i32` for `u16` tables, `i64` for `u32` tables,
+/// `i128` only for `u64` tables (where the width proof shows 64 bits cannot hold an
+/// intermediate). Sealed: the crate's width proofs are written for these three.
 ///
 /// Only the ring operations are used; the width analysis proves before each lookup that no
 /// intermediate leaves the type's range (see `docs/design.md`, "Lookup widths").
@@ -54,88 +56,102 @@ pub trait Acc:
     + Sub<Output = Self>
     + Mul<Output = Self>
     + Shl<u32, Output = Self>
+    + sealed::Sealed
     + 'static
 {
-    /// Value bits (the sign bit excluded): 63 or 127.
+    /// Value bits (the sign bit excluded): 31, 63 or 127.
     const VALUE_BITS: u32;
     /// Zero.
     const ZERO: Self;
+    /// The unsigned word a non-negative result is returned in ([`BoxSum`](crate::BoxSum)'s
+    /// sums and means): `u64` for `i32` and `i64`, `u128` for `i128`.
+    type Wide: Wide;
     /// A small non-negative integer (a fraction numerator, at most `2^24`).
     fn from_u32(v: u32) -> Self;
-    /// Widen to `i128`.
-    fn to_i128(self) -> i128;
+    /// The value as [`Acc::Wide`], or `None` if it is negative.
+    fn to_wide(self) -> Option<Self::Wide>;
     /// Wrapping addition (used only where the width proof rules out wrapping, or where the
-    /// arithmetic is modular on purpose).
+    /// arithmetic is modular on purpose, or on corrupt lent storage, where it keeps the no-panic
+    /// guarantee).
     fn wrapping_add(self, o: Self) -> Self;
     /// Wrapping subtraction (see [`Acc::wrapping_add`]).
     fn wrapping_sub(self, o: Self) -> Self;
     /// Wrapping multiplication (see [`Acc::wrapping_add`]).
     fn wrapping_mul(self, o: Self) -> Self;
+    /// Wrapping left shift by `s < VALUE_BITS` (see [`Acc::wrapping_add`]).
+    fn wrapping_shl(self, s: u32) -> Self;
     /// The low `k` bits, as a non-negative value (`k` below the type's width).
     fn low_bits(self, k: u32) -> Self;
 }
 
-impl Acc for i64 {
-    const VALUE_BITS: u32 = 63;
-    const ZERO: Self = 0;
-    #[inline(always)]
-    fn from_u32(v: u32) -> Self {
-        v as i64
-    }
-    #[inline(always)]
-    fn to_i128(self) -> i128 {
-        self as i128
-    }
-    #[inline(always)]
-    fn wrapping_add(self, o: Self) -> Self {
-        i64::wrapping_add(self, o)
-    }
-    #[inline(always)]
-    fn wrapping_sub(self, o: Self) -> Self {
-        i64::wrapping_sub(self, o)
-    }
-    #[inline(always)]
-    fn wrapping_mul(self, o: Self) -> Self {
-        i64::wrapping_mul(self, o)
-    }
-    #[inline(always)]
-    fn low_bits(self, k: u32) -> Self {
-        self & ((1 << k) - 1)
-    }
+macro_rules! impl_acc {
+    ($t:ty, $vb:expr, $wide:ty) => {
+        impl sealed::Sealed for $t {}
+        impl Acc for $t {
+            const VALUE_BITS: u32 = $vb;
+            const ZERO: Self = 0;
+            type Wide = $wide;
+            #[inline(always)]
+            fn from_u32(v: u32) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn to_wide(self) -> Option<$wide> {
+                if self < 0 {
+                    None
+                } else {
+                    Some(self as $wide)
+                }
+            }
+            #[inline(always)]
+            fn wrapping_add(self, o: Self) -> Self {
+                <$t>::wrapping_add(self, o)
+            }
+            #[inline(always)]
+            fn wrapping_sub(self, o: Self) -> Self {
+                <$t>::wrapping_sub(self, o)
+            }
+            #[inline(always)]
+            fn wrapping_mul(self, o: Self) -> Self {
+                <$t>::wrapping_mul(self, o)
+            }
+            #[inline(always)]
+            fn wrapping_shl(self, s: u32) -> Self {
+                <$t>::wrapping_shl(self, s)
+            }
+            #[inline(always)]
+            fn low_bits(self, k: u32) -> Self {
+                if k >= <$t>::BITS - 1 {
+                    self
+                } else {
+                    self & ((1 << k) - 1)
+                }
+            }
+        }
+    };
 }
 
-impl Acc for i128 {
-    const VALUE_BITS: u32 = 127;
-    const ZERO: Self = 0;
-    #[inline(always)]
-    fn from_u32(v: u32) -> Self {
-        v as i128
-    }
-    #[inline(always)]
-    fn to_i128(self) -> i128 {
-        self
-    }
-    #[inline(always)]
-    fn wrapping_add(self, o: Self) -> Self {
-        i128::wrapping_add(self, o)
-    }
-    #[inline(always)]
-    fn wrapping_sub(self, o: Self) -> Self {
-        i128::wrapping_sub(self, o)
-    }
-    #[inline(always)]
-    fn wrapping_mul(self, o: Self) -> Self {
-        i128::wrapping_mul(self, o)
-    }
-    #[inline(always)]
-    fn low_bits(self, k: u32) -> Self {
-        self & ((1 << k) - 1)
-    }
+impl_acc!(i32, 31, u64);
+impl_acc!(i64, 63, u64);
+impl_acc!(i128, 127, u128);
+
+pub use crate::wide::Wide;
+
+pub(crate) mod sealed {
+    /// Keeps the numeric traits closed: the width proofs cover exactly the implemented types.
+    pub trait Sealed {}
 }
 
 /// An unsigned table entry.
 pub trait Entry:
-    Copy + Default + Ord + Add<Output = Self> + Sub<Output = Self> + From<u16> + 'static
+    Copy
+    + Default
+    + Ord
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + From<u16>
+    + sealed::Sealed
+    + 'static
 {
     /// Bits per entry and channel.
     const BITS: u32;
@@ -145,6 +161,10 @@ pub trait Entry:
     type Acc: Acc;
     /// Checked addition (the data-dependent build).
     fn checked_add(self, other: Self) -> Option<Self>;
+    /// Checked subtraction (validating lent tables).
+    fn checked_sub(self, other: Self) -> Option<Self>;
+    /// The largest texel of `texel_bits` bits, `2^b - 1`, saturating at the entry's maximum.
+    fn max_texel(texel_bits: u32) -> Self;
     /// The entry in the accumulator type (always lossless).
     fn to_acc(self) -> Self::Acc;
     /// The entry as `u128` (always lossless).
@@ -163,6 +183,7 @@ pub trait Entry:
 
 macro_rules! impl_entry {
     ($t:ty, $acc:ty) => {
+        impl sealed::Sealed for $t {}
         impl Entry for $t {
             const BITS: u32 = <$t>::BITS;
             const ZERO: Self = 0;
@@ -170,6 +191,18 @@ macro_rules! impl_entry {
             #[inline(always)]
             fn checked_add(self, other: Self) -> Option<Self> {
                 <$t>::checked_add(self, other)
+            }
+            #[inline(always)]
+            fn checked_sub(self, other: Self) -> Option<Self> {
+                <$t>::checked_sub(self, other)
+            }
+            #[inline(always)]
+            fn max_texel(texel_bits: u32) -> Self {
+                if texel_bits >= <$t>::BITS {
+                    <$t>::MAX
+                } else {
+                    (1 << texel_bits) - 1
+                }
             }
             #[inline(always)]
             fn to_acc(self) -> $acc {
@@ -207,6 +240,6 @@ macro_rules! impl_entry {
     };
 }
 
-impl_entry!(u16, i64);
+impl_entry!(u16, i32);
 impl_entry!(u32, i64);
 impl_entry!(u64, i128);

@@ -8,13 +8,17 @@ pub(crate) const MAX_DIMENSION: usize = (1 << 31) - 1;
 
 /// The size check every table, layout and texture shares: both sides in `1..=2^31 - 1` and at
 /// least one channel.
-pub(crate) fn check_dimensions(width: usize, height: usize, channels: usize) -> Result<(), Error> {
+pub(crate) const fn check_dimensions(
+    width: usize,
+    height: usize,
+    channels: usize,
+) -> Result<(), Error> {
     if width == 0 || height == 0 || channels == 0 {
         return Err(Error::EmptyTexture);
     }
     if width > MAX_DIMENSION || height > MAX_DIMENSION {
         return Err(Error::TextureTooLarge {
-            dimension: width.max(height),
+            dimension: if width > height { width } else { height },
         });
     }
     Ok(())

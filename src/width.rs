@@ -34,6 +34,11 @@ pub const fn bits_of(v: u128) -> u32 {
     128 - v.leading_zeros()
 }
 
+/// [`bits_of`] for `u64` (what the lookups' paths use: no 128-bit operation).
+pub const fn bits_of_u64(v: u64) -> u32 {
+    64 - v.leading_zeros()
+}
+
 /// `ceil(log2(v))` for `v >= 1` (and `0` for `v <= 1`).
 pub const fn ceil_log2(v: u128) -> u32 {
     if v <= 1 {
@@ -49,6 +54,15 @@ pub const fn max_texel(texel_bits: u32) -> u128 {
         u128::MAX
     } else {
         (1u128 << texel_bits) - 1
+    }
+}
+
+/// The largest texel of `texel_bits` bits in `u64` (`u64::MAX` from 64 bits on).
+pub const fn max_texel_u64(texel_bits: u32) -> u64 {
+    if texel_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << texel_bits) - 1
     }
 }
 
@@ -80,7 +94,7 @@ pub const fn entry_bits_worst_case(texel_bits: u32, width: usize, height: usize)
 /// The conservative textbook bound `b + ceil(log2(w * h))`. Never smaller than
 /// [`entry_bits_worst_case`], sometimes one larger; kept to document the difference.
 pub const fn entry_bits_naive(texel_bits: u32, width: usize, height: usize) -> u32 {
-    texel_bits.saturating_add(ceil_log2(width as u128 * height as u128))
+    texel_bits.saturating_add(ceil_log2((width as u128).saturating_mul(height as u128)))
 }
 
 /// Refuses a table whose worst case does not fit `entry_bits`.
@@ -117,7 +131,7 @@ pub const MAX_FRAC_BITS: u32 = 24;
 /// difference is non-negative and every partial result lies in `[0, total * 2^2F]`; the final
 /// `(V11 - V10) - (V01 - V00)` is a difference of non-negative, ordered values.
 pub const fn paper_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
-    total_bits + 2 * frac_bits
+    total_bits.saturating_add(frac_bits.saturating_mul(2))
 }
 
 /// Accumulator bits (sign excluded) of the [`crate::Stable`] lookup: `total_bits + 2F + 1`.
@@ -131,7 +145,45 @@ pub const fn paper_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
 /// strip lies in `[0, 2^F strip]`. So `E << F` lies in `[-(L + T) 2^2F, (Rt + Bm) 2^2F]`, every
 /// partial sum in `(-2 total 2^2F, 2 total 2^2F)`, and `|K| <= 2 m 2^2F`.
 pub const fn stable_acc_bits(total_bits: u32, frac_bits: u32) -> u32 {
-    total_bits + 2 * frac_bits + 1
+    total_bits
+        .saturating_add(frac_bits.saturating_mul(2))
+        .saturating_add(1)
+}
+
+/// Accumulator value bits of each table entry type: `u16` tables compute in `i32` (31 value
+/// bits), `u32` tables in `i64` (63), `u64` tables in `i128` (127).
+pub const fn acc_value_bits(entry_bits: u32) -> u32 {
+    if entry_bits <= 16 {
+        31
+    } else if entry_bits <= 32 {
+        63
+    } else {
+        127
+    }
+}
+
+/// The largest `F` a lookup in `form` allows on a table whose largest entry has `total_bits`
+/// bits, computing in an accumulator of `acc_value_bits` value bits (see [`acc_value_bits`]),
+/// capped at [`MAX_FRAC_BITS`]; `None` if not even `F = 0` fits. From [`paper_acc_bits`]
+/// (`total + 2F <= acc`) and [`stable_acc_bits`] (`total + 2F + 1 <= acc`).
+///
+/// For full tables: a `u16` table (16-bit total) allows `F <= 7` in both forms; a `u32` table
+/// (32-bit total) `F <= 15`; a `u64` table (64-bit total) `F <= 24` (the cap). Tabulated in
+/// `docs/design.md`.
+pub const fn max_frac_bits(
+    form: crate::FormKind,
+    total_bits: u32,
+    acc_value_bits: u32,
+) -> Option<u32> {
+    let extra = match form {
+        crate::FormKind::Paper => 0,
+        crate::FormKind::Stable => 1,
+    };
+    if total_bits + extra > acc_value_bits {
+        return None;
+    }
+    let f = (acc_value_bits - total_bits - extra) / 2;
+    Some(if f > MAX_FRAC_BITS { MAX_FRAC_BITS } else { f })
 }
 
 /// Refuses a lookup whose accumulator needs more than `available` value bits.
@@ -162,7 +214,10 @@ impl MulShape {
     /// Whether this multiply fits a signed `p x q` hardware multiplier (e.g. an FPGA DSP block,
     /// 18 x 18 or 18 x 25): unsigned operands need one extra bit each, in either orientation.
     pub const fn fits_signed(&self, p: u32, q: u32) -> bool {
-        let (a, b) = (self.data_bits + 1, self.frac_bits + 1);
+        let (a, b) = (
+            self.data_bits.saturating_add(1),
+            self.frac_bits.saturating_add(1),
+        );
         (a <= p && b <= q) || (a <= q && b <= p)
     }
 }
@@ -179,12 +234,12 @@ pub const fn paper_multiplies(
     let m = max_texel(texel_bits);
     [
         MulShape {
-            data_bits: bits_of(m * height as u128),
-            frac_bits: frac_bits + 1,
+            data_bits: bits_of(m.saturating_mul(height as u128)),
+            frac_bits: frac_bits.saturating_add(1),
         },
         MulShape {
-            data_bits: bits_of(m * width as u128) + frac_bits,
-            frac_bits: frac_bits + 1,
+            data_bits: bits_of(m.saturating_mul(width as u128)).saturating_add(frac_bits),
+            frac_bits: frac_bits.saturating_add(1),
         },
     ]
 }
@@ -193,18 +248,21 @@ pub const fn paper_multiplies(
 /// strips `<= m (max_side + 1)` times one fraction, corner texels (`b` bits) times a product of
 /// two fractions, and the fraction products themselves. All bounded by the *box*.
 pub const fn stable_multiplies(texel_bits: u32, max_side: usize, frac_bits: u32) -> [MulShape; 3] {
+    let f1 = frac_bits.saturating_add(1);
     [
         MulShape {
-            data_bits: bits_of(max_texel(texel_bits) * (max_side as u128 + 1)),
-            frac_bits: frac_bits + 1,
+            data_bits: bits_of(
+                max_texel(texel_bits).saturating_mul((max_side as u128).saturating_add(1)),
+            ),
+            frac_bits: f1,
         },
         MulShape {
             data_bits: texel_bits,
-            frac_bits: 2 * frac_bits + 1,
+            frac_bits: frac_bits.saturating_mul(2).saturating_add(1),
         },
         MulShape {
-            data_bits: frac_bits + 1,
-            frac_bits: frac_bits + 1,
+            data_bits: f1,
+            frac_bits: f1,
         },
     ]
 }
@@ -253,6 +311,54 @@ mod tests {
         assert_eq!(entry_bits_worst_case(8, 1024, 1024), 28);
         // "as little as 24 bits per entry by restricting texture images to 256 by 256".
         assert_eq!(entry_bits_worst_case(8, 256, 256), 24);
+    }
+
+    #[test]
+    fn frac_bit_limits_per_entry_word() {
+        use crate::FormKind::{Paper, Stable};
+        // Full tables: u16 in i32, u32 in i64, u64 in i128.
+        assert_eq!(max_frac_bits(Paper, 16, acc_value_bits(16)), Some(7));
+        assert_eq!(max_frac_bits(Stable, 16, acc_value_bits(16)), Some(7));
+        assert_eq!(max_frac_bits(Paper, 32, acc_value_bits(32)), Some(15));
+        assert_eq!(max_frac_bits(Stable, 32, acc_value_bits(32)), Some(15));
+        assert_eq!(
+            max_frac_bits(Stable, 64, acc_value_bits(64)),
+            Some(MAX_FRAC_BITS)
+        );
+        // Crow's 28-bit table of 1024^2 8-bit texels in u32: F <= 17 (Paper), 17 (Stable).
+        assert_eq!(max_frac_bits(Paper, 28, 63), Some(17));
+        assert_eq!(max_frac_bits(Stable, 28, 63), Some(17));
+        assert_eq!(max_frac_bits(Stable, 31, 31), None);
+        // Consistent with the checks the lookups make.
+        for total in 0..=64u32 {
+            for acc in [31u32, 63, 127] {
+                for (form, bits) in [
+                    (Paper, paper_acc_bits as fn(u32, u32) -> u32),
+                    (Stable, stable_acc_bits),
+                ] {
+                    match max_frac_bits(form, total, acc) {
+                        None => assert!(bits(total, 0) > acc),
+                        Some(f) => {
+                            assert!(bits(total, f) <= acc);
+                            assert!(f == MAX_FRAC_BITS || bits(total, f + 1) > acc);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn absurd_inputs_do_not_overflow() {
+        // Regression (fuzz finding, width.rs:120, 134, 165, 182, 198): unchecked additions and
+        // 128-bit products overflowed for absurd bit counts and sizes.
+        assert_eq!(paper_acc_bits(u32::MAX, u32::MAX), u32::MAX);
+        assert_eq!(stable_acc_bits(u32::MAX - 1, 1), u32::MAX);
+        let p = paper_multiplies(200, usize::MAX, usize::MAX, u32::MAX);
+        assert_eq!(p[0].data_bits, 128);
+        let s = stable_multiplies(200, usize::MAX, u32::MAX);
+        assert!(!s[0].fits_signed(18, 25));
+        assert_eq!(entry_bits_naive(u32::MAX, usize::MAX, usize::MAX), u32::MAX);
     }
 
     #[test]

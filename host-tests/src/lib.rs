@@ -519,7 +519,7 @@ pub fn sum_int<E: Entry, const C: usize, K: Counter>(
     r: [i32; 4],
     mode: RefMode,
     k: &mut K,
-) -> Result<BoxSum<C>, Error> {
+) -> Result<BoxSum<u128, C>, Error> {
     let r = Rect::new(r[0], r[1], r[2], r[3]);
     match mode {
         RefMode::Border => sat.box_sum_int(&r, Border, k),
@@ -527,6 +527,7 @@ pub fn sum_int<E: Entry, const C: usize, K: Counter>(
         RefMode::Repeat => sat.box_sum_int(&r, Repeat, k),
         RefMode::Mirror => sat.box_sum_int(&r, MirroredRepeat, k),
     }
+    .map(|s| s.to_u128())
 }
 
 /// [`Sat::box_sum`] under a run-time form and mode.
@@ -536,7 +537,7 @@ pub fn sum_fixed<X: Coord, E: Entry, const C: usize, K: Counter>(
     form: RefForm,
     mode: RefMode,
     k: &mut K,
-) -> Result<BoxSum<C>, Error> {
+) -> Result<BoxSum<u128, C>, Error> {
     macro_rules! go {
         ($form:expr) => {
             match mode {
@@ -545,6 +546,7 @@ pub fn sum_fixed<X: Coord, E: Entry, const C: usize, K: Counter>(
                 RefMode::Repeat => sat.box_sum(r, $form, Repeat, k),
                 RefMode::Mirror => sat.box_sum(r, $form, MirroredRepeat, k),
             }
+            .map(|s| s.to_u128())
         };
     }
     match form {
@@ -562,7 +564,7 @@ pub fn mean_shortcut<X: Coord, E: Entry, const C: usize, K: Counter>(
     shortcut: &Shortcut,
     g: u32,
     k: &mut K,
-) -> Result<ShortcutMean<C>, Error> {
+) -> Result<ShortcutMean<u128, C>, Error> {
     macro_rules! go {
         ($form:expr) => {
             match mode {
@@ -571,6 +573,7 @@ pub fn mean_shortcut<X: Coord, E: Entry, const C: usize, K: Counter>(
                 RefMode::Repeat => sat.box_mean_shortcut(r, $form, Repeat, shortcut, g, k),
                 RefMode::Mirror => sat.box_mean_shortcut(r, $form, MirroredRepeat, shortcut, g, k),
             }
+            .map(|s| s.to_u128())
         };
     }
     match form {

@@ -658,7 +658,7 @@ fn texsat_mean<E: texsat::Entry>(
         } else {
             sat.box_sum_int(&r, ClampToEdge, k)
         };
-        s.expect("integer lookup").sum() << (2 * FRAC_BITS)
+        s.expect("integer lookup").to_u128().sum() << (2 * FRAC_BITS)
     } else {
         let r: Rect<I24F8> = rect_from_raw(b);
         let s = if repeat {
@@ -666,7 +666,7 @@ fn texsat_mean<E: texsat::Entry>(
         } else {
             sat.box_sum(&r, Stable, ClampToEdge, k)
         };
-        s.expect("fixed-point lookup").sum()
+        s.expect("fixed-point lookup").to_u128().sum()
     };
     exact_mean(sum, area_raw(b))
 }

@@ -349,11 +349,11 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, self.levels_y as u32 - 1);
         let column = |l: u32, k: &mut K| {
             self.view(DipPyramid::Column, l as usize)
-                .bilinear::<M, K>(&fp, l, 0, WEIGHT_BITS, k)
+                .bilinear(mode, &fp, l, 0, WEIGHT_BITS, k)
         };
         let row = |l: u32, k: &mut K| {
             self.view(DipPyramid::Row, l as usize)
-                .bilinear::<M, K>(&fp, 0, l, WEIGHT_BITS, k)
+                .bilinear(mode, &fp, 0, l, WEIGHT_BITS, k)
         };
         let (a, b, shift) = match filter {
             DipFilter::Bilinear => (
@@ -477,10 +477,10 @@ mod tests {
     ) -> f64 {
         let idx = |i: i64, n: usize| -> Option<usize> {
             match mode {
-                0 => Border::texel_index(i, n),
-                1 => ClampToEdge::texel_index(i, n),
-                2 => Repeat::texel_index(i, n),
-                _ => MirroredRepeat::texel_index(i, n),
+                0 => crate::EdgeKind::Border.texel_index(i, n),
+                1 => crate::EdgeKind::Clamp.texel_index(i, n),
+                2 => crate::EdgeKind::Repeat.texel_index(i, n),
+                _ => crate::EdgeKind::Mirror.texel_index(i, n),
             }
         };
         let split = |side: i64, top: usize| {

@@ -62,8 +62,8 @@ pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
     k.words((T::BITS * C as u32).div_ceil(32));
     let mut values = [0u64; C];
     if let (Some(x), Some(y)) = (
-        M::texel_index(ix, texture.width()),
-        M::texel_index(iy, texture.height()),
+        mode.kind().texel_index(ix, texture.width()),
+        mode.kind().texel_index(iy, texture.height()),
     ) {
         if let Some(px) = texture.row(y).and_then(|r| r.get(x * C..x * C + C)) {
             for (v, t) in values.iter_mut().zip(px) {

@@ -323,7 +323,7 @@ pub(crate) fn floor_sample<const C: usize>(v: [i64; C], shift: u32) -> Sample<C>
 /// for `i`.
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 #[inline(always)]
-fn resolve<M: EdgeMode>(i: i128, n: usize) -> Option<usize> {
+fn resolve<M: EdgeMode>(mode: M, i: i128, n: usize) -> Option<usize> {
     let idx = match i64::try_from(i) {
         Ok(v) => v,
         Err(_) => {
@@ -333,7 +333,7 @@ fn resolve<M: EdgeMode>(i: i128, n: usize) -> Option<usize> {
             (if i > 0 { far + r } else { r - far }) as i64
         }
     };
-    M::texel_index(idx, n).filter(|&v| v < n)
+    mode.kind().texel_index(idx, n).filter(|&v| v < n)
 }
 
 /// One stored level of a rip or dip map: `w x h` texels, row-major, `C` channels.
@@ -361,9 +361,9 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
 
     /// Texel `(i, j)` of the level under mode `M`, or zeros; counts one read if fetched.
     #[inline(always)]
-    fn fetch<M: EdgeMode, K: Counter>(&self, i: i128, j: i128, k: &mut K) -> [i64; C] {
+    fn fetch<M: EdgeMode, K: Counter>(&self, mode: M, i: i128, j: i128, k: &mut K) -> [i64; C] {
         let mut out = [0i64; C];
-        if let (Some(x), Some(y)) = (resolve::<M>(i, self.w), resolve::<M>(j, self.h)) {
+        if let (Some(x), Some(y)) = (resolve(mode, i, self.w), resolve(mode, j, self.h)) {
             let base = (y * self.w + x) * C;
             if let Some(texel) = self.data.get(base..base + C) {
                 count_reads::<T, C, K>(1, k);
@@ -381,6 +381,7 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
     #[inline(always)]
     pub(crate) fn bilinear<M: EdgeMode, K: Counter>(
         &self,
+        mode: M,
         fp: &Footprint,
         sx: u32,
         sy: u32,
@@ -389,10 +390,10 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
     ) -> [i64; C] {
         let (i0, ax) = split_position(fp.px, fp.f + 1 + sx, weight_bits);
         let (j0, ay) = split_position(fp.py, fp.f + 1 + sy, weight_bits);
-        let t00 = self.fetch::<M, K>(i0, j0, k);
-        let t10 = self.fetch::<M, K>(i0 + 1, j0, k);
-        let t01 = self.fetch::<M, K>(i0, j0 + 1, k);
-        let t11 = self.fetch::<M, K>(i0 + 1, j0 + 1, k);
+        let t00 = self.fetch(mode, i0, j0, k);
+        let t10 = self.fetch(mode, i0 + 1, j0, k);
+        let t01 = self.fetch(mode, i0, j0 + 1, k);
+        let t11 = self.fetch(mode, i0 + 1, j0 + 1, k);
         let r0 = lerp(t00, t10, ax, weight_bits, k);
         let r1 = lerp(t01, t11, ax, weight_bits, k);
         lerp(r0, r1, ay, weight_bits, k)

@@ -279,7 +279,7 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
         let shift = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
         let probe = |lx: u32, ly: u32, k: &mut K| {
             let level = self.view(lx as usize, ly as usize);
-            truncate(level.bilinear::<M, K>(&fp, lx, ly, WEIGHT_BITS, k), shift)
+            truncate(level.bilinear(mode, &fp, lx, ly, WEIGHT_BITS, k), shift)
         };
         let v00 = probe(lox, loy, k);
         let v10 = probe(hix, loy, k);
@@ -376,10 +376,10 @@ mod tests {
     fn reference(map: &RipMap<'_, u16, 1>, r: [i64; 4], f: u32, mode: u8) -> f64 {
         let idx = |i: i64, n: usize| -> Option<usize> {
             match mode {
-                0 => Border::texel_index(i, n),
-                1 => ClampToEdge::texel_index(i, n),
-                2 => Repeat::texel_index(i, n),
-                _ => MirroredRepeat::texel_index(i, n),
+                0 => crate::EdgeKind::Border.texel_index(i, n),
+                1 => crate::EdgeKind::Clamp.texel_index(i, n),
+                2 => crate::EdgeKind::Repeat.texel_index(i, n),
+                _ => crate::EdgeKind::Mirror.texel_index(i, n),
             }
         };
         let split = |side: i64, top: usize| {

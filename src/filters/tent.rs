@@ -185,18 +185,8 @@ pub fn paper_error_bound(texel_bits: u32, a: f64, b: f64) -> f64 {
     m / 4.0 * (1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (2.0 * a * a * b * b))
 }
 
-/// Which boundary mode a [`TentMode`] is (selects the per-axis extension formulas).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TentModeKind {
-    /// [`Border`].
-    Border,
-    /// [`ClampToEdge`].
-    Clamp,
-    /// [`Repeat`].
-    Repeat,
-    /// [`MirroredRepeat`].
-    Mirror,
-}
+/// Which boundary mode a [`TentMode`] is: the crate's one [`crate::EdgeKind`].
+pub type TentModeKind = crate::EdgeKind;
 
 /// A boundary mode the order-2 lookups support: all four of [`crate::edge`].
 pub trait TentMode: EdgeMode {
@@ -816,7 +806,7 @@ struct Footprint {
 /// The texel the extended texture shows at integer position `i` (`None`: zero).
 fn texel_at<M: TentMode>(i: i128, n: usize) -> Option<usize> {
     let i = i64::try_from(i).ok()?;
-    M::texel_index(i, n)
+    M::KIND.texel_index(i, n)
 }
 
 /// Up to 6 `(index, weight)` pairs: `value = sum weight * f(index)`; index 0 (a zero value) and
@@ -1114,6 +1104,7 @@ mod tests {
     /// Direct convolution: `N = sum_ij t_ext(i, j) WX_i WY_j` with per-texel weights scaled by
     /// `2 s^2` each; the exact output is `round(N 2^14 / (a^2 b^2))`.
     fn direct<M: TentMode>(
+        mode: M,
         tex: &[u8],
         w: usize,
         h: usize,
@@ -1134,11 +1125,11 @@ mod tests {
         let (wx, wy) = (wts(c.0, ab.0), wts(c.1, ab.1));
         let mut n = 0i128;
         for &(j, vy) in &wy {
-            let Some(jj) = M::texel_index(j as i64, h) else {
+            let Some(jj) = mode.kind().texel_index(j as i64, h) else {
                 continue;
             };
             for &(i, vx) in &wx {
-                let Some(ii) = M::texel_index(i as i64, w) else {
+                let Some(ii) = mode.kind().texel_index(i as i64, w) else {
                     continue;
                 };
                 n += tex[jj * w + ii] as i128 * vx * vy;
@@ -1186,7 +1177,8 @@ mod tests {
                     for a in 1u32..=7 {
                         for b in [1u32, 2, 5] {
                             let got = tt.sample_int(cx, cy, a, b, mode, &mut NoCount).unwrap();
-                            let want = direct::<M>(
+                            let want = direct(
+                                mode,
                                 &t,
                                 w,
                                 h,
@@ -1198,7 +1190,7 @@ mod tests {
                                 got.values[0],
                                 want,
                                 "{} {w}x{h} c=({cx},{cy}) a={a} b={b}",
-                                M::NAME
+                                mode.kind().name()
                             );
                         }
                     }
@@ -1239,7 +1231,8 @@ mod tests {
                 let got = tt
                     .sample_exact(&lines, &texture, &r, mode, &mut NoCount)
                     .unwrap();
-                let want = direct::<M>(
+                let want = direct(
+                    mode,
                     &t,
                     w,
                     h,
@@ -1247,7 +1240,7 @@ mod tests {
                     ((x1 - x0) as i128, (y1 - y0) as i128),
                     5,
                 );
-                assert_eq!(got.values[0], want, "{} {w}x{h} {r:?}", M::NAME);
+                assert_eq!(got.values[0], want, "{} {w}x{h} {r:?}", mode.kind().name());
                 // Paper within its bound of the exact value.
                 let p = tt.sample(&r, mode, &mut NoCount).unwrap();
                 let a = (x1 - x0) as f64 / 32.0;
@@ -1257,7 +1250,7 @@ mod tests {
                 assert!(
                     err <= bound,
                     "{} paper err {err} > {bound} for {r:?}",
-                    M::NAME
+                    mode.kind().name()
                 );
             }
         }

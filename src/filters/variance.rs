@@ -50,6 +50,7 @@ use crate::rect::{Coord, Rect};
 use crate::table::Sat;
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
+use crate::wide::Wide;
 use crate::width::{bits_of, check_texel_bits, max_texel};
 
 /// Exact bits per entry of the squares table: `bits_of((2^b - 1)^2 * w * h)` (saturating at 128).
@@ -269,12 +270,13 @@ impl<'a, E: Entry, const C: usize> VarianceTables<'a, E, C> {
 }
 
 /// `(n Q - S^2) / n^2` per channel, rounded (module docs), with its operations counted.
-fn finish<const C: usize, K: Counter>(
-    s: &BoxSum<C>,
-    q: &BoxSum<C>,
+fn finish<W1: Wide, W2: Wide, const C: usize, K: Counter>(
+    s: &BoxSum<W1, C>,
+    q: &BoxSum<W2, C>,
     k: &mut K,
 ) -> Result<Sample<C>, Error> {
     let (wr, hr) = s.sides_raw();
+    let (wr, hr) = (u128::from(wr), u128::from(hr));
     let wide = |needed: u32, available: u32| Error::TooWide {
         what: Quantity::MeanNumerator,
         bits_needed: needed,
@@ -293,7 +295,7 @@ fn finish<const C: usize, K: Counter>(
         .ok_or(wide(2 * bits_of(n), 127))?;
     let mut out = [0u64; C];
     for (c, o) in out.iter_mut().enumerate() {
-        let (sc, qc) = (s.scaled_sum(c), q.scaled_sum(c));
+        let (sc, qc): (u128, u128) = (s.scaled_sum(c).into(), q.scaled_sum(c).into());
         k.muls(2);
         k.adds(1);
         k.divs(1);
@@ -358,14 +360,15 @@ mod tests {
     }
 
     /// Direct: n, S, Q over the extended texture, then the same rounding.
-    fn direct<M: EdgeMode>(t: &[u8], w: usize, h: usize, r: &Rect<i32>) -> u64 {
+    fn direct<M: EdgeMode>(mode: M, t: &[u8], w: usize, h: usize, r: &Rect<i32>) -> u64 {
         let (mut s, mut q, mut n) = (0u128, 0u128, 0u128);
         for y in r.y0..r.y1 {
             for x in r.x0..r.x1 {
                 n += 1;
-                if let (Some(i), Some(j)) =
-                    (M::texel_index(x as i64, w), M::texel_index(y as i64, h))
-                {
+                if let (Some(i), Some(j)) = (
+                    mode.kind().texel_index(x as i64, w),
+                    mode.kind().texel_index(y as i64, h),
+                ) {
                     let v = t[j * w + i] as u128;
                     s += v;
                     q += v * v;
@@ -390,9 +393,9 @@ mod tests {
                             let got = vt.variance_int(&r, mode, &mut NoCount).unwrap();
                             assert_eq!(
                                 got.values[0],
-                                direct::<M>(&t, w, h, &r),
+                                direct(mode, &t, w, h, &r),
                                 "{} {r:?}",
-                                M::NAME
+                                mode.kind().name()
                             );
                         }
                     }
@@ -524,7 +527,7 @@ mod tests {
             let ch: Vec<u8> = t[..20].iter().skip(c).step_by(2).copied().collect();
             assert_eq!(
                 v.values[c],
-                direct::<Repeat>(&ch, 5, 2, &Rect::new(1, 0, 4, 2))
+                direct(Repeat, &ch, 5, 2, &Rect::new(1, 0, 4, 2))
             );
         }
         assert_eq!((k.muls, k.divs), (6, 2));

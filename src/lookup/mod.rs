@@ -16,37 +16,84 @@
 mod corners4;
 mod paper;
 mod shortcut;
+mod split;
 mod stable;
-mod weighted;
 
 pub use shortcut::{Shortcut, ShortcutMean};
 
 use crate::cost::Counter;
-use crate::edge::{place, EdgeMode, Placement};
+use crate::edge::{place_axis, width_u64, AxisPlan, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::layouts::Layout;
-use crate::rect::{Coord, RawBox, Rect};
+use crate::rect::{Coord, FracBits, RawBox, Rect};
 use crate::table::Sat;
 use crate::texel::{Acc, Entry};
-use crate::width::{self, bits_of};
+use crate::wide::Wide;
+use crate::width;
+
+/// The accumulator of a layout's lookups (`i32`, `i64` or `i128`, after its value type).
+pub(crate) type AccOf<L, const C: usize> = <<L as Layout<C>>::Value as Entry>::Acc;
+/// The result word of a layout's lookups (`u64`, or `u128` for `u64` values).
+pub type WideOf<L, const C: usize> = <AccOf<L, C> as Acc>::Wide;
+
+/// Which formulation, as a run-time value ([`Paper`] or [`Stable`] fixed at compile time are the
+/// zero-sized choices). Implements [`Form`] by a `match`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FormKind {
+    /// [`Paper`].
+    Paper,
+    /// [`Stable`].
+    #[default]
+    Stable,
+}
+
+impl FormKind {
+    /// A short name: `paper`, `stable`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FormKind::Paper => "paper",
+            FormKind::Stable => "stable",
+        }
+    }
+
+    /// The form named by [`FormKind::name`].
+    pub fn from_name(name: &str) -> Option<FormKind> {
+        [FormKind::Paper, FormKind::Stable]
+            .into_iter()
+            .find(|k| k.name() == name)
+    }
+}
+
+mod sealed {
+    use super::AccOf;
+    use crate::cost::Counter;
+    use crate::layouts::Layout;
+    use crate::rect::RawBox;
+
+    /// The behaviour of a form (sealed: the width proofs cover exactly these).
+    pub trait FormImpl: Copy {
+        /// Accumulator value bits a table with whole-texture sums of `total_bits` bits needs.
+        fn acc_bits(self, total_bits: u32, frac_bits: u32) -> u32;
+        /// Extra bits a modular layout needs above the box sum's bits.
+        fn modular_headroom_bits(self, frac_bits: u32) -> u32;
+        /// The box integral scaled by `2^2F` for a box inside `[0, w] x [0, h]` (raw units); on
+        /// a valid table never negative.
+        fn in_range<L: Layout<C>, const C: usize, K: Counter>(
+            self,
+            layout: &L,
+            b: &RawBox,
+            frac_bits: u32,
+            k: &mut K,
+        ) -> [AccOf<L, C>; C];
+    }
+}
 
 /// A box-sum formulation: how the 16 table values of a fractional-corner box are combined.
-pub trait Form: Copy + Default {
-    /// A short name (`paper`, `stable`).
-    const NAME: &'static str;
-    /// Accumulator value bits a table with whole-texture sums of `total_bits` bits needs at `F`.
-    fn acc_bits(total_bits: u32, frac_bits: u32) -> u32;
-    /// Extra bits a modular layout needs above the box sum's bits: the form's result is only
-    /// known modulo `2^k`, so it must be below `2^k`.
-    fn modular_headroom_bits(frac_bits: u32) -> u32;
-    /// The box integral scaled by `2^2F`, for a box inside `[0, w] x [0, h]` (raw units).
-    #[doc(hidden)]
-    fn in_range<L: Layout<C>, const C: usize, K: Counter>(
-        layout: &L,
-        b: &RawBox,
-        frac_bits: u32,
-        k: &mut K,
-    ) -> [u128; C];
+/// [`Paper`], [`Stable`], or [`FormKind`] at run time. Sealed.
+pub trait Form: sealed::FormImpl {
+    /// Which form this is.
+    fn kind(self) -> FormKind;
 }
 
 /// Crow's formulation (§2.1–2.2): bilinear interpolation of the table at each corner, with each
@@ -73,30 +120,84 @@ pub struct Paper;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stable;
 
-/// An exact box sum: per channel, the integral over the box scaled by `2^2F` (`F = 0` for integer
-/// corners), with the box's side lengths for the mean.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct BoxSum<const C: usize> {
-    sums: [u128; C],
-    frac_bits: u32,
-    width_raw: u128,
-    height_raw: u128,
+impl Form for Paper {
+    #[inline(always)]
+    fn kind(self) -> FormKind {
+        FormKind::Paper
+    }
 }
 
-impl<const C: usize> BoxSum<C> {
+impl Form for Stable {
+    #[inline(always)]
+    fn kind(self) -> FormKind {
+        FormKind::Stable
+    }
+}
+
+impl Form for FormKind {
+    #[inline(always)]
+    fn kind(self) -> FormKind {
+        self
+    }
+}
+
+impl sealed::FormImpl for FormKind {
+    #[inline(always)]
+    fn acc_bits(self, total_bits: u32, frac_bits: u32) -> u32 {
+        match self {
+            FormKind::Paper => Paper.acc_bits(total_bits, frac_bits),
+            FormKind::Stable => Stable.acc_bits(total_bits, frac_bits),
+        }
+    }
+    #[inline(always)]
+    fn modular_headroom_bits(self, frac_bits: u32) -> u32 {
+        match self {
+            FormKind::Paper => Paper.modular_headroom_bits(frac_bits),
+            FormKind::Stable => Stable.modular_headroom_bits(frac_bits),
+        }
+    }
+    #[inline(always)]
+    fn in_range<L: Layout<C>, const C: usize, K: Counter>(
+        self,
+        layout: &L,
+        b: &RawBox,
+        frac_bits: u32,
+        k: &mut K,
+    ) -> [AccOf<L, C>; C] {
+        match self {
+            FormKind::Paper => Paper.in_range(layout, b, frac_bits, k),
+            FormKind::Stable => Stable.in_range(layout, b, frac_bits, k),
+        }
+    }
+}
+
+use sealed::FormImpl;
+
+/// An exact box sum: per channel, the integral over the box scaled by `2^2F` (`F = 0` for integer
+/// corners), with the box's side lengths for the mean. `W` is the result word: `u64` for `u16`
+/// and `u32` tables, `u128` for `u64` tables.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BoxSum<W, const C: usize> {
+    sums: [W; C],
+    frac_bits: u32,
+    width_raw: u64,
+    height_raw: u64,
+}
+
+impl<W: Wide, const C: usize> BoxSum<W, C> {
     /// Channel `c`'s integral times `2^2F` (exact). Channels past `C` read as 0.
-    pub fn scaled_sum(&self, c: usize) -> u128 {
-        self.sums.get(c).copied().unwrap_or(0)
+    pub fn scaled_sum(&self, c: usize) -> W {
+        self.sums.get(c).copied().unwrap_or(W::ZERO)
     }
 
     /// All channels' integrals times `2^2F`.
-    pub fn scaled_sums(&self) -> [u128; C] {
+    pub fn scaled_sums(&self) -> [W; C] {
         self.sums
     }
 
     /// Channel 0's integral times `2^2F`: for integer corners (`F = 0`), the box sum itself.
-    pub fn sum(&self) -> u128 {
+    pub fn sum(&self) -> W {
         self.scaled_sum(0)
     }
 
@@ -106,43 +207,28 @@ impl<const C: usize> BoxSum<C> {
     }
 
     /// The box's side lengths in units of `2^-F` (the unclipped box, also for [`crate::Border`]).
-    pub fn sides_raw(&self) -> (u128, u128) {
+    pub fn sides_raw(&self) -> (u64, u64) {
         (self.width_raw, self.height_raw)
-    }
-
-    /// The box area in units of `2^-2F` (one multiply).
-    fn area_raw<K: Counter>(&self, k: &mut K) -> Result<u128, Error> {
-        k.muls(1);
-        let area = self
-            .width_raw
-            .checked_mul(self.height_raw)
-            .ok_or(Error::TooWide {
-                what: Quantity::MeanNumerator,
-                bits_needed: bits_of(self.width_raw) + bits_of(self.height_raw),
-                bits_available: 128,
-            })?;
-        if area == 0 {
-            Err(Error::ZeroArea)
-        } else {
-            Ok(area)
-        }
     }
 
     /// Channel `c`'s mean over the box as a fixed-point number with `out_frac_bits` fractional
     /// bits: `round(sum * 2^g / area)`, rounding to nearest with ties up (away from zero). The
-    /// result is within `2^-(g+1)` of the exact mean. Costs one multiply (the area) and one divide.
+    /// result is within `2^-(g+1)` of the exact mean. Costs one multiply (the area) and one
+    /// divide; for `u64` results one `u64` division in the common case (see [`crate::wide`]'s
+    /// docs), never a 128-bit operation. A zero-area box is [`Error::ZeroArea`].
     pub fn mean_rounded<K: Counter>(
         &self,
         c: usize,
         out_frac_bits: u32,
         k: &mut K,
-    ) -> Result<u128, Error> {
-        if c >= C {
+    ) -> Result<W, Error> {
+        let Some(&s) = self.sums.get(c) else {
             return Err(Error::NoSuchChannel);
-        }
-        let area = self.area_raw(k)?;
+        };
+        self.check_area()?;
+        k.muls(1);
         k.divs(1);
-        div_round(self.sums[c], out_frac_bits, area)
+        s.div_round_area(out_frac_bits, self.width_raw, self.height_raw)
     }
 
     /// Every channel's mean (see [`BoxSum::mean_rounded`]): one multiply, `C` divides.
@@ -150,30 +236,35 @@ impl<const C: usize> BoxSum<C> {
         &self,
         out_frac_bits: u32,
         k: &mut K,
-    ) -> Result<[u128; C], Error> {
-        let area = self.area_raw(k)?;
-        let mut out = [0u128; C];
+    ) -> Result<[W; C], Error> {
+        self.check_area()?;
+        k.muls(1);
+        let mut out = [W::ZERO; C];
         for (o, &s) in out.iter_mut().zip(self.sums.iter()) {
             k.divs(1);
-            *o = div_round(s, out_frac_bits, area)?;
+            *o = s.div_round_area(out_frac_bits, self.width_raw, self.height_raw)?;
         }
         Ok(out)
     }
-}
 
-/// `round(num * 2^g / den)`, ties up, refusing a numerator that does not fit `u128`.
-pub(crate) fn div_round(num: u128, g: u32, den: u128) -> Result<u128, Error> {
-    let needed = bits_of(num).saturating_add(g);
-    if needed > 128 || g >= 128 {
-        return Err(Error::TooWide {
-            what: Quantity::MeanNumerator,
-            bits_needed: needed,
-            bits_available: 128,
-        });
+    /// The same sums as `u128` (a host-side convenience for comparing with wide references;
+    /// firmware never needs it).
+    pub fn to_u128(&self) -> BoxSum<u128, C> {
+        BoxSum {
+            sums: self.sums.map(Into::into),
+            frac_bits: self.frac_bits,
+            width_raw: self.width_raw,
+            height_raw: self.height_raw,
+        }
     }
-    let n = num << g;
-    let (q, r) = (n / den, n % den);
-    Ok(if r >= den - r { q + 1 } else { q })
+
+    fn check_area(&self) -> Result<(), Error> {
+        if self.width_raw == 0 || self.height_raw == 0 {
+            Err(Error::ZeroArea)
+        } else {
+            Ok(())
+        }
+    }
 }
 
 /// Box lookups over any [`Layout`]: implemented for every layout, so every mode and form works
@@ -183,51 +274,49 @@ pub trait BoxLookup<const C: usize>: Layout<C> + Sized {
     /// `M`. An in-range (or placeable, see [`crate::edge`]) box costs 4 corner reads and 3
     /// additive operations per channel; corners on the zero row or column cost no read. Zero-area
     /// boxes sum to 0 with no reads; inverted boxes are [`Error::InvertedBox`].
+    #[inline]
     fn box_sum_int<M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<i32>,
         mode: M,
         k: &mut K,
-    ) -> Result<BoxSum<C>, Error> {
-        let _ = mode;
-        let b = RawBox {
-            x0: r.x0 as i128,
-            y0: r.y0 as i128,
-            x1: r.x1 as i128,
-            y1: r.y1 as i128,
-        };
-        sum_raw::<Self, corners4::Corners4, M, K, C>(self, b, 0, k)
+    ) -> Result<BoxSum<WideOf<Self, C>, C>, Error> {
+        sum_raw(self, &r.to_raw_int(), 0, corners4::Corners4, mode, k)
     }
 
-    /// The exact integral over the box with fixed-point corners (`X` has `F` fractional bits,
-    /// `F <= 24`), scaled by `2^2F`, in formulation `Fm` under boundary mode `M`. An in-range box
-    /// costs 16 corner reads (fewer on the zero row and column).
+    /// The exact integral over the box with raw fixed-point corners (`value * 2^F`, `F` given as a
+    /// value), scaled by `2^2F`, in formulation `form` under boundary mode `mode`. An in-range box
+    /// costs 16 corner reads (fewer on the zero row and column); a box that crosses the texture's
+    /// edge under a wrapping or clamping mode is split into at most 9 in-range boxes (see
+    /// [`crate::edge`]).
     ///
     /// Refused with [`Error::TooWide`] if the accumulator cannot hold the formulation's
-    /// intermediates for this table ([`Form::acc_bits`]), e.g. `u32` entries holding 32-bit
-    /// sums at `F = 16`, or, on a modular layout, if the box's sum may reach `2^k`.
+    /// intermediates for this table (see [`width::max_frac_bits`]), if the sum of a box that
+    /// covers many periods does not fit the result word, or, on a modular layout, if the box's
+    /// sum may reach `2^k`.
+    #[inline]
+    fn box_sum_raw<Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        form: Fm,
+        mode: M,
+        k: &mut K,
+    ) -> Result<BoxSum<WideOf<Self, C>, C>, Error> {
+        sum_raw(self, r, frac_bits.get(), form, mode, k)
+    }
+
+    /// [`BoxLookup::box_sum_raw`] with the corners as a `fixed` type `X` (`F = X::FRAC_BITS`,
+    /// at most [`width::MAX_FRAC_BITS`]).
+    #[inline]
     fn box_sum<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<X>,
         form: Fm,
         mode: M,
         k: &mut K,
-    ) -> Result<BoxSum<C>, Error> {
-        let _ = (form, mode);
-        let f = X::FRAC_BITS;
-        if f > width::MAX_FRAC_BITS {
-            return Err(Error::FracBitsUnsupported {
-                frac_bits: f,
-                max: width::MAX_FRAC_BITS,
-            });
-        }
-        let b = RawBox {
-            x0: r.x0.raw() as i128,
-            y0: r.y0.raw() as i128,
-            x1: r.x1.raw() as i128,
-            y1: r.y1.raw() as i128,
-        };
-        sum_raw::<Self, Fm, M, K, C>(self, b, f, k)
+    ) -> Result<BoxSum<WideOf<Self, C>, C>, Error> {
+        sum_raw(self, &r.to_raw(), FracBits::of::<X>()?.get(), form, mode, k)
     }
 
     /// See [`shortcut`](crate::lookup::Shortcut): the mean by the 4-read shortcut when both
@@ -240,8 +329,32 @@ pub trait BoxLookup<const C: usize>: Layout<C> + Sized {
         shortcut: &Shortcut,
         out_frac_bits: u32,
         k: &mut K,
-    ) -> Result<ShortcutMean<C>, Error> {
-        shortcut::mean(self, r, form, mode, shortcut, out_frac_bits, k)
+    ) -> Result<ShortcutMean<WideOf<Self, C>, C>, Error> {
+        shortcut::mean(
+            self,
+            &r.to_raw(),
+            FracBits::of::<X>()?,
+            form,
+            mode,
+            shortcut,
+            out_frac_bits,
+            k,
+        )
+    }
+
+    /// [`BoxLookup::box_mean_shortcut`] with raw corners and `F` as a value.
+    #[allow(clippy::too_many_arguments)]
+    fn box_mean_shortcut_raw<Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        form: Fm,
+        mode: M,
+        shortcut: &Shortcut,
+        out_frac_bits: u32,
+        k: &mut K,
+    ) -> Result<ShortcutMean<WideOf<Self, C>, C>, Error> {
+        shortcut::mean(self, r, frac_bits, form, mode, shortcut, out_frac_bits, k)
     }
 }
 
@@ -249,24 +362,39 @@ impl<const C: usize, L: Layout<C>> BoxLookup<C> for L {}
 
 impl<E: Entry, const C: usize> Sat<'_, E, C> {
     /// [`BoxLookup::box_sum_int`] on the flat table: 4 reads, exact.
+    #[inline]
     pub fn box_sum_int<M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<i32>,
         mode: M,
         k: &mut K,
-    ) -> Result<BoxSum<C>, Error> {
+    ) -> Result<BoxSum<<E::Acc as Acc>::Wide, C>, Error> {
         BoxLookup::box_sum_int(self, r, mode, k)
     }
 
     /// [`BoxLookup::box_sum`] on the flat table: 16 reads, exact, scaled by `2^2F`.
+    #[inline]
     pub fn box_sum<X: Coord, Fm: Form, M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<X>,
         form: Fm,
         mode: M,
         k: &mut K,
-    ) -> Result<BoxSum<C>, Error> {
+    ) -> Result<BoxSum<<E::Acc as Acc>::Wide, C>, Error> {
         BoxLookup::box_sum(self, r, form, mode, k)
+    }
+
+    /// [`BoxLookup::box_sum_raw`] on the flat table.
+    #[inline]
+    pub fn box_sum_raw<Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        form: Fm,
+        mode: M,
+        k: &mut K,
+    ) -> Result<BoxSum<<E::Acc as Acc>::Wide, C>, Error> {
+        BoxLookup::box_sum_raw(self, r, frac_bits, form, mode, k)
     }
 
     /// [`BoxLookup::box_mean_shortcut`] on the flat table.
@@ -278,30 +406,50 @@ impl<E: Entry, const C: usize> Sat<'_, E, C> {
         shortcut: &Shortcut,
         out_frac_bits: u32,
         k: &mut K,
-    ) -> Result<ShortcutMean<C>, Error> {
+    ) -> Result<ShortcutMean<<E::Acc as Acc>::Wide, C>, Error> {
         BoxLookup::box_mean_shortcut(self, r, form, mode, shortcut, out_frac_bits, k)
     }
 }
 
-/// Texel columns (rows) a raw interval `[lo, hi)` overlaps: `ceil(hi) - floor(lo)`.
-fn cells(lo: i128, hi: i128, f: u32) -> u128 {
-    let s = 1i128 << f;
-    (((hi + s - 1) >> f) - (lo >> f)).max(0) as u128
+/// Splits an in-range raw coordinate `0 <= x <= n 2^F` into cell `i <= n - 1` and fraction
+/// `a <= 2^F` (the right edge `x = n` is cell `n - 1` with `a = 2^F`, so `i + 1 <= n`).
+#[inline(always)]
+pub(crate) fn split_coord(x: i64, n: usize, f: u32) -> (usize, u32) {
+    let i = (x >> f) as usize;
+    if i >= n {
+        (n.saturating_sub(1), 1u32 << f)
+    } else {
+        (i, (x & ((1i64 << f) - 1)) as u32)
+    }
+}
+
+/// Texel cells a raw interval `[lo, hi)` overlaps, `ceil(hi) - floor(lo)`, exact in `u64`.
+#[inline(always)]
+pub(crate) fn cells(lo: i64, hi: i64, f: u32) -> u64 {
+    let frac = (hi & ((1i64 << f) - 1) != 0) as u64;
+    width_u64(lo >> f, hi >> f).wrapping_add(frac)
 }
 
 /// Refuses, on a modular layout, a box whose sum (with `headroom` extra bits) may reach `2^k`.
+#[inline(always)]
 fn check_modular<L: Layout<C>, const C: usize>(
     layout: &L,
-    b: &RawBox,
+    b: &Rect<i64>,
     f: u32,
     headroom: u32,
 ) -> Result<(), Error> {
     let Some(k) = layout.modulus() else {
         return Ok(());
     };
-    let m = width::max_texel(layout.texel_bits());
-    let area = cells(b.x0, b.x1, f).saturating_mul(cells(b.y0, b.y1, f));
-    let needed = bits_of(m.saturating_mul(area)) + headroom;
+    let m = width::max_texel_u64(layout.texel_bits());
+    let bound = cells(b.x0, b.x1, f)
+        .checked_mul(cells(b.y0, b.y1, f))
+        .and_then(|a| a.checked_mul(m));
+    let needed = match bound {
+        Some(v) => width::bits_of_u64(v),
+        None => 65,
+    }
+    .saturating_add(headroom);
     if needed > k {
         return Err(Error::TooWide {
             what: Quantity::ModularBox,
@@ -312,39 +460,76 @@ fn check_modular<L: Layout<C>, const C: usize>(
     Ok(())
 }
 
-/// The common driver: validate, place the box for the mode, then the in-range form or the
-/// weighted path.
-pub(crate) fn sum_raw<L: Layout<C>, Fm: Form, M: EdgeMode, K: Counter, const C: usize>(
+/// Checks that the form's accumulator holds its intermediates on this table.
+#[inline(always)]
+fn check_acc<L: Layout<C>, Fm: FormImpl, const C: usize>(
     layout: &L,
-    b: RawBox,
+    form: Fm,
     f: u32,
+) -> Result<(), Error> {
+    width::check_acc(
+        form.acc_bits(layout.value_bits(), f),
+        <AccOf<L, C> as Acc>::VALUE_BITS,
+    )
+}
+
+/// One in-range box through the form, as result words (a negative result can only come from
+/// corrupt lent storage).
+#[inline(always)]
+pub(crate) fn in_range_wide<L: Layout<C>, Fm: FormImpl, K: Counter, const C: usize>(
+    layout: &L,
+    b: &RawBox,
+    f: u32,
+    form: Fm,
     k: &mut K,
-) -> Result<BoxSum<C>, Error> {
-    if b.x1 < b.x0 || b.y1 < b.y0 {
+) -> Result<[WideOf<L, C>; C], Error> {
+    let acc = form.in_range(layout, b, f, k);
+    let mut out = [<WideOf<L, C> as Wide>::ZERO; C];
+    for (o, a) in out.iter_mut().zip(acc) {
+        *o = a.to_wide().ok_or(Error::CorruptStorage)?;
+    }
+    Ok(out)
+}
+
+/// The common driver: validate, place the box for the mode, then one in-range lookup (the
+/// common case) or the split path.
+#[inline(always)]
+pub(crate) fn sum_raw<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: usize>(
+    layout: &L,
+    r: &Rect<i64>,
+    f: u32,
+    form: Fm,
+    mode: M,
+    k: &mut K,
+) -> Result<BoxSum<WideOf<L, C>, C>, Error> {
+    if r.x1 < r.x0 || r.y1 < r.y0 {
         return Err(Error::InvertedBox);
     }
     let mut out = BoxSum {
-        sums: [0; C],
+        sums: [<WideOf<L, C> as Wide>::ZERO; C],
         frac_bits: f,
-        width_raw: (b.x1 - b.x0) as u128,
-        height_raw: (b.y1 - b.y0) as u128,
+        width_raw: width_u64(r.x0, r.x1),
+        height_raw: width_u64(r.y0, r.y1),
     };
-    if b.x1 == b.x0 || b.y1 == b.y0 {
+    if out.width_raw == 0 || out.height_raw == 0 {
         return Ok(out);
     }
-    match place::<M>(b, layout.width(), layout.height(), f) {
-        Placement::Empty => {}
-        Placement::InRange(ib) => {
-            check_modular(layout, &ib, f, Fm::modular_headroom_bits(f))?;
-            width::check_acc(
-                Fm::acc_bits(layout.value_bits(), f),
-                <<L::Value as Entry>::Acc as Acc>::VALUE_BITS,
-            )?;
-            out.sums = Fm::in_range(layout, &ib, f, k);
+    let kind = mode.kind();
+    let px = place_axis(kind, r.x0, r.x1, layout.width(), f)?;
+    let py = place_axis(kind, r.y0, r.y1, layout.height(), f)?;
+    match (px, py) {
+        (AxisPlan::Empty, _) | (_, AxisPlan::Empty) => {}
+        (AxisPlan::InRange(x0, x1), AxisPlan::InRange(y0, y1)) => {
+            let b = RawBox { x0, y0, x1, y1 };
+            let placed = Rect::new(x0, y0, x1, y1);
+            check_modular(layout, &placed, f, form.modular_headroom_bits(f))?;
+            check_acc(layout, form, f)?;
+            out.sums = in_range_wide(layout, &b, f, form, k)?;
         }
-        Placement::Outside(ob) => {
-            check_modular(layout, &ob, f, 2 * f)?;
-            out.sums = weighted::sum::<M, L, K, C>(layout, &ob, f, k)?;
+        (px, py) => {
+            check_modular(layout, r, f, form.modular_headroom_bits(f))?;
+            check_acc(layout, form, f)?;
+            out.sums = split::sum(layout, px, py, f, form, k)?;
         }
     }
     Ok(out)

@@ -17,13 +17,13 @@
 //! under the lost strips and 0 elsewhere (tested in `host-tests`).
 
 use super::corners4::Corners4;
-use super::{sum_raw, BoxLookup, BoxSum, Form};
+use super::{sum_raw, Form, WideOf};
 use crate::cost::Counter;
-use crate::edge::EdgeMode;
+use crate::edge::{width_u64, EdgeMode};
 use crate::error::Error;
 use crate::layouts::Layout;
-use crate::rect::{Coord, RawBox, Rect};
-use crate::width::{self, max_texel};
+use crate::rect::{FracBits, Rect};
+use crate::width::max_texel_u64;
 
 /// When to take the 4-read shortcut: boxes whose sides are both at least `min_side` texels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,18 +47,12 @@ impl Shortcut {
         if tol_num == 0 {
             return Shortcut { min_side: u64::MAX };
         }
-        let need = max_texel(texel_bits)
+        let need = max_texel_u64(texel_bits)
             .saturating_mul(2)
-            .saturating_mul(tol_den as u128);
-        let s = need.div_ceil(tol_num as u128).saturating_add(1);
+            .saturating_mul(tol_den);
+        let s = need.div_ceil(tol_num).saturating_add(1);
         Shortcut {
-            min_side: if s > u64::MAX as u128 {
-                u64::MAX
-            } else if s < 2 {
-                2
-            } else {
-                s as u64
-            },
+            min_side: if s < 2 { 2 } else { s },
         }
     }
 
@@ -70,25 +64,36 @@ impl Shortcut {
     /// The proven bound `m (1/(W-1) + 1/(H-1))` on the shortcut's mean error for a box of sides
     /// `W, H >= 2` texels, as `f64` (for reports and tests).
     pub fn error_bound(texel_bits: u32, w: f64, h: f64) -> f64 {
-        max_texel(texel_bits) as f64 * (1.0 / (w - 1.0) + 1.0 / (h - 1.0))
+        max_texel_u64(texel_bits) as f64 * (1.0 / (w - 1.0) + 1.0 / (h - 1.0))
     }
 }
 
 /// A mean from [`crate::Sat::box_mean_shortcut`], and whether the shortcut answered it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ShortcutMean<const C: usize> {
+pub struct ShortcutMean<W, const C: usize> {
     /// Per channel, the mean times `2^g`, rounded to nearest (ties up).
-    pub means: [u128; C],
+    pub means: [W; C],
     /// True if the 4-read shortcut was taken.
     pub shortcut: bool,
 }
 
-/// Rounds a raw coordinate to the nearest integer, ties up (toward +infinity).
-fn round_raw(x: i128, f: u32) -> i128 {
+impl<W: Into<u128> + Copy, const C: usize> ShortcutMean<W, C> {
+    /// The same means as `u128` (host-side convenience).
+    pub fn to_u128(&self) -> ShortcutMean<u128, C> {
+        ShortcutMean {
+            means: self.means.map(Into::into),
+            shortcut: self.shortcut,
+        }
+    }
+}
+
+/// Rounds a raw coordinate to the nearest integer, ties up (toward +infinity); `None` past
+/// the `i64` range.
+fn round_raw(x: i64, f: u32) -> Option<i64> {
     if f == 0 {
-        x
+        Some(x)
     } else {
-        (x + (1i128 << (f - 1))) >> f
+        Some(x.checked_add(1i64 << (f - 1))? >> f)
     }
 }
 
@@ -99,47 +104,33 @@ fn round_raw(x: i128, f: u32) -> i128 {
 ///
 /// Shortcut cost: 4 reads, 3 additive, 1 multiply (area), 1 divide per channel: Crow's
 /// "4 texture accesses, two multiplicative operations and 3 additive operations".
-pub(crate) fn mean<L: Layout<C>, X: Coord, Fm: Form, M: EdgeMode, K: Counter, const C: usize>(
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn mean<L: Layout<C>, Fm: Form, M: EdgeMode, K: Counter, const C: usize>(
     layout: &L,
-    r: &Rect<X>,
+    r: &Rect<i64>,
+    frac_bits: FracBits,
     form: Fm,
     mode: M,
     shortcut: &Shortcut,
     out_frac_bits: u32,
     k: &mut K,
-) -> Result<ShortcutMean<C>, Error> {
-    let f = X::FRAC_BITS;
-    if f > width::MAX_FRAC_BITS {
-        return Err(Error::FracBitsUnsupported {
-            frac_bits: f,
-            max: width::MAX_FRAC_BITS,
-        });
-    }
-    let (x0, y0, x1, y1) = (
-        r.x0.raw() as i128,
-        r.y0.raw() as i128,
-        r.x1.raw() as i128,
-        r.y1.raw() as i128,
-    );
-    if x1 < x0 || y1 < y0 {
+) -> Result<ShortcutMean<WideOf<L, C>, C>, Error> {
+    let f = frac_bits.get();
+    if r.x1 < r.x0 || r.y1 < r.y0 {
         return Err(Error::InvertedBox);
     }
-    let min_raw = (shortcut.min_side as i128).saturating_mul(1i128 << f);
-    if x1 - x0 >= min_raw && y1 - y0 >= min_raw {
-        let b = RawBox {
-            x0: round_raw(x0, f),
-            y0: round_raw(y0, f),
-            x1: round_raw(x1, f),
-            y1: round_raw(y1, f),
-        };
-        let sum: BoxSum<C> = sum_raw::<L, Corners4, M, K, C>(layout, b, 0, k)?;
+    let min_raw = shortcut.min_side.checked_mul(1u64 << f).unwrap_or(u64::MAX);
+    if width_u64(r.x0, r.x1) >= min_raw && width_u64(r.y0, r.y1) >= min_raw {
+        let round = |v: i64| round_raw(v, f).ok_or(Error::CoordinateOutOfRange);
+        let b = Rect::new(round(r.x0)?, round(r.y0)?, round(r.x1)?, round(r.y1)?);
+        let sum = sum_raw(layout, &b, 0, Corners4, mode, k)?;
         let means = sum.means_rounded(out_frac_bits, k)?;
         return Ok(ShortcutMean {
             means,
             shortcut: true,
         });
     }
-    let sum = BoxLookup::box_sum(layout, r, form, mode, k)?;
+    let sum = sum_raw(layout, r, f, form, mode, k)?;
     Ok(ShortcutMean {
         means: sum.means_rounded(out_frac_bits, k)?,
         shortcut: false,

@@ -14,11 +14,11 @@ const TEX: [u8; W * H] = [
     16, 17, 18, 19, 20,
 ];
 
-fn direct(x0: usize, y0: usize, x1: usize, y1: usize) -> u128 {
+fn direct(x0: usize, y0: usize, x1: usize, y1: usize) -> u64 {
     let mut s = 0;
     for y in y0..y1 {
         for x in x0..x1 {
-            s += TEX[y * W + x] as u128;
+            s += TEX[y * W + x] as u64;
         }
     }
     s

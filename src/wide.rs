@@ -1,0 +1,285 @@
+//! The unsigned result words of the lookups ([`Wide`]: `u64` for `u16` and `u32` tables, `u128`
+//! for `u64` tables) and the one rounded division of the mean.
+//!
+//! The mean is `round(sum * 2^g / (W * H))` with the sum scaled by `2^2F` and the box sides `W`,
+//! `H` in units of `2^-F`. For `u64` results the common case is one `u64` division: when
+//! `sum * 2^g` and `W * H` both fit 64 bits. Otherwise (a huge [`crate::Border`] box, many output
+//! bits) the same rounded quotient is found by restoring long division on two 64-bit words, so
+//! no 128-bit integer operation is ever emitted for a `u16` or `u32` table (a 128-bit divide is a
+//! software loop of about 1,200 instructions on a Cortex-M4).
+
+use crate::error::{Error, Quantity};
+
+/// An unsigned result word: `u64` or `u128`. Sealed.
+pub trait Wide:
+    Copy + Ord + Default + core::fmt::Debug + core::fmt::Display + Into<u128> + sealed::Sealed + 'static
+{
+    /// Bits of the word.
+    const BITS: u32;
+    /// Zero.
+    const ZERO: Self;
+    /// Bits needed to hold the value (`0` for `0`).
+    fn bits(self) -> u32;
+    /// `self >> s` for `s < BITS`.
+    fn shr(self, s: u32) -> Self;
+    /// Checked `self * m`.
+    fn checked_mul_u64(self, m: u64) -> Option<Self>;
+    /// Checked `self + o`.
+    fn checked_add(self, o: Self) -> Option<Self>;
+    /// `round(self * 2^g / (w * h))`, ties up; `w, h >= 1`. Refuses (as
+    /// [`Quantity::MeanNumerator`]) a result that does not fit the word.
+    fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<Self, Error>;
+}
+
+mod sealed {
+    /// Keeps [`super::Wide`] closed.
+    pub trait Sealed {}
+    impl Sealed for u64 {}
+    impl Sealed for u128 {}
+}
+
+fn too_wide(bits_needed: u32, bits_available: u32) -> Error {
+    Error::TooWide {
+        what: Quantity::MeanNumerator,
+        bits_needed,
+        bits_available,
+    }
+}
+
+/// `floor(log2 v) + 1`, 0 for 0.
+#[inline(always)]
+const fn bits64(v: u64) -> u32 {
+    64 - v.leading_zeros()
+}
+
+/// A 128-bit unsigned value as two `u64` halves, with just what restoring division needs.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Pair {
+    hi: u64,
+    lo: u64,
+}
+
+impl Pair {
+    /// The full product `a * b`, from 32-bit halves (no 128-bit operation).
+    fn mul(a: u64, b: u64) -> Pair {
+        let (a1, a0) = (a >> 32, a & 0xFFFF_FFFF);
+        let (b1, b0) = (b >> 32, b & 0xFFFF_FFFF);
+        let p00 = a0 * b0;
+        let p01 = a0 * b1;
+        let p10 = a1 * b0;
+        let p11 = a1 * b1;
+        // Middle column: the high half of p00 plus the low halves of the cross terms; below 3 * 2^32.
+        let mid = (p00 >> 32) + (p01 & 0xFFFF_FFFF) + (p10 & 0xFFFF_FFFF);
+        let lo = (p00 & 0xFFFF_FFFF) | (mid << 32);
+        let hi = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
+        Pair { hi, lo }
+    }
+
+    /// `self - o` for `self >= o`.
+    fn sub(self, o: Pair) -> Pair {
+        let (lo, borrow) = self.lo.overflowing_sub(o.lo);
+        Pair {
+            hi: self.hi.wrapping_sub(o.hi).wrapping_sub(borrow as u64),
+            lo,
+        }
+    }
+
+    /// `(self << 1) | bit` and the bit shifted out.
+    fn shl1(self, bit: bool) -> (Pair, bool) {
+        let out = self.hi >> 63 != 0;
+        (
+            Pair {
+                hi: (self.hi << 1) | (self.lo >> 63),
+                lo: (self.lo << 1) | bit as u64,
+            },
+            out,
+        )
+    }
+}
+
+/// `round(num * 2^g / (w * h))` by restoring long division over the bits of `num` followed by
+/// `g` zero bits, against the 128-bit divisor `w * h` (the cold path of the `u64` mean).
+fn div_round_long(num: u64, g: u32, w: u64, h: u64) -> Result<u64, Error> {
+    let den = Pair::mul(w, h);
+    let total = 64 + g;
+    let mut rem = Pair { hi: 0, lo: 0 };
+    let mut q: u64 = 0;
+    for i in 0..total {
+        let bit = if i < 64 {
+            (num >> (63 - i)) & 1 != 0
+        } else {
+            false
+        };
+        let (shifted, out) = rem.shl1(bit);
+        // q's top bit would be lost: the quotient has more than 64 bits.
+        if q >> 63 != 0 {
+            return Err(too_wide(total - i + 64, 64));
+        }
+        q <<= 1;
+        if out || shifted >= den {
+            rem = shifted.sub(den);
+            q |= 1;
+        } else {
+            rem = shifted;
+        }
+    }
+    // Round to nearest, ties up: up iff 2 rem >= den, i.e. rem >= den - rem.
+    if rem >= den.sub(rem) {
+        q = q.checked_add(1).ok_or(too_wide(65, 64))?;
+    }
+    Ok(q)
+}
+
+impl Wide for u64 {
+    const BITS: u32 = 64;
+    const ZERO: Self = 0;
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        bits64(self)
+    }
+    #[inline(always)]
+    fn shr(self, s: u32) -> Self {
+        self >> (s & 63)
+    }
+    #[inline(always)]
+    fn checked_mul_u64(self, m: u64) -> Option<Self> {
+        self.checked_mul(m)
+    }
+    #[inline(always)]
+    fn checked_add(self, o: Self) -> Option<Self> {
+        u64::checked_add(self, o)
+    }
+    #[inline]
+    fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<u64, Error> {
+        if self == 0 {
+            return Ok(0);
+        }
+        if let Some(area) = w.checked_mul(h) {
+            if area != 0 && g < 64 && bits64(self) + g <= 64 {
+                // The common case: one u64 division (quotient and remainder together).
+                let n = self << g;
+                let (q, r) = (n / area, n % area);
+                return Ok(if r >= area - r { q + 1 } else { q });
+            }
+        }
+        if w == 0 || h == 0 {
+            return Err(Error::ZeroArea);
+        }
+        if g > 128 {
+            return Err(too_wide(bits64(self).saturating_add(g), 64));
+        }
+        div_round_long(self, g, w, h)
+    }
+}
+
+impl Wide for u128 {
+    const BITS: u32 = 128;
+    const ZERO: Self = 0;
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        128 - self.leading_zeros()
+    }
+    #[inline(always)]
+    fn shr(self, s: u32) -> Self {
+        self >> (s & 127)
+    }
+    #[inline(always)]
+    fn checked_mul_u64(self, m: u64) -> Option<Self> {
+        self.checked_mul(m as u128)
+    }
+    #[inline(always)]
+    fn checked_add(self, o: Self) -> Option<Self> {
+        u128::checked_add(self, o)
+    }
+    fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<u128, Error> {
+        let area = w as u128 * h as u128;
+        if area == 0 {
+            return Err(Error::ZeroArea);
+        }
+        let needed = self.bits().saturating_add(g);
+        if needed > 128 || g >= 128 {
+            return Err(too_wide(needed, 128));
+        }
+        let n = self << g;
+        let (q, r) = (n / area, n % area);
+        Ok(if r >= area - r { q + 1 } else { q })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reference(num: u64, g: u32, w: u64, h: u64) -> Option<u128> {
+        // Exact in u128 where it fits (the test's own arithmetic, not the code under test).
+        let n = (num as u128)
+            .checked_shl(g)
+            .filter(|v| v >> g == num as u128)?;
+        let a = w as u128 * h as u128;
+        let (q, r) = (n / a, n % a);
+        Some(if r >= a - r { q + 1 } else { q })
+    }
+
+    #[test]
+    fn pair_mul_matches_u128() {
+        let vals = [
+            0u64,
+            1,
+            2,
+            0xFFFF_FFFF,
+            0x1_0000_0000,
+            u64::MAX,
+            u64::MAX - 1,
+            0x8000_0000_0000_0000,
+            0x1234_5678_9ABC_DEF0,
+        ];
+        for &a in &vals {
+            for &b in &vals {
+                let p = Pair::mul(a, b);
+                let want = a as u128 * b as u128;
+                assert_eq!(((p.hi as u128) << 64) | p.lo as u128, want, "{a} {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn u64_mean_matches_reference_fast_and_long_paths() {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        for i in 0..20_000 {
+            let num = next() >> (next() % 64);
+            let g = (next() % 40) as u32;
+            let w = (next() >> (next() % 64)).max(1);
+            let h = (next() >> (next() % 64)).max(1);
+            let want = reference(num, g, w, h);
+            let got = num.div_round_area(g, w, h);
+            match want {
+                Some(v) if v <= u64::MAX as u128 => {
+                    assert_eq!(got, Ok(v as u64), "{i}: {num} {g} {w} {h}")
+                }
+                Some(_) => assert!(got.is_err(), "{i}: {num} {g} {w} {h}"),
+                None => {}
+            }
+            // The long path alone agrees too.
+            if let Some(v) = want.filter(|&v| v <= u64::MAX as u128) {
+                assert_eq!(div_round_long(num, g, w, h), Ok(v as u64));
+            }
+        }
+    }
+
+    #[test]
+    fn ties_round_up_and_huge_areas() {
+        assert_eq!(1u64.div_round_area(0, 2, 1), Ok(1));
+        assert_eq!(1u64.div_round_area(0, 3, 1), Ok(0));
+        // Area 2^64 * 2^63 (cold path): 2^63 * 2^64 / 2^127 = 1.
+        assert_eq!((1u64 << 63).div_round_area(64, 1 << 63, 1 << 63), Ok(2));
+        assert_eq!(u64::MAX.div_round_area(64, u64::MAX, u64::MAX), Ok(1));
+        assert!(u64::MAX.div_round_area(8, 1, 1).is_err());
+        assert_eq!(0u64.div_round_area(200, 1, 1), Ok(0));
+    }
+}
