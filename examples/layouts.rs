@@ -59,7 +59,12 @@ fn measure<L: BoxLookup<1>>(
         let r = Rect::new(x0 as i32, y0 as i32, (x0 + bw) as i32, (y0 + bh) as i32);
         let mut t = Tally::new();
         let s = l.box_sum_int(&r, Border, &mut t).expect("in-range box");
-        assert_eq!(s, flat.box_sum_int(&r, Border, &mut NoCount).unwrap());
+        assert_eq!(
+            s.to_u128(),
+            flat.box_sum_int(&r, Border, &mut NoCount)
+                .unwrap()
+                .to_u128()
+        );
         ri += t.reads;
         wi += t.words;
         ai += t.adds;
@@ -74,7 +79,12 @@ fn measure<L: BoxLookup<1>>(
         let s = l
             .box_sum(&fr, Stable, Border, &mut t)
             .expect("in-range box");
-        assert_eq!(s, flat.box_sum(&fr, Stable, Border, &mut NoCount).unwrap());
+        assert_eq!(
+            s.to_u128(),
+            flat.box_sum(&fr, Stable, Border, &mut NoCount)
+                .unwrap()
+                .to_u128()
+        );
         rf += t.reads;
     }
     let n = boxes as f64;

@@ -30,12 +30,6 @@ mod num;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use filter::{FilterArg, FilterQuery, ImageTexel};
-use fixed::traits::Fixed;
-use fixed::types::extra::{
-    U1, U10, U11, U12, U13, U14, U15, U16, U17, U18, U19, U2, U20, U21, U22, U23, U24, U3, U4, U5,
-    U6, U7, U8, U9,
-};
-use fixed::FixedI64;
 use layout::{with_layout, Detail, LayoutArg, LayoutJob, LayoutKind, Plan};
 use load::{channel_totals, with_texture, TextureJob};
 use num::{fixed_decimal, parse_fixed, Inexact};
@@ -46,8 +40,8 @@ use std::process::ExitCode;
 use texsat::texel::Acc;
 use texsat::width::{self, bits_of};
 use texsat::{
-    Border, BoxLookup, BoxSum, ClampToEdge, EdgeMode, Entry, Error, Form, MirroredRepeat, NoCount,
-    Paper, Quantity, Rect, Repeat, Stable, Tally, Texel, Texture,
+    BoxLookup, BoxSum, EdgeKind, Entry, Error, FormKind, FracBits, NoCount, Quantity, Rect, Tally,
+    Texel, Texture,
 };
 
 #[derive(Parser)]
@@ -236,6 +230,28 @@ enum FormArg {
     Paper,
     /// Differences first; multiplier operands bounded by the box (16 reads, 31 adds).
     Stable,
+}
+
+impl EdgeArg {
+    /// The crate's run-time mode.
+    fn kind(self) -> EdgeKind {
+        match self {
+            EdgeArg::Border => EdgeKind::Border,
+            EdgeArg::Clamp => EdgeKind::Clamp,
+            EdgeArg::Repeat => EdgeKind::Repeat,
+            EdgeArg::Mirror => EdgeKind::Mirror,
+        }
+    }
+}
+
+impl FormArg {
+    /// The crate's run-time form.
+    fn kind(self) -> FormKind {
+        match self {
+            FormArg::Paper => FormKind::Paper,
+            FormArg::Stable => FormKind::Stable,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -713,8 +729,8 @@ fn check_widths<L: BoxLookup<C>, const C: usize>(
     }
     let f = o.frac_bits;
     let (name, needed) = match o.form {
-        FormArg::Paper => ("paper", Paper::acc_bits(l.value_bits(), f)),
-        FormArg::Stable => ("stable", Stable::acc_bits(l.value_bits(), f)),
+        FormArg::Paper => ("paper", FormKind::Paper.acc_bits(l.value_bits(), f)),
+        FormArg::Stable => ("stable", FormKind::Stable.acc_bits(l.value_bits(), f)),
     };
     let available = <<L::Value as Entry>::Acc as Acc>::VALUE_BITS;
     if needed > available {
@@ -734,7 +750,7 @@ fn check_widths<L: BoxLookup<C>, const C: usize>(
         ));
     }
     if let (Some(k), FormArg::Paper, false) = (l.modulus(), o.form, o.int4) {
-        let headroom = <Paper as Form>::modular_headroom_bits(f);
+        let headroom = FormKind::Paper.modular_headroom_bits(f);
         let one_texel = l.texel_bits() + headroom;
         if one_texel > k {
             return Err(format!(
@@ -847,47 +863,21 @@ fn answer_line<L: BoxLookup<C>, const C: usize>(
     }))
 }
 
-type Looked<const C: usize> = Result<(BoxSum<C>, &'static str), String>;
+type Looked<const C: usize> = Result<(BoxSum<u128, C>, &'static str), String>;
 
-/// Dispatches on the boundary mode and the formulation (zero-sized types in the crate).
+/// The lookup: the 4-read integer lookup at `F = 0` (or for integer boxes with `--int4`), else
+/// the 16-read lookup with `F` as a value and the mode and form as run-time values
+/// (`EdgeKind`, `FormKind`): one compiled lookup per layout serves every `F`, mode and form.
 fn lookup<L: BoxLookup<C>, const C: usize>(
     l: &L,
     o: &QueryOpts,
     raw: [i64; 4],
     k: &mut Tally,
 ) -> Looked<C> {
-    fn by_form<L: BoxLookup<C>, const C: usize, M: EdgeMode>(
-        l: &L,
-        o: &QueryOpts,
-        raw: [i64; 4],
-        m: M,
-        k: &mut Tally,
-    ) -> Looked<C> {
-        match o.form {
-            FormArg::Paper => lookup_in::<L, C, M, Paper>(l, o.frac_bits, o.int4, raw, m, k),
-            FormArg::Stable => lookup_in::<L, C, M, Stable>(l, o.frac_bits, o.int4, raw, m, k),
-        }
-    }
-    match o.edge {
-        EdgeArg::Border => by_form(l, o, raw, Border, k),
-        EdgeArg::Clamp => by_form(l, o, raw, ClampToEdge, k),
-        EdgeArg::Repeat => by_form(l, o, raw, Repeat, k),
-        EdgeArg::Mirror => by_form(l, o, raw, MirroredRepeat, k),
-    }
-}
-
-/// The lookup proper: the 4-read integer lookup at `F = 0` (or for integer boxes with `--int4`),
-/// else the 16-read lookup with corners of the `fixed` type `FixedI64<U{F}>`.
-fn lookup_in<L: BoxLookup<C>, const C: usize, M: EdgeMode, Fm: Form>(
-    l: &L,
-    f: u32,
-    int4: bool,
-    raw: [i64; 4],
-    mode: M,
-    k: &mut Tally,
-) -> Looked<C> {
+    let f = o.frac_bits;
+    let mode = o.edge.kind();
     let integer = raw.iter().all(|&v| v & ((1i64 << f) - 1) == 0);
-    if f == 0 || (int4 && integer) {
+    if f == 0 || (o.int4 && integer) {
         let mut c = [0i32; 4];
         for (ci, &r) in c.iter_mut().zip(&raw) {
             *ci = i32::try_from(r >> f).map_err(|_| {
@@ -900,30 +890,13 @@ fn lookup_in<L: BoxLookup<C>, const C: usize, M: EdgeMode, Fm: Form>(
         let r = Rect::new(c[0], c[1], c[2], c[3]);
         return l
             .box_sum_int(&r, mode, k)
-            .map(|s| (s, "int4"))
+            .map(|s| (s.to_u128(), "int4"))
             .map_err(|e| e.to_string());
     }
-    fn at<X: Fixed<Bits = i64>, L: BoxLookup<C>, const C: usize, M: EdgeMode, Fm: Form>(
-        l: &L,
-        raw: [i64; 4],
-        mode: M,
-        k: &mut Tally,
-    ) -> Result<BoxSum<C>, Error> {
-        let [x0, y0, x1, y1] = raw.map(X::from_bits);
-        l.box_sum(&Rect::new(x0, y0, x1, y1), Fm::default(), mode, k)
-    }
-    macro_rules! by_frac_bits {
-        ($($n:literal => $u:ident),* $(,)?) => {
-            match f {
-                $($n => at::<FixedI64<$u>, L, C, M, Fm>(l, raw, mode, k),)*
-                _ => unreachable!("F is checked to be in 0..=24"),
-            }
-        };
-    }
-    let sum = by_frac_bits!(
-        1 => U1, 2 => U2, 3 => U3, 4 => U4, 5 => U5, 6 => U6, 7 => U7, 8 => U8,
-        9 => U9, 10 => U10, 11 => U11, 12 => U12, 13 => U13, 14 => U14, 15 => U15, 16 => U16,
-        17 => U17, 18 => U18, 19 => U19, 20 => U20, 21 => U21, 22 => U22, 23 => U23, 24 => U24,
-    );
-    sum.map(|s| (s, Fm::NAME)).map_err(|e| e.to_string())
+    let form = o.form.kind();
+    let fb = FracBits::new(f).map_err(|e| e.to_string())?;
+    let [x0, y0, x1, y1] = raw;
+    l.box_sum_raw(&Rect::new(x0, y0, x1, y1), fb, form, mode, k)
+        .map(|s| (s.to_u128(), form.name()))
+        .map_err(|e| e.to_string())
 }

@@ -12,7 +12,7 @@ use texsat::filters::Sample;
 use texsat::footprint::Footprint;
 use texsat::layouts::{Modular, Tiled, TiledSpec};
 use texsat::{
-    BoxLookup, BoxSum, Counter, Error, Layout, NoCount, Paper, Rect, Sat, Stable, Texture,
+    BoxLookup, BoxSum, Counter, Error, Layout, NoCount, Paper, Rect, Sat, Stable, Texture, Wide,
 };
 use texsat_host_tests::filter_ref_mip::{self as rmip, RefImage};
 use texsat_host_tests::filter_ref_ripdip::{self as rrd, DipVariant, LevelSel, RefDip, RefRip};
@@ -489,8 +489,9 @@ fn value(s: Sample<1>) -> f64 {
 }
 
 #[inline(always)]
-fn mean<K: Counter>(s: BoxSum<1>, k: &mut K) -> Result<f64, SampleError> {
-    Ok(s.mean_rounded(0, G, k)? as f64 / (1u64 << G) as f64)
+fn mean<W: Wide, K: Counter>(s: BoxSum<W, 1>, k: &mut K) -> Result<f64, SampleError> {
+    let m: u128 = s.mean_rounded(0, G, k)?.into();
+    Ok(m as f64 / (1u64 << G) as f64)
 }
 
 #[inline(always)]

@@ -105,11 +105,12 @@ fn lookup<M: EdgeMode, Fm: Form>(
         let [x0, y0, x1, y1] = raw.map(|v| I24F8::from_bits(v as i32));
         sat.box_sum(&Rect::new(x0, y0, x1, y1), form, mode, &mut tally)
     }
-    .map_err(|e| format!("demo lookup failed: {e}"))?;
+    .map_err(|e| format!("demo lookup failed: {e}"))?
+    .to_u128();
     let mean = sum
         .mean_rounded(0, G, &mut tally)
         .map_err(|e| format!("demo mean failed: {e}"))?;
-    let reference = direct(t, raw, f, M::NAME);
+    let reference = direct(t, raw, f, mode.kind().name());
     let c = |v| coord(v, f);
     Ok(Row {
         what: format!(
@@ -119,11 +120,11 @@ fn lookup<M: EdgeMode, Fm: Form>(
             c(raw[1]),
             c(raw[3])
         ),
-        mode: M::NAME,
+        mode: mode.kind().name(),
         lookup: if f == 0 {
             "int4".to_string()
         } else {
-            format!("{} F={f}", Fm::NAME)
+            format!("{} F={f}", form.kind().name())
         },
         sum: fixed_decimal(sum.sum(), 2 * f),
         mean: mean as f64 / (1u64 << G) as f64,
@@ -189,8 +190,8 @@ pub fn run() -> Result<bool, String> {
     );
     println!(
         "          16-read lookups at F = {F} accumulate in i64 (63 value bits): paper needs {}, stable {}",
-        Paper::acc_bits(sat.total_bits(), F),
-        Stable::acc_bits(sat.total_bits(), F)
+        texsat::FormKind::Paper.acc_bits(sat.total_bits(), F),
+        texsat::FormKind::Stable.acc_bits(sat.total_bits(), F)
     );
     println!();
 
@@ -283,7 +284,7 @@ pub fn run() -> Result<bool, String> {
         .box_mean_shortcut(&big_rect, Paper, Border, &shortcut, G, &mut short_tally)
         .map_err(|e| e.to_string())?;
     let to_f = |m: u128| m as f64 / (1u64 << G) as f64;
-    let (me, ms) = (to_f(exact.means[0]), to_f(short.means[0]));
+    let (me, ms) = (to_f(exact.means[0].into()), to_f(short.means[0].into()));
     let (bw, bh) = (
         (big[2] - big[0]) as f64 / 256.0,
         (big[3] - big[1]) as f64 / 256.0,

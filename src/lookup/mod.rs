@@ -57,6 +57,25 @@ impl FormKind {
         }
     }
 
+    /// Accumulator value bits this form needs on a table whose largest entry has `total_bits`
+    /// bits, at `F = frac_bits` ([`width::paper_acc_bits`], [`width::stable_acc_bits`]).
+    pub const fn acc_bits(self, total_bits: u32, frac_bits: u32) -> u32 {
+        match self {
+            FormKind::Paper => width::paper_acc_bits(total_bits, frac_bits),
+            FormKind::Stable => width::stable_acc_bits(total_bits, frac_bits),
+        }
+    }
+
+    /// Extra bits a modular layout needs above the box sum's bits in this form: `2F` for
+    /// [`Paper`] (its corner values are only known modulo `2^k`), 0 for [`Stable`] (it reduces
+    /// box-bounded differences first).
+    pub const fn modular_headroom_bits(self, frac_bits: u32) -> u32 {
+        match self {
+            FormKind::Paper => frac_bits.saturating_mul(2),
+            FormKind::Stable => 0,
+        }
+    }
+
     /// The form named by [`FormKind::name`].
     pub fn from_name(name: &str) -> Option<FormKind> {
         [FormKind::Paper, FormKind::Stable]

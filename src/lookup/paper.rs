@@ -60,7 +60,7 @@ impl FormImpl for Paper {
     #[inline(always)]
     fn modular_headroom_bits(self, frac_bits: u32) -> u32 {
         // Corner values are known mod 2^k only, so the whole scaled result must be below 2^k.
-        2 * frac_bits
+        crate::FormKind::Paper.modular_headroom_bits(frac_bits)
     }
     // Inlined: an out-of-line call returning the sums through memory dominated the lookup
     // (docs/benchmarks.md, finding 1).
