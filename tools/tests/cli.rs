@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 
 fn sat_bin() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| common::example_bin("sat", "SAT_BIN", &["filters"]))
+    BIN.get_or_init(|| common::example_bin("sat", "SAT_BIN", &[]))
 }
 
 fn run(args: &[&str], stdin: &str) -> Output {
