@@ -119,7 +119,7 @@ pub(crate) fn mean<L: Layout<C>, Fm: Form, M: EdgeMode, K: Counter, const C: usi
     if r.x1 < r.x0 || r.y1 < r.y0 {
         return Err(Error::InvertedBox);
     }
-    let min_raw = shortcut.min_side.checked_mul(1u64 << f).unwrap_or(u64::MAX);
+    let min_raw = shortcut.min_side.saturating_mul(1u64 << f);
     if width_u64(r.x0, r.x1) >= min_raw && width_u64(r.y0, r.y1) >= min_raw {
         let round = |v: i64| round_raw(v, f).ok_or(Error::CoordinateOutOfRange);
         let b = Rect::new(round(r.x0)?, round(r.y0)?, round(r.x1)?, round(r.y1)?);
