@@ -136,19 +136,6 @@ def parse_disassembly(objdump, elf):
         m = INSN.match(line)
         if m and cur is not None:
             insns[cur].append((int(m.group(1), 16), m.group(2), m.group(3)))
-    starts = sorted(funcs)
-    ends = {s: (starts[i + 1] if i + 1 < len(starts) else 1 << 32) for i, s in enumerate(starts)}
-
-    def owner(addr):
-        lo, hi = 0, len(starts) - 1
-        while lo <= hi:
-            mid = (lo + hi) // 2
-            if starts[mid] <= addr:
-                lo = mid + 1
-            else:
-                hi = mid - 1
-        return starts[hi] if hi >= 0 and addr < ends[starts[hi]] else None
-
     edges = defaultdict(list)  # caller start -> [(callee start, insn index)]
     for s, body in insns.items():
         for i, (addr, mnem, ops) in enumerate(body):
@@ -157,8 +144,10 @@ def parse_disassembly(objdump, elf):
             m = re.match(r"0x([0-9a-f]+)", ops)
             if not m:
                 continue
-            t = owner(int(m.group(1), 16))
-            if t is not None and t != s:
+            # Calls and tail calls go to a function's first instruction; a branch into the middle
+            # of another function is alignment padding decoded as an instruction.
+            t = int(m.group(1), 16)
+            if t in funcs and t != s:
                 edges[s].append((t, i))
     return funcs, insns, edges
 

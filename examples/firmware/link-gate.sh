@@ -111,7 +111,8 @@ diagnose() {
     "$LLVM_BIN/llvm-objdump" -d -C --no-show-raw-insn "$dir/diagnose.elf" | awk '
       /^[0-9a-f]+ <.*>:$/ { fn = $0; sub(/^[0-9a-f]+ </, "", fn); sub(/>:$/, "", fn) }
       /\tbl?(\.w)?\t.*<core::(panicking|slice::index|option|result)::/ {
-        t = $0; sub(/.*</, "", t); sub(/>.*/, "", t); print "  " fn "  ->  " t }' | sort | uniq -c
+        t = $0; sub(/.*</, "", t); sub(/>.*/, "", t)
+        if (t !~ /\+0x/ && index(fn, "core::") != 1) print "  " fn "  ->  " t }' | sort | uniq -c
   fi
 }
 

@@ -49,10 +49,10 @@ const MAX_WORDS: usize = 4 * MAX_TEXELS;
 
 /// The gate's panic handler: reachable only if a panic path remains, and then the link fails.
 ///
-/// `unsafe` is needed (and is the firmware's only use of it) because calling a foreign function
-/// is unsafe: `texsat_link_gate_a_panic_path_remains` is deliberately *defined nowhere*. It is
-/// never executed: if the handler is reachable the binary does not link, so no firmware with
-/// this handler can ever run it. texsat itself stays `forbid(unsafe_code)`.
+/// `unsafe` is needed because calling a foreign function is unsafe (the only other `unsafe` here
+/// is defmt's `Logger` impl): `texsat_link_gate_a_panic_path_remains` is deliberately *defined
+/// nowhere*. It is never executed: if the handler is reachable the binary does not link, so no
+/// firmware with this handler can ever run it. texsat itself stays `forbid(unsafe_code)`.
 #[cfg(not(feature = "diagnose"))]
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
@@ -423,6 +423,69 @@ fn gate_modular_box_sum(l: &Modular<'_, En>, r: &Rect<Co>) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Core: width proofs, packed fields, tiled specs, footprints (public helpers a firmware may call
+// at run time; the `const fn`s are called here with opaque arguments).
+// ---------------------------------------------------------------------------------------------
+
+#[inline(never)]
+fn gate_width(texel_bits: u32, w: usize, h: usize, entry_bits: u32, frac_bits: u32, v: u128) {
+    use texsat::width;
+    keep((
+        width::bits_of(v),
+        width::ceil_log2(v),
+        width::max_texel(texel_bits),
+    ));
+    keep(width::check_texel_bits(texel_bits));
+    keep(width::worst_case_total(texel_bits, w, h));
+    keep(width::entry_bits_worst_case(texel_bits, w, h));
+    keep(width::entry_bits_naive(texel_bits, w, h));
+    keep(width::check_entry_worst_case(texel_bits, w, h, entry_bits));
+    keep(width::paper_acc_bits(entry_bits, frac_bits));
+    keep(width::stable_acc_bits(entry_bits, frac_bits));
+    keep(width::check_acc(entry_bits, frac_bits));
+    let p = width::paper_multiplies(texel_bits, w, h, frac_bits);
+    let q = width::stable_multiplies(texel_bits, w, frac_bits);
+    keep((p[0].fits_signed(18, 25), q[2].fits_signed(18, 25), p, q));
+}
+
+#[inline(never)]
+fn gate_packed(words: &mut [u32], offset: u64, len: u32, value: u64, count: usize) {
+    use texsat::layouts::packed;
+    keep(packed::words_for(count, len));
+    keep(packed::write_bits(words, offset, len, value));
+    keep(packed::read_bits(words, offset, len));
+}
+
+#[inline(never)]
+fn gate_tiled_spec(blocks: &[u32], t: [u32; 2], k: u32, texel_bits: u32, area: u64) {
+    use texsat::layouts::{modulus_bits_for, AxisLevels};
+    let levels = AxisLevels::new(blocks);
+    if let Ok(l) = levels {
+        keep((l.blocks(), l.components()));
+    }
+    keep(levels);
+    keep(TiledSpec::tiles(t[0], t[1]).map(|s| s.with_modulus(k)));
+    keep(TiledSpec::square(blocks));
+    keep(TiledSpec::FLAT_PACKED.with_modulus(k));
+    keep(modulus_bits_for(texel_bits, area));
+}
+
+/// The f64 helpers (soft double precision on the M4F): perspective footprints and Crow's
+/// rectangle, the shortcut's error bound.
+#[inline(never)]
+fn gate_footprint(m: [[f64; 3]; 3], a: [f64; 6], x: f64, y: f64) {
+    use texsat::footprint::Perspective;
+    let p = Perspective::new(m);
+    let q = Perspective::affine(a[0], a[1], a[2], a[3], a[4], a[5]);
+    keep((p.homogeneous(x, y), p.map(x, y), q.map(x, y)));
+    if let Some(f) = p.footprint(x, y) {
+        let (c, b) = (f.crow_rect(), f.bounding_rect());
+        keep((c.width(), c.height(), b.width(), b.height(), c, b));
+    }
+    keep(Shortcut::error_bound(8, x, y));
+}
+
+// ---------------------------------------------------------------------------------------------
 // Filters, each behind its feature; each sample function in all four boundary modes.
 // ---------------------------------------------------------------------------------------------
 
@@ -454,6 +517,9 @@ macro_rules! each_mode {
 fn gate_point(t: &Texture<'_, Tx>, r: &Rect<Co>) {
     use texsat::filters::point::point;
     each_mode!(|m| point(t, r, m, &mut NoCount));
+    if let Ok(sample) = point(t, r, Repeat, &mut NoCount) {
+        keep(sample.value_f64(black_box(0)));
+    }
 }
 
 #[cfg(any(
@@ -484,6 +550,7 @@ mod mip_gates {
 
     #[inline(never)]
     pub fn gate_mip_queries(p: &MipPyramid<'_, Tx>, r: &Rect<Co>, l: usize, x: usize, y: usize) {
+        keep(texsat::filters::mip::trilinear_error_bound(black_box(8)));
         keep(p.lod(r));
         keep(p.level_texel(l, x, y));
         keep((p.levels(), p.level_count(), p.storage_len()));
@@ -521,6 +588,9 @@ mod rip_gates {
 
     #[inline(never)]
     pub fn gate_rip_queries(m: &RipMap<'_, Tx, 1>, lx: usize, ly: usize, i: usize, j: usize) {
+        use texsat::filters::rip::{arithmetic_error_bound, level_selection_error_bound};
+        let b = black_box(8);
+        keep((arithmetic_error_bound(b), level_selection_error_bound(b)));
         keep((m.level_size(lx, ly), m.level_texel(lx, ly, i, j)));
         keep((
             m.levels_x(),
@@ -557,6 +627,9 @@ mod dip_gates {
 
     #[inline(never)]
     pub fn gate_dip_queries(m: &DipMap<'_, Tx, 1>, p: DipPyramid, l: usize, i: usize, j: usize) {
+        use texsat::filters::dip::{arithmetic_error_bound, level_selection_error_bound};
+        let b = black_box(8);
+        keep((arithmetic_error_bound(b), level_selection_error_bound(b)));
         keep((m.levels(p), m.level_size(p, l), m.level_texel(p, l, i, j)));
         keep((m.storage_len(), m.storage_bits()));
     }
@@ -595,6 +668,11 @@ mod tent_gates {
 
     #[inline(never)]
     pub fn gate_tent_queries(q: &TentTable<'_, Te>, l: &TentLines<'_, Te>, x: usize, y: usize) {
+        use texsat::filters::tent::{paper_error_bound, tent_entry_bits, tent_line_bits};
+        let b = black_box(8);
+        keep((tent_entry_bits(b, x, y), tent_line_bits(b, x)));
+        keep(paper_error_bound(b, x as f64, y as f64));
+        keep((q.width(), q.height(), q.texel_bits()));
         keep((
             q.corner(x, y),
             q.entries(),
@@ -653,6 +731,11 @@ mod variance_gates {
 
     #[inline(never)]
     pub fn gate_variance_queries(v: &VarianceTables<'_, En>, x: usize, y: usize) {
+        keep(texsat::filters::variance::squares_entry_bits(
+            black_box(8),
+            x,
+            y,
+        ));
         keep(Layout::corner(v.squares(), x, y, &mut NoCount));
         keep((
             v.values().total(),
@@ -768,6 +851,35 @@ fn main() -> ! {
     gate_rect_from_f64(
         black_box([0.5, 0.5, 7.5, 3.5]),
         black_box([0.25, 0.0, 2.0, 1.5]),
+    );
+    gate_width(
+        black_box(8),
+        w,
+        h,
+        black_box(32),
+        black_box(8),
+        black_box(12345),
+    );
+    let mut field_words = [0u32; 8];
+    gate_packed(
+        black_box(&mut field_words[..]),
+        black_box(37),
+        black_box(14),
+        black_box(0x1abc),
+        black_box(16),
+    );
+    gate_tiled_spec(
+        black_box(&[2, 8][..]),
+        black_box([4, 4]),
+        black_box(16),
+        black_box(8),
+        black_box(64),
+    );
+    gate_footprint(
+        black_box([[1.0, 0.1, 0.0], [0.0, 1.2, 0.0], [0.0, 0.001, 1.0]]),
+        black_box([1.0, 0.0, 0.5, 0.0, 1.0, 0.5]),
+        black_box(12.5),
+        black_box(7.25),
     );
 
     let packed = gate_texture_new(texels, w, h);
