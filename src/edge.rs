@@ -234,15 +234,16 @@ pub(crate) fn width_u64(lo: i64, hi: i64) -> u64 {
 }
 
 /// `(q, r)` with `x = q p + r`, `0 <= r < p`, for `p > 0`: comparisons only when `x` lies in
-/// `[0, p)` or `[p, 2p)`, else one division.
+/// `[0, p)` or `[p, 2p)`, else one division (checked: `None` only for `p <= 0`, which the
+/// layouts' size check rules out; no panic path either way).
 #[inline(always)]
-fn periods(x: i64, p: i64) -> (i64, i64) {
+fn periods(x: i64, p: i64) -> Option<(i64, i64)> {
     if x >= 0 && x < p {
-        (0, x)
+        Some((0, x))
     } else if x >= p && x - p < p {
-        (1, x - p)
+        Some((1, x - p))
     } else {
-        (x.div_euclid(p), x.rem_euclid(p))
+        Some((x.checked_div_euclid(p)?, x.checked_rem_euclid(p)?))
     }
 }
 
@@ -291,7 +292,7 @@ fn split_clamp(lo: i64, hi: i64, p: i64, f: u32) -> AxisPlan {
 /// `Repeat` (period `p`) or `MirroredRepeat` (half-period `p`, odd halves reflected).
 #[inline(always)]
 fn place_periodic(mirror: bool, lo: i64, hi: i64, p: i64) -> Result<AxisPlan, Error> {
-    let (q0, r0) = periods(lo, p);
+    let (q0, r0) = periods(lo, p).ok_or(Error::CoordinateOutOfRange)?;
     let odd = mirror && q0 & 1 != 0;
     // Reflection of [a, b) inside an odd half: [p - b, p - a).
     let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
@@ -313,10 +314,9 @@ fn split_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> AxisPl
     let (a, b) = map(r0, p, odd);
     s.push(a, b, 1, false);
     let pu = p as u64;
-    let (whole, tail) = if rest <= pu {
-        (0, rest)
-    } else {
-        (rest / pu, rest % pu)
+    let (whole, tail) = match core::num::NonZeroU64::new(pu) {
+        Some(d) if rest > pu => (rest / d, rest % d),
+        _ => (0, rest),
     };
     s.push(0, p, whole, false);
     // The tail lies in the half (period) after the head and the whole ones.

@@ -142,7 +142,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         let needed = entries_needed::<C>(w, h)?;
-        let row_len = needed / h; // = w * C; `h >= 1` by `Texture`
+        let row_len = w * C; // below `needed`, which did not overflow
         let got = storage.len();
         let Some(table) = storage.get_mut(..needed) else {
             return Err(Error::StorageTooSmall { needed, got });

@@ -198,7 +198,7 @@ fn gate_row_stream_builder(t: &Texture<'_, Tx>, row: &mut [En], texel_bits: u32)
 macro_rules! box_sum_int_gates {
     ($($name:ident: $mode:expr;)*) => {$(
         #[inline(never)]
-        fn $name(sat: &Sat<'_, En>, r: &Rect<i32>) -> Option<BoxSum<1>> {
+        fn $name(sat: &Sat<'_, En>, r: &Rect<i32>) -> Option<BoxSum<u64, 1>> {
             black_box(sat.box_sum_int(r, $mode, &mut NoCount)).ok()
         }
     )*};
@@ -214,7 +214,7 @@ box_sum_int_gates! {
 macro_rules! box_sum_gates {
     ($($name:ident: $form:expr, $mode:expr;)*) => {$(
         #[inline(never)]
-        fn $name(sat: &Sat<'_, En>, r: &Rect<Co>) -> Option<BoxSum<1>> {
+        fn $name(sat: &Sat<'_, En>, r: &Rect<Co>) -> Option<BoxSum<u64, 1>> {
             black_box(sat.box_sum(r, $form, $mode, &mut NoCount)).ok()
         }
     )*};
@@ -261,7 +261,7 @@ shortcut_gates! {
 }
 
 #[inline(never)]
-fn gate_mean_rounded(sum: &BoxSum<1>, c: usize, out_frac_bits: u32) {
+fn gate_mean_rounded(sum: &BoxSum<u64, 1>, c: usize, out_frac_bits: u32) {
     keep(sum.mean_rounded(c, out_frac_bits, &mut NoCount));
     let mut tally = Tally::new();
     keep(sum.mean_rounded(c, out_frac_bits, &mut tally));
@@ -271,7 +271,7 @@ fn gate_mean_rounded(sum: &BoxSum<1>, c: usize, out_frac_bits: u32) {
 }
 
 #[inline(never)]
-fn gate_means_rounded(sum: &BoxSum<1>, out_frac_bits: u32) {
+fn gate_means_rounded(sum: &BoxSum<u64, 1>, out_frac_bits: u32) {
     keep(sum.means_rounded(out_frac_bits, &mut NoCount));
 }
 
@@ -766,7 +766,7 @@ mod variance_gates {
 
 #[cfg(feature = "defmt")]
 #[inline(never)]
-fn gate_defmt_format(err: &texsat::Error, sum: &BoxSum<1>, r: &Rect<i32>, s: &Shortcut, t: &Tally) {
+fn gate_defmt_format(err: &texsat::Error, sum: &BoxSum<u64, 1>, r: &Rect<i32>, s: &Shortcut, t: &Tally) {
     defmt::println!("{} {} {} {} {}", err, sum, r, s, t);
 }
 
