@@ -87,21 +87,32 @@ pub(crate) const fn entries_needed<const C: usize>(
     }
 }
 
-/// Exact bits of the largest channel total of a texture (the error path of the checked build).
+/// Exact bits of the largest channel total of a texture (the error path of the checked build),
+/// summed in two 64-bit words (at most `2^31 x 2^31` texels of 16 bits: below `2^78`).
 fn actual_total_bits<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> u32 {
-    // At most 2^31 x 2^31 texels of 16 bits x 4 channels: below 2^80, so u128 (an error path,
-    // never a lookup's) cannot overflow; saturating anyway.
-    let mut totals = [0u128; C];
+    let mut totals = [(0u64, 0u64); C];
     for y in 0..texture.height() {
         if let Some(row) = texture.row(y) {
             for px in row.chunks_exact(C) {
-                for (t, p) in totals.iter_mut().zip(px) {
-                    *t = t.saturating_add(u128::from(p.to_u16()));
+                for ((hi, lo), p) in totals.iter_mut().zip(px) {
+                    let (v, carry) = lo.overflowing_add(u64::from(p.to_u16()));
+                    *lo = v;
+                    *hi = hi.wrapping_add(carry as u64);
                 }
             }
         }
     }
-    totals.iter().map(|&t| bits_of(t)).max().unwrap_or(0)
+    totals
+        .iter()
+        .map(|&(hi, lo)| {
+            if hi != 0 {
+                64 + crate::width::bits_of_u64(hi)
+            } else {
+                crate::width::bits_of_u64(lo)
+            }
+        })
+        .max()
+        .unwrap_or(0)
 }
 
 impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {

@@ -79,16 +79,67 @@ pub const fn check_texel_bits(texel_bits: u32) -> Result<(), Error> {
 }
 
 /// The largest possible whole-table sum: `(2^b - 1) * w * h` (saturating at `u128::MAX`, which
-/// no entry type holds, so a saturated value is still refused).
+/// no entry type holds, so a saturated value is still refused). A host-side convenience; the
+/// checks below compute the bits without 128-bit arithmetic.
 pub const fn worst_case_total(texel_bits: u32, width: usize, height: usize) -> u128 {
     max_texel(texel_bits)
         .saturating_mul(width as u128)
         .saturating_mul(height as u128)
 }
 
-/// Exact bits per entry (and channel) the worst case needs: `bits_of((2^b - 1) * w * h)`.
+/// Bits of the product `a * b * c` of three `u64`, exactly, from 32-bit limbs (no 128-bit
+/// operation, so it costs a firmware's build and lookups nothing wider than 64 bits).
+pub const fn bits_of_product(a: u64, b: u64, c: u64) -> u32 {
+    // Six 32-bit limbs, least significant first.
+    let mut limbs = [0u64; 6];
+    limbs[0] = a & 0xFFFF_FFFF;
+    limbs[1] = a >> 32;
+    let factors = [b, c];
+    let mut f = 0;
+    while f < 2 {
+        let (v0, v1) = (factors[f] & 0xFFFF_FFFF, factors[f] >> 32);
+        let mut out = [0u64; 6];
+        let mut i = 0;
+        while i < 6 {
+            // Each partial product is below 2^64 and each sum of a limb and a carry stays below
+            // 2^64 because limbs and carries are below 2^32 after normalisation.
+            let lo = limbs[i] * v0;
+            let hi = limbs[i] * v1;
+            let mut k = i;
+            let mut carry = lo;
+            while carry != 0 && k < 6 {
+                let t = out[k] + (carry & 0xFFFF_FFFF);
+                out[k] = t & 0xFFFF_FFFF;
+                carry = (carry >> 32) + (t >> 32);
+                k += 1;
+            }
+            let mut k = i + 1;
+            let mut carry = hi;
+            while carry != 0 && k < 6 {
+                let t = out[k] + (carry & 0xFFFF_FFFF);
+                out[k] = t & 0xFFFF_FFFF;
+                carry = (carry >> 32) + (t >> 32);
+                k += 1;
+            }
+            i += 1;
+        }
+        limbs = out;
+        f += 1;
+    }
+    let mut i = 6;
+    while i > 0 {
+        i -= 1;
+        if limbs[i] != 0 {
+            return 32 * i as u32 + bits_of_u64(limbs[i]);
+        }
+    }
+    0
+}
+
+/// Exact bits per entry (and channel) the worst case needs: `bits_of((2^b - 1) * w * h)`
+/// (texel widths above 64 bits, which no texel has, saturate at `2^64 - 1`).
 pub const fn entry_bits_worst_case(texel_bits: u32, width: usize, height: usize) -> u32 {
-    bits_of(worst_case_total(texel_bits, width, height))
+    bits_of_product(max_texel_u64(texel_bits), width as u64, height as u64)
 }
 
 /// The conservative textbook bound `b + ceil(log2(w * h))`. Never smaller than
@@ -231,14 +282,14 @@ pub const fn paper_multiplies(
     height: usize,
     frac_bits: u32,
 ) -> [MulShape; 2] {
-    let m = max_texel(texel_bits);
+    let m = max_texel_u64(texel_bits);
     [
         MulShape {
-            data_bits: bits_of(m.saturating_mul(height as u128)),
+            data_bits: bits_of_product(m, height as u64, 1),
             frac_bits: frac_bits.saturating_add(1),
         },
         MulShape {
-            data_bits: bits_of(m.saturating_mul(width as u128)).saturating_add(frac_bits),
+            data_bits: bits_of_product(m, width as u64, 1).saturating_add(frac_bits),
             frac_bits: frac_bits.saturating_add(1),
         },
     ]
@@ -356,9 +407,43 @@ mod tests {
         assert_eq!(stable_acc_bits(u32::MAX - 1, 1), u32::MAX);
         let p = paper_multiplies(200, usize::MAX, usize::MAX, u32::MAX);
         assert_eq!(p[0].data_bits, 128);
+        assert_eq!(p[1].frac_bits, u32::MAX);
         let s = stable_multiplies(200, usize::MAX, u32::MAX);
         assert!(!s[0].fits_signed(18, 25));
         assert_eq!(entry_bits_naive(u32::MAX, usize::MAX, usize::MAX), u32::MAX);
+    }
+
+    #[test]
+    fn bits_of_product_matches_u128() {
+        let vals = [
+            0u64,
+            1,
+            2,
+            3,
+            255,
+            65535,
+            4104,
+            1 << 31,
+            (1 << 31) - 1,
+            u32::MAX as u64,
+            1 << 40,
+            u64::MAX,
+        ];
+        for &a in &vals {
+            for &b in &vals {
+                for &c in &vals {
+                    let want = (a as u128)
+                        .checked_mul(b as u128)
+                        .and_then(|v| v.checked_mul(c as u128));
+                    let got = bits_of_product(a, b, c);
+                    match want {
+                        Some(v) => assert_eq!(got, bits_of(v), "{a} {b} {c}"),
+                        None => assert!(got > 128, "{a} {b} {c}: {got}"),
+                    }
+                }
+            }
+        }
+        assert_eq!(bits_of_product(u64::MAX, u64::MAX, u64::MAX), 192);
     }
 
     #[test]
