@@ -12,7 +12,7 @@
 //! (`cargo clippy --all-targets`), it does not run it. Results are written up in
 //! `docs/benchmarks.md`.
 //!
-//! * `build/*`: a 4096 x 4096 `u8` texture (xorshift content) into `u32` entries, reported as
+//! * `build/*`: a 4096 x 4096 `u8` texture (seeded ChaCha8 content) into `u32` entries, reported as
 //!   elements (texels) per second. `texsat_build` is [`Sat::build`] into reused storage;
 //!   `texsat_build_alloc` allocates the storage in the timed loop, as `imageproc` does;
 //!   `imageproc` is `imageproc::integral_image::integral_image::<_, u32>`, whose output is
@@ -38,6 +38,7 @@ use image::GrayImage;
 use texsat::{
     Border, NoCount, Paper, Rect, Repeat, RowStreamBuilder, Sat, Shortcut, Stable, Tally, Texture,
 };
+use texsat_host_tests::{rng, Rng, RngExt, TestRng};
 
 /// Side of the build benchmark's texture.
 const BUILD_SIDE: usize = 4096;
@@ -50,28 +51,11 @@ const L1_SIDE: usize = 64;
 /// Fractional bits of the fixed-point corners (`I24F8`).
 const F: u32 = 8;
 
-/// Marsaglia's xorshift64: deterministic pseudo-random content and boxes.
-struct XorShift(u64);
-
-impl XorShift {
-    fn next(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-
-    /// Uniform-ish in `lo..hi` (modulo bias is irrelevant here).
-    fn range(&mut self, lo: i64, hi: i64) -> i64 {
-        lo + (self.next() % (hi - lo) as u64) as i64
-    }
-}
-
+/// Deterministic pseudo-random content: the host tests' one seeded generator.
 fn texels(side: usize, seed: u64) -> Vec<u8> {
-    let mut rng = XorShift(seed);
-    (0..side * side).map(|_| (rng.next() >> 56) as u8).collect()
+    let mut v = vec![0u8; side * side];
+    rng(seed).fill_bytes(&mut v);
+    v
 }
 
 fn quick() -> bool {
@@ -220,42 +204,49 @@ fn bench_build(c: &mut Criterion) {
 
 /// A random interior box with integer corners: every corner off the zero row and column of the
 /// corner function, so each lookup costs the full 4 reads. Sides in `min_side..=max_side`.
-fn int_box(rng: &mut XorShift, n: i64, min_side: i64, max_side: i64) -> Rect<i32> {
-    let sw = rng.range(min_side, max_side + 1);
-    let sh = rng.range(min_side, max_side + 1);
-    let x0 = rng.range(1, n - sw + 1);
-    let y0 = rng.range(1, n - sh + 1);
+fn int_box(rng: &mut TestRng, n: i64, min_side: i64, max_side: i64) -> Rect<i32> {
+    let sw = rng.random_range(min_side..max_side + 1);
+    let sh = rng.random_range(min_side..max_side + 1);
+    let x0 = rng.random_range(1..n - sw + 1);
+    let y0 = rng.random_range(1..n - sh + 1);
     Rect::new(x0 as i32, y0 as i32, (x0 + sw) as i32, (y0 + sh) as i32)
 }
 
 /// A random interior box with `I24F8` corners and non-zero fractions (the full 16 reads): corners
 /// in `[1, n - 1)` texels, sides in `min_side..max_side` texels.
-fn frac_box(rng: &mut XorShift, n: i64, min_side: i64, max_side: i64) -> Rect<I24F8> {
+fn frac_box(rng: &mut TestRng, n: i64, min_side: i64, max_side: i64) -> Rect<I24F8> {
     let one = 1i64 << F;
-    let frac = |rng: &mut XorShift| rng.range(1, one);
-    let sw = rng.range(min_side, max_side) * one + frac(rng);
-    let sh = rng.range(min_side, max_side) * one + frac(rng);
-    let x0 = rng.range(1, n - 1 - max_side - 1) * one + frac(rng);
-    let y0 = rng.range(1, n - 1 - max_side - 1) * one + frac(rng);
+    let frac = |rng: &mut TestRng| rng.random_range(1..one);
+    let sw = rng.random_range(min_side..max_side) * one + frac(rng);
+    let sh = rng.random_range(min_side..max_side) * one + frac(rng);
+    let x0 = rng.random_range(1..n - 1 - max_side - 1) * one + frac(rng);
+    let y0 = rng.random_range(1..n - 1 - max_side - 1) * one + frac(rng);
     let fx = |raw: i64| I24F8::from_bits(raw as i32);
     Rect::new(fx(x0), fx(y0), fx(x0 + sw), fx(y0 + sh))
 }
 
 /// A box that straddles the right edge (and, for half of them, the bottom edge) of a Repeat
-/// texture, so no in-range equivalent exists and the weighted path answers.
-fn straddle_box(rng: &mut XorShift, n: i64, max_over: i64, fractional: bool) -> Rect<i64> {
+/// texture, so no in-range equivalent exists and the split path answers (2 or 4 in-range
+/// pieces, src/lookup/split.rs).
+fn straddle_box(rng: &mut TestRng, n: i64, max_over: i64, fractional: bool) -> Rect<i64> {
     let one = if fractional { 1i64 << F } else { 1 };
-    let frac = |rng: &mut XorShift| if fractional { rng.range(1, one) } else { 0 };
-    let x0 = rng.range(n - max_over, n) * one + frac(rng);
-    let x1 = rng.range(n + 1, n + max_over) * one + frac(rng);
-    let (y0, y1) = if rng.next() & 1 == 0 {
+    let frac = |rng: &mut TestRng| {
+        if fractional {
+            rng.random_range(1..one)
+        } else {
+            0
+        }
+    };
+    let x0 = rng.random_range(n - max_over..n) * one + frac(rng);
+    let x1 = rng.random_range(n + 1..n + max_over) * one + frac(rng);
+    let (y0, y1) = if rng.next_u64() & 1 == 0 {
         (
-            rng.range(n - max_over, n) * one + frac(rng),
-            rng.range(n + 1, n + max_over) * one + frac(rng),
+            rng.random_range(n - max_over..n) * one + frac(rng),
+            rng.random_range(n + 1..n + max_over) * one + frac(rng),
         )
     } else {
-        let y0 = rng.range(1, n / 2) * one + frac(rng);
-        (y0, y0 + rng.range(1, max_over) * one + frac(rng))
+        let y0 = rng.random_range(1..n / 2) * one + frac(rng);
+        (y0, y0 + rng.random_range(1..max_over) * one + frac(rng))
     };
     Rect::new(x0, y0, x1, y1)
 }
@@ -268,7 +259,7 @@ fn bench_lookup(c: &mut Criterion) {
     let sat = Sat::build(&texture, &mut storage).expect("build");
     let ni = n as i64;
 
-    let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
+    let mut rng = rng(0x2545_F491_4F6C_DD1D);
     let int_boxes: Vec<Rect<i32>> = (0..N_BOXES)
         .map(|_| int_box(&mut rng, ni, 1, 256))
         .collect();
@@ -314,9 +305,10 @@ fn bench_lookup(c: &mut Criterion) {
     for r in &rep_int {
         sat.box_sum_int(r, Repeat, &mut t).expect("repeat int");
     }
+    // Split into 2 pieces (x only: (2 + 1) x 2 = 6 reads) or 4 ((2 + 1) x (2 + 1) = 9).
     assert!(
         t.reads > 4 * N_BOXES as u64,
-        "repeat boxes take the weighted path"
+        "repeat boxes take the split path"
     );
     let mut t = Tally::new();
     for r in &rep_frac {
@@ -324,7 +316,7 @@ fn bench_lookup(c: &mut Criterion) {
     }
     assert!(
         t.reads > 16 * N_BOXES as u64,
-        "repeat boxes take the weighted path"
+        "repeat boxes take the split path"
     );
 
     let (warm, measure) = times(500, 2000);
@@ -377,7 +369,7 @@ fn bench_lookup(c: &mut Criterion) {
         Tally::new(),
         |r, k| { sat.box_sum(r, Stable, Border, &mut k) }
     );
-    // Means (one area multiply and one u128 divide on top of the sum).
+    // Means (one area multiply and one u64 divide on top of the sum, for this u32 table).
     bench_boxes!("int4_mean", "nocount", &int_boxes, NoCount, |r, k| {
         sat.box_sum_int(r, Border, &mut k)
             .and_then(|s| s.mean_rounded(0, 8, &mut k))
@@ -404,7 +396,7 @@ fn bench_lookup(c: &mut Criterion) {
                 .and_then(|s| s.mean_rounded(0, 8, &mut k))
         }
     );
-    // Repeat boxes straddling the edge: the weighted (checked i128) path.
+    // Repeat boxes straddling the edge: the split path (2 or 4 in-range pieces).
     bench_boxes!(
         "int_repeat_straddle",
         "nocount",
@@ -452,7 +444,7 @@ fn bench_lookup_l1(c: &mut Criterion) {
     let mut storage = vec![0u32; n * n];
     let sat = Sat::build(&texture, &mut storage).expect("build");
     let ni = n as i64;
-    let mut rng = XorShift(0xBB67_AE85_84CA_A73B);
+    let mut rng = rng(0xBB67_AE85_84CA_A73B);
     let int_boxes: Vec<Rect<i32>> = (0..N_BOXES).map(|_| int_box(&mut rng, ni, 1, 32)).collect();
     let frac_boxes: Vec<Rect<I24F8>> = (0..N_BOXES)
         .map(|_| frac_box(&mut rng, ni, 1, 32))

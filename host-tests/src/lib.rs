@@ -8,6 +8,9 @@
 //! many periods, per-texel weights in closed form, cross-checked against direct summation in
 //! `tests/reference.rs`).
 //!
+//! Random inputs: every test and bench draws from one seeded generator, [`rng`] (ChaCha8 from a
+//! constant seed), so inputs are the same on every run.
+//!
 //! Units: a fixed-point coordinate with `F` fractional bits is the integer `raw = value * 2^F`;
 //! exact box integrals are returned scaled by `2^2F` (the product of two raw lengths), which is
 //! exactly the unit of [`texsat::BoxSum::scaled_sum`].
@@ -17,8 +20,8 @@ pub mod crow_literal;
 use fixed::traits::Fixed;
 use proptest::prelude::*;
 use texsat::{
-    Border, BoxSum, ClampToEdge, Coord, Counter, Entry, Error, MirroredRepeat, Paper, Rect, Repeat,
-    Sat, Shortcut, ShortcutMean, Stable, Texel, Texture,
+    Acc, Border, BoxSum, ClampToEdge, Coord, Counter, EdgeKind, Entry, Error, FormKind,
+    MirroredRepeat, Paper, Rect, Repeat, Sat, Shortcut, ShortcutMean, Stable, Texel, Texture,
 };
 
 /// A boundary mode of the reference, mirroring texsat's zero-sized mode types at run time.
@@ -35,6 +38,16 @@ pub enum RefMode {
 }
 
 impl RefMode {
+    /// texsat's run-time mode value for this mode.
+    pub fn kind(self) -> EdgeKind {
+        match self {
+            RefMode::Border => EdgeKind::Border,
+            RefMode::Clamp => EdgeKind::Clamp,
+            RefMode::Repeat => EdgeKind::Repeat,
+            RefMode::Mirror => EdgeKind::Mirror,
+        }
+    }
+
     /// All four modes.
     pub const ALL: [RefMode; 4] = [
         RefMode::Border,
@@ -81,6 +94,14 @@ pub enum RefForm {
 }
 
 impl RefForm {
+    /// texsat's run-time form value for this form.
+    pub fn kind(self) -> FormKind {
+        match self {
+            RefForm::Paper => FormKind::Paper,
+            RefForm::Stable => FormKind::Stable,
+        }
+    }
+
     /// Both forms.
     pub const ALL: [RefForm; 2] = [RefForm::Paper, RefForm::Stable];
 }
@@ -119,9 +140,9 @@ impl RefTexture {
 
     /// A pseudo-random texture with texels in `0..=max`, reproducible from `seed`.
     pub fn random(width: usize, height: usize, channels: usize, max: u32, seed: u64) -> Self {
-        let mut rng = SplitMix64::new(seed);
+        let mut rng = rng(seed);
         let texels = (0..width * height * channels)
-            .map(|_| rng.below(max as u64 + 1) as u32)
+            .map(|_| rng.random_range(0..=max))
             .collect();
         Self::new(width, height, channels, texels)
     }
@@ -394,6 +415,22 @@ impl U256 {
         }
     }
 
+    /// `a * 2^k` for any `k` whose result fits 256 bits (panics otherwise), exactly.
+    pub fn shl_any(a: u128, k: u32) -> Self {
+        let bits = 128 - a.leading_zeros();
+        assert!(a == 0 || bits + k <= 256, "2^{k} * a overflows 256 bits");
+        if a == 0 {
+            U256 { hi: 0, lo: 0 }
+        } else if k < 128 {
+            Self::shl(a, k)
+        } else {
+            U256 {
+                hi: a << (k - 128),
+                lo: 0,
+            }
+        }
+    }
+
     /// The value as `f64` (rounded).
     pub fn to_f64(self) -> f64 {
         self.hi as f64 * 2f64.powi(128) + self.lo as f64
@@ -412,9 +449,10 @@ impl U256 {
 
 /// Whether `m` is `round(sum * 2^g / area)` rounded to nearest with ties up, checked by the
 /// defining inequality in exact integers: `(2m - 1) area <= sum * 2^(g+1) < (2m + 1) area`.
+/// Any `g` for which `sum * 2^(g+1)` fits 256 bits; `m < 2^127`.
 pub fn is_rounded_mean(sum: u128, area: u128, g: u32, m: u128) -> bool {
-    assert!(area > 0 && g < 127);
-    let n2 = U256::shl(sum, g + 1);
+    assert!(area > 0 && m < 1 << 127);
+    let n2 = U256::shl_any(sum, g + 1);
     let upper = U256::mul(2 * m + 1, area);
     let lower_ok = m == 0 || U256::mul(2 * m - 1, area) <= n2;
     lower_ok && n2 < upper
@@ -428,38 +466,18 @@ pub fn mean_error(sum: u128, area: u128, g: u32, m: u128) -> f64 {
     U256::abs_diff(a, b).to_f64() / (area as f64 * 2f64.powi(g as i32))
 }
 
-/// A small deterministic generator (SplitMix64) for reproducible "random" test textures and
-/// boxes without a dependency.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
+/// The one random generator of the host tests and benches: ChaCha8, a stream cipher, so the
+/// inputs are well mixed, and seeded from a constant, so every run sees the same inputs. Use
+/// [`rng`] to make one, [`RngExt::random_range`] for bounded values and [`Rng::next_u64`] for
+/// raw bits.
+pub type TestRng = rand_chacha::ChaCha8Rng;
 
-impl SplitMix64 {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        SplitMix64(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// A value in `0..n` (`n > 0`; the slight modulo bias does not matter here).
-    pub fn below(&mut self, n: u64) -> u64 {
-        self.next_u64() % n
-    }
-
-    /// A value in `lo..=hi`.
-    pub fn range_i64(&mut self, lo: i64, hi: i64) -> i64 {
-        assert!(lo <= hi);
-        let span = (hi as i128 - lo as i128 + 1) as u128;
-        (lo as i128 + (self.next_u64() as u128 % span) as i128) as i64
-    }
+/// The generator for `seed` (every test and bench names its own constant seed).
+pub fn rng(seed: u64) -> TestRng {
+    <TestRng as rand::SeedableRng>::seed_from_u64(seed)
 }
+
+pub use rand::{Rng, RngExt};
 
 /// A texel type the references can produce from `u32` (texsat's `u8` and `u16`).
 pub trait RefTexel: Texel + Copy {
@@ -513,13 +531,13 @@ pub fn rect_from_raw<X: Fixed>(b: [i64; 4]) -> Rect<X> {
     Rect::new(x0, y0, x1, y1)
 }
 
-/// [`Sat::box_sum_int`] under a run-time mode.
-pub fn sum_int<E: Entry, const C: usize, K: Counter>(
+/// [`Sat::box_sum_int`] under a run-time mode, in the table's own result word.
+pub fn sum_int_native<E: Entry, const C: usize, K: Counter>(
     sat: &Sat<'_, E, C>,
     r: [i32; 4],
     mode: RefMode,
     k: &mut K,
-) -> Result<BoxSum<u128, C>, Error> {
+) -> Result<BoxSum<WideOfEntry<E>, C>, Error> {
     let r = Rect::new(r[0], r[1], r[2], r[3]);
     match mode {
         RefMode::Border => sat.box_sum_int(&r, Border, k),
@@ -527,17 +545,28 @@ pub fn sum_int<E: Entry, const C: usize, K: Counter>(
         RefMode::Repeat => sat.box_sum_int(&r, Repeat, k),
         RefMode::Mirror => sat.box_sum_int(&r, MirroredRepeat, k),
     }
-    .map(|s| s.to_u128())
 }
 
-/// [`Sat::box_sum`] under a run-time form and mode.
-pub fn sum_fixed<X: Coord, E: Entry, const C: usize, K: Counter>(
+/// [`Sat::box_sum_int`] under a run-time mode, the sums as `u128` (for exact comparisons with
+/// the `u128` references).
+pub fn sum_int<E: Entry, const C: usize, K: Counter>(
+    sat: &Sat<'_, E, C>,
+    r: [i32; 4],
+    mode: RefMode,
+    k: &mut K,
+) -> Result<BoxSum<u128, C>, Error> {
+    sum_int_native(sat, r, mode, k).map(|s| s.to_u128())
+}
+
+/// [`Sat::box_sum`] under a run-time form and mode, in the table's own result word (so a mean
+/// taken from it runs the word's own division, e.g. the `u64` one for `u16`/`u32` tables).
+pub fn sum_fixed_native<X: Coord, E: Entry, const C: usize, K: Counter>(
     sat: &Sat<'_, E, C>,
     r: &Rect<X>,
     form: RefForm,
     mode: RefMode,
     k: &mut K,
-) -> Result<BoxSum<u128, C>, Error> {
+) -> Result<BoxSum<WideOfEntry<E>, C>, Error> {
     macro_rules! go {
         ($form:expr) => {
             match mode {
@@ -546,7 +575,6 @@ pub fn sum_fixed<X: Coord, E: Entry, const C: usize, K: Counter>(
                 RefMode::Repeat => sat.box_sum(r, $form, Repeat, k),
                 RefMode::Mirror => sat.box_sum(r, $form, MirroredRepeat, k),
             }
-            .map(|s| s.to_u128())
         };
     }
     match form {
@@ -554,6 +582,20 @@ pub fn sum_fixed<X: Coord, E: Entry, const C: usize, K: Counter>(
         RefForm::Stable => go!(Stable),
     }
 }
+
+/// [`Sat::box_sum`] under a run-time form and mode, the sums as `u128`.
+pub fn sum_fixed<X: Coord, E: Entry, const C: usize, K: Counter>(
+    sat: &Sat<'_, E, C>,
+    r: &Rect<X>,
+    form: RefForm,
+    mode: RefMode,
+    k: &mut K,
+) -> Result<BoxSum<u128, C>, Error> {
+    sum_fixed_native(sat, r, form, mode, k).map(|s| s.to_u128())
+}
+
+/// The result word of a table with entries `E` (`u64`, or `u128` for `u64` entries).
+pub type WideOfEntry<E> = <<E as Entry>::Acc as Acc>::Wide;
 
 /// [`Sat::box_mean_shortcut`] under a run-time form and mode.
 pub fn mean_shortcut<X: Coord, E: Entry, const C: usize, K: Counter>(
@@ -580,6 +622,115 @@ pub fn mean_shortcut<X: Coord, E: Entry, const C: usize, K: Counter>(
         RefForm::Paper => go!(Paper),
         RefForm::Stable => go!(Stable),
     }
+}
+
+/// The accumulator value bits of a table with `entry_bits`-bit entries, as the core's docs state
+/// them (`u16` tables compute in `i32`, `u32` in `i64`, `u64` in `i128`): 31, 63 or 127.
+pub fn acc_value_bits_for_entry(entry_bits: u32) -> u32 {
+    match entry_bits {
+        0..=16 => 31,
+        17..=32 => 63,
+        _ => 127,
+    }
+}
+
+/// The result word's bits of a table with `entry_bits`-bit entries: 64 (`u16`, `u32`), or 128
+/// (`u64`).
+pub fn wide_bits_for_entry(entry_bits: u32) -> u32 {
+    if entry_bits <= 32 {
+        64
+    } else {
+        128
+    }
+}
+
+/// Whether a Repeat or Mirror interval `[lo, hi)` (raw, `F = f`, `lo < hi`, not inside
+/// `[0, n 2^F]`) is beyond what the core places: it computes the interval's end relative to
+/// the (half-)period `p = n 2^F` that `lo` falls in, `(lo mod p) + (hi - lo)`, in `u64`, and
+/// refuses with `CoordinateOutOfRange` when that overflows (widths within `p` of `2^64`).
+/// (The core's documented error for this case names integer corners only; for fractional
+/// corners this refusal was first seen by `tests/extremes.rs`' `i64` limits.)
+pub fn periodic_overflow(mode: RefMode, lo: i64, hi: i64, n: usize, f: u32) -> bool {
+    if !matches!(mode, RefMode::Repeat | RefMode::Mirror) || hi <= lo {
+        return false;
+    }
+    let p = (n as i128) << f;
+    if lo >= 0 && (hi as i128) <= p {
+        return false;
+    }
+    let r0 = (lo as i128).rem_euclid(p);
+    r0 + (hi as i128 - lo as i128) > u64::MAX as i128
+}
+
+/// What a flat table's lookup must return for the raw box `b` at `F = f` under `mode`, from
+/// the documented rules alone (independent of the lookup code): `Err(InvertedBox)` for an
+/// inverted box; all zeros for a zero-width or zero-height box and for a Border box clipped
+/// away; `Err(TooWide { LookupAccumulator, needed, acc })` when the form's intermediates need
+/// more than the accumulator's value bits (`total_bits + 2F` for Paper, one more for Stable,
+/// none for integer corners: `form = None`; `total_bits` is the largest channel total's bits);
+/// `Err(TooWide { LookupAccumulator, wide + 1, wide })` when an exact sum does not fit the
+/// `wide_bits` result word; else the exact sums. Before the accumulator check,
+/// `Err(CoordinateOutOfRange)` for a Repeat or Mirror box that [`periodic_overflow`] says the
+/// core cannot place (raw widths near `2^64`, only reachable at the `i64` limits).
+pub fn expected_sums(
+    tex: &RefTexture,
+    mode: RefMode,
+    b: [i64; 4],
+    f: u32,
+    form: Option<RefForm>,
+    acc_value_bits: u32,
+    wide_bits: u32,
+) -> Result<Vec<u128>, Error> {
+    let [x0, y0, x1, y1] = b;
+    if x1 < x0 || y1 < y0 {
+        return Err(Error::InvertedBox);
+    }
+    let zeros = vec![0u128; tex.channels];
+    if x1 == x0 || y1 == y0 {
+        return Ok(zeros);
+    }
+    if mode == RefMode::Border {
+        let clipped_away = |lo: i64, hi: i64, n: usize| {
+            let end = (n as i128) << f;
+            (hi as i128) <= 0 || (lo as i128) >= end
+        };
+        if clipped_away(x0, x1, tex.width) || clipped_away(y0, y1, tex.height) {
+            return Ok(zeros);
+        }
+    }
+    if periodic_overflow(mode, x0, x1, tex.width, f)
+        || periodic_overflow(mode, y0, y1, tex.height, f)
+    {
+        return Err(Error::CoordinateOutOfRange);
+    }
+    if let Some(form) = form {
+        let total_bits = (0..tex.channels)
+            .map(|c| texsat::width::bits_of(tex.total(c)))
+            .max()
+            .unwrap_or(0);
+        let extra = match form {
+            RefForm::Paper => 0,
+            RefForm::Stable => 1,
+        };
+        let needed = total_bits + 2 * f + extra;
+        if needed > acc_value_bits {
+            return Err(Error::TooWide {
+                what: texsat::Quantity::LookupAccumulator,
+                bits_needed: needed,
+                bits_available: acc_value_bits,
+            });
+        }
+    }
+    let too_wide = Error::TooWide {
+        what: texsat::Quantity::LookupAccumulator,
+        bits_needed: wide_bits + 1,
+        bits_available: wide_bits,
+    };
+    let sums = tex.exact_integrals_checked(mode, b, f).ok_or(too_wide)?;
+    if wide_bits < 128 && sums.iter().any(|&v| v >> wide_bits != 0) {
+        return Err(too_wide);
+    }
+    Ok(sums)
 }
 
 /// Proptest strategies (dimensions first, then texels via `prop_flat_map`, as in imageproc's

@@ -44,7 +44,7 @@
 //! gets there).
 
 use crate::ewa::EwaEllipse;
-use crate::{RefMode, RefTexture, SplitMix64};
+use crate::{RefMode, RefTexture, Rng};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 use texsat::footprint::{Footprint, Perspective};
@@ -302,7 +302,7 @@ pub fn value_noise(n: usize, seed: u64) -> RefTexture {
     for octave in 0..4 {
         let cell = (n >> (2 + octave)).max(2);
         let lattice = n.div_ceil(cell).max(1);
-        let mut rng = SplitMix64::new(seed.wrapping_add(0x5EED_0000 + octave as u64));
+        let mut rng = crate::rng(seed.wrapping_add(0x5EED_0000 + octave as u64));
         let values: Vec<f64> = (0..lattice * lattice)
             .map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
             .collect();

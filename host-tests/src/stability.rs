@@ -43,7 +43,7 @@ use fixed::types::I24F8;
 use texsat::{ClampToEdge, NoCount, Rect, Repeat, Sat, Stable, Texture};
 
 use crate::scenes::SceneSize;
-use crate::{rect_from_raw, RefMode, RefTexture, SplitMix64};
+use crate::{rect_from_raw, RefMode, RefTexture, RngExt, TestRng};
 
 /// Fractional bits of every box in the study (`F = 8`, texsat's `I24F8`).
 pub const FRAC_BITS: u32 = 8;
@@ -323,9 +323,11 @@ impl Tex {
 
     /// Texels uniform in `lo..=hi`, reproducible from `seed`.
     fn noise(n: usize, lo: u8, hi: u8, seed: u64) -> Self {
-        let mut rng = SplitMix64::new(seed);
+        let mut rng = crate::rng(seed);
         let span = (hi - lo) as u64 + 1;
-        let t = (0..n * n).map(|_| lo + rng.below(span) as u8).collect();
+        let t = (0..n * n)
+            .map(|_| lo + rng.random_range(0..span) as u8)
+            .collect();
         Tex { w: n, h: n, t }
     }
 
@@ -674,7 +676,7 @@ fn texsat_mean<E: texsat::Entry>(
 /// `count` random boxes inside an `n x n` table with sides in `1..=max_side` texels; integer
 /// corners, or (when `frac`) corners on the `1/256` grid with sides from `0.25` texel.
 fn random_boxes(
-    rng: &mut SplitMix64,
+    rng: &mut TestRng,
     n: usize,
     count: usize,
     max_side: i64,
@@ -684,16 +686,16 @@ fn random_boxes(
     let max_side = (max_side * ONE).min(end);
     (0..count)
         .map(|_| {
-            let side = |rng: &mut SplitMix64| {
+            let side = |rng: &mut TestRng| {
                 if frac {
-                    rng.range_i64(ONE / 4, max_side.max(ONE / 4))
+                    rng.random_range(ONE / 4..=max_side.max(ONE / 4))
                 } else {
-                    rng.range_i64(1, max_side / ONE) * ONE
+                    rng.random_range(1..=max_side / ONE) * ONE
                 }
             };
             let (sw, sh) = (side(rng), side(rng));
-            let pos = |rng: &mut SplitMix64, s: i64| {
-                let p = rng.range_i64(0, end - s);
+            let pos = |rng: &mut TestRng, s: i64| {
+                let p = rng.random_range(0..=end - s);
                 if frac {
                     p
                 } else {
@@ -723,7 +725,7 @@ fn far_corner_boxes(n: usize, side: i64, step: i64) -> Vec<[i64; 4]> {
 
 /// Long thin boxes (grazing view near the horizon): `thick x len` and `len x thick`, placed at
 /// random with many near the far edges.
-fn thin_boxes(rng: &mut SplitMix64, n: usize, len: i64, thick: i64, count: usize) -> Vec<[i64; 4]> {
+fn thin_boxes(rng: &mut TestRng, n: usize, len: i64, thick: i64, count: usize) -> Vec<[i64; 4]> {
     let end = n as i64 * ONE;
     let len = (len * ONE).min(end);
     let grid = if thick % ONE == 0 { ONE } else { 1 };
@@ -731,14 +733,14 @@ fn thin_boxes(rng: &mut SplitMix64, n: usize, len: i64, thick: i64, count: usize
         .map(|k| {
             let far = k % 2 == 0;
             let a = if far {
-                end - thick - rng.range_i64(0, 16 * ONE) / grid * grid
+                end - thick - rng.random_range(0..=16 * ONE) / grid * grid
             } else {
-                rng.range_i64(0, end - thick) / grid * grid
+                rng.random_range(0..=end - thick) / grid * grid
             };
             let l0 = if far {
                 end - len
             } else {
-                rng.range_i64(0, end - len) / ONE * ONE
+                rng.random_range(0..=end - len) / ONE * ONE
             };
             if k % 4 < 2 {
                 [a, l0, a + thick, l0 + len]
@@ -752,7 +754,7 @@ fn thin_boxes(rng: &mut SplitMix64, n: usize, len: i64, thick: i64, count: usize
 /// Boxes over the `period x period` repeated texture with sides of `periods/2..=periods`
 /// periods plus a random fraction, starting anywhere within the first `periods` periods.
 fn repeat_wide_boxes(
-    rng: &mut SplitMix64,
+    rng: &mut TestRng,
     period: usize,
     periods: i64,
     count: usize,
@@ -762,8 +764,8 @@ fn repeat_wide_boxes(
         .map(|_| {
             let mut b = [0i64; 4];
             for axis in 0..2 {
-                let lo = rng.range_i64(0, periods * p);
-                let side = rng.range_i64((periods * p / 2).max(ONE / 4), periods * p);
+                let lo = rng.random_range(0..=periods * p);
+                let side = rng.random_range((periods * p / 2).max(ONE / 4)..=periods * p);
                 b[axis] = lo;
                 b[axis + 2] = lo + side;
             }
@@ -774,7 +776,7 @@ fn repeat_wide_boxes(
 
 /// 1x1 integer boxes about `periods` periods from the origin.
 fn repeat_far_unit_boxes(
-    rng: &mut SplitMix64,
+    rng: &mut TestRng,
     period: usize,
     periods: i64,
     count: usize,
@@ -782,8 +784,8 @@ fn repeat_far_unit_boxes(
     let p = period as i64;
     (0..count)
         .map(|_| {
-            let x = periods * p + rng.range_i64(0, p - 1);
-            let y = periods * p + rng.range_i64(0, p - 1);
+            let x = periods * p + rng.random_range(0..=p - 1);
+            let y = periods * p + rng.random_range(0..=p - 1);
             [x * ONE, y * ONE, (x + 1) * ONE, (y + 1) * ONE]
         })
         .collect()
@@ -811,7 +813,7 @@ const FLOAT_METHODS: [Method; 4] = [Method::F32, Method::F32Mean, Method::F32Hal
 /// a second in release at `Default` (a few seconds in debug at `Quick`).
 pub fn stability_rows(size: SceneSize) -> Vec<StabilityRow> {
     let largest = largest_u32_square(8);
-    let mut rng = SplitMix64::new(0x5AB1_u64);
+    let mut rng = crate::rng(0x5AB1_u64);
     let mut rows = Vec::new();
     let (n_random, n_thin, n_repeat) = match size {
         SceneSize::Quick => (64, 32, 16),
@@ -996,7 +998,7 @@ pub fn float32_error_vs_size(size: SceneSize) -> Vec<Float32Curve> {
             points: Vec::new(),
         })
         .collect();
-    let mut rng = SplitMix64::new(0xC0_12BE);
+    let mut rng = crate::rng(0xC0_12BE);
     for &n in &sides {
         let tex = Tex::noise(n, 200, 255, 0x5EED ^ n as u64);
         let mut int_boxes = random_boxes(&mut rng, n, count, 16, false);

@@ -8,8 +8,8 @@ use texsat::{
     Sat, Shortcut, Stable, Tally, Texture,
 };
 use texsat_host_tests::{
-    build_sat, mean_shortcut, rect_from_raw, sum_fixed, sum_int, RefForm, RefMode, RefTexel,
-    RefTexture, SplitMix64,
+    acc_value_bits_for_entry, build_sat, mean_shortcut, rect_from_raw, sum_fixed, sum_int, RefForm,
+    RefMode, RefTexel, RefTexture, RngExt,
 };
 
 // Crow §3.0 and the exact width proof, checked at compile time.
@@ -34,12 +34,18 @@ fn crow_table_c1<E: Entry>() {
     let mut st = vec![E::ZERO; 63];
     let sat = build_sat::<u8, E, 1>(&tex, &mut st).unwrap();
     let eb = E::BITS as u64;
-    let mut rng = SplitMix64::new(2);
+    let mut rng = texsat_host_tests::rng(2);
+    let mut refused = 0;
     for _ in 0..50 {
         // Interior: every corner off row and column 0.
-        let x0 = rng.range_i64(1, 8);
-        let y0 = rng.range_i64(1, 6);
-        let r = [x0, y0, rng.range_i64(x0 + 1, 9), rng.range_i64(y0 + 1, 7)];
+        let x0: i64 = rng.random_range(1..=8);
+        let y0: i64 = rng.random_range(1..=6);
+        let r = [
+            x0,
+            y0,
+            rng.random_range(x0 + 1..=9),
+            rng.random_range(y0 + 1..=7),
+        ];
         let ri = r.map(|v| v as i32);
         let mut k = Tally::new();
         let s = sum_int(&sat, ri, RefMode::Border, &mut k).unwrap();
@@ -48,15 +54,15 @@ fn crow_table_c1<E: Entry>() {
         assert_eq!(k.multiplicative(), 2);
 
         // Fractional corners, any F, both forms.
-        let f = [4u32, 8, 16][rng.below(3) as usize];
+        let f = [4u32, 8, 16][rng.random_range(0..3) as usize];
         let one = 1i64 << f;
-        let x0 = rng.range_i64(one, 8 * one);
-        let y0 = rng.range_i64(one, 6 * one);
+        let x0 = rng.random_range(one..=8 * one);
+        let y0 = rng.random_range(one..=6 * one);
         let b = [
             x0,
             y0,
-            rng.range_i64(x0 + 1, 9 * one),
-            rng.range_i64(y0 + 1, 7 * one),
+            rng.random_range(x0 + 1..=9 * one),
+            rng.random_range(y0 + 1..=7 * one),
         ];
         for (form, adds) in [(RefForm::Paper, 27), (RefForm::Stable, 31)] {
             let mut k = Tally::new();
@@ -82,14 +88,35 @@ fn crow_table_c1<E: Entry>() {
                     RefMode::Border,
                     &mut k,
                 ),
+            };
+            // A u16 table computes in i32 (31 value bits): Paper needs `total_bits + 2F`, Stable
+            // one more; this texture's total has 14 bits, so F = 16 is refused on u16 (and
+            // costs nothing), F = 4 and 8 fit. (Before the i32 accumulator every F was answered.)
+            let needed = bits_of(tex.total(0)) + 2 * f + (form == RefForm::Stable) as u32;
+            let acc = acc_value_bits_for_entry(E::BITS);
+            if needed > acc {
+                assert_eq!(E::BITS, 16);
+                assert_eq!(
+                    s.unwrap_err(),
+                    Error::TooWide {
+                        what: Quantity::LookupAccumulator,
+                        bits_needed: needed,
+                        bits_available: acc
+                    }
+                );
+                assert_eq!(counts(&k), (0, 0, 0, 0, 0), "{form:?} {b:?}");
+                refused += 1;
+                continue;
             }
-            .unwrap();
+            let s = s.unwrap();
             assert_eq!(counts(&k), (16, 16 * eb, 12, 0, adds), "{form:?} {b:?}");
             s.mean_rounded(0, 8, &mut k).unwrap();
             assert_eq!(counts(&k), (16, 16 * eb, 13, 1, adds), "{form:?} {b:?}");
             assert_eq!(k.multiplicative(), 14);
         }
     }
+    // Only the u16 table refuses (F = 16), and the draws reach it.
+    assert_eq!(refused > 0, E::BITS == 16, "{refused} refusals");
 }
 
 #[test]
@@ -206,21 +233,69 @@ fn placed_boxes_cost_the_same_as_interior_ones() {
             assert_eq!(s.sum(), tex.exact_integral(RefMode::Border, base, 8, 0));
         }
     }
-    // Integer corners, Repeat over whole periods (no in-range equivalent): the weighted path,
-    // at most 9 reads per corner.
+    // A box with no in-range equivalent is split into at most 3 x 3 in-range pieces
+    // (src/edge.rs, src/lookup/split.rs). The removed weighted path was only bounded here
+    // (`1 <= reads <= 36`); the split path's counts follow from its pieces, worked out by hand:
+    // each piece is an ordinary in-range lookup, plus per channel one multiply per multiplicity
+    // other than 1 and one addition per piece after the first.
+    //
+    // Integer corners, Repeat, [-12, 13) x [-9, 11) on 5 x 4: x = [3, 5) + 4 x [0, 5) + [0, 3),
+    // y = [3, 4) + 4 x [0, 4) + [0, 3). A 4-read piece reads the corners off row and column 0:
+    // per axis 2, 1, 1 of them, so (2 + 1 + 1)^2 = 16 reads; 9 pieces x 3 additions + 8 to
+    // combine = 35; multiplies: the 3 pieces with x multiplicity 4 and the 3 with y
+    // multiplicity 4: 6.
+    let xs = [(3, 5, 1u128), (0, 5, 4), (0, 3, 1)];
+    let ys = [(3, 4, 1u128), (0, 4, 4), (0, 3, 1)];
     let mut k = Tally::new();
     let r = Rect::new(-12, -9, 13, 11);
     let s = sat.box_sum_int(&r, Repeat, &mut k).unwrap();
-    assert_eq!(s.sum(), tex.int_sums(RefMode::Repeat, [-12, -9, 13, 11])[0]);
-    assert!(k.reads >= 1 && k.reads <= 36, "{k:?}");
+    let want = tex.int_sums(RefMode::Repeat, [-12, -9, 13, 11])[0];
+    assert_eq!(u128::from(s.sum()), want);
+    assert_eq!((k.reads, k.muls, k.divs, k.adds), (16, 6, 0, 35), "{k:?}");
+    // The pieces themselves (Border lookups inside the texture) sum to the same.
+    let mut by_pieces = 0u128;
+    for &(x0, x1, mx) in &xs {
+        for &(y0, y1, my) in &ys {
+            let p = sum_int(&sat, [x0, y0, x1, y1], RefMode::Border, &mut NoCount).unwrap();
+            by_pieces += mx * my * p.sum();
+        }
+    }
+    assert_eq!(by_pieces, want);
+
+    // F = 8, Stable, MirroredRepeat, [-3000, 4000) x [-2000, 3000) raw on 5 x 4 (half periods
+    // 1280 x 1024 raw): x starts in an odd (reflected) half at 840: head [840, 1280) reflected
+    // to [0, 440), 5 whole halves [0, 1280), tail 160 in an odd half, reflected to [1120, 1280);
+    // y starts in an even half at 48: [48, 1024), 3 x [0, 1024), tail [0, 952). A 16-read piece
+    // reads, per corner, the table values of cells i and i + 1 off row and column 0 (the right
+    // edge n 2^F is cell n - 1 with fraction 1): per axis and piece 1 + 2, 1 + 2, 2 + 2 (x) and
+    // 1 + 2, 1 + 2, 1 + 2 (y): (3 + 3 + 4) (3 + 3 + 3) = 90 reads; 9 x 12 + 6 = 114
+    // multiplies; 9 x 31 + 8 = 287 additions.
+    let xs = [(0i64, 440i64, 1u128), (0, 1280, 5), (1120, 1280, 1)];
+    let ys = [(48i64, 1024i64, 1u128), (0, 1024, 3), (0, 952, 1)];
+    let b = [-3000, -2000, 4000, 3000];
     let mut k = Tally::new();
-    let r = rect_from_raw::<I24F8>([-3000, -2000, 4000, 3000]);
+    let r = rect_from_raw::<I24F8>(b);
     let s = sat.box_sum(&r, Stable, MirroredRepeat, &mut k).unwrap();
+    let want = tex.exact_integral(RefMode::Mirror, b, 8, 0);
+    assert_eq!(u128::from(s.sum()), want);
     assert_eq!(
-        s.sum(),
-        tex.exact_integral(RefMode::Mirror, [-3000, -2000, 4000, 3000], 8, 0)
+        (k.reads, k.muls, k.divs, k.adds),
+        (90, 114, 0, 287),
+        "{k:?}"
     );
-    assert!(k.reads >= 1 && k.reads <= 36, "{k:?}");
+    let mut by_pieces = 0u128;
+    let mut piece_reads = 0;
+    for &(x0, x1, mx) in &xs {
+        for &(y0, y1, my) in &ys {
+            let mut pk = Tally::new();
+            let r = rect_from_raw::<I24F8>([x0, y0, x1, y1]);
+            let p = sum_fixed(&sat, &r, RefForm::Stable, RefMode::Border, &mut pk).unwrap();
+            by_pieces += mx * my * p.sum();
+            piece_reads += pk.reads;
+        }
+    }
+    assert_eq!(by_pieces, want);
+    assert_eq!(piece_reads, 90);
 }
 
 #[test]

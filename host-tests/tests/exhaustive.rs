@@ -138,11 +138,7 @@ fn fine_grid<T: RefTexel, E: Entry, const C: usize>(tex: &RefTexture, step: i64)
             assert_eq!(p.scaled_sums().to_vec(), want, "paper {r:?}");
             assert_eq!(s.scaled_sums().to_vec(), want, "stable {r:?}");
             assert_eq!(p.frac_bits(), 4);
-            assert_eq!(
-                p.sides_raw(),
-                ((x1 - x0) as u128, (y1 - y0) as u128),
-                "sides"
-            );
+            assert_eq!(p.sides_raw(), ((x1 - x0) as u64, (y1 - y0) as u64), "sides");
         }
     }
 }

@@ -15,6 +15,7 @@
 //!   (1 / 0 / 0 and 8 reads, 7 multiplies, 14 additive operations per channel).
 
 use texsat_host_tests::filter_ref_mip as reference;
+use texsat_host_tests::RngExt;
 
 use fixed::traits::Fixed;
 use fixed::types::{I16F16, I24F8, I28F4, I40F24};
@@ -98,9 +99,10 @@ fn check_one<T: Texel, const C: usize, X: Fixed + Coord, M: EdgeMode>(
     case: &Case<'_, T, C>,
     raw: [i64; 4],
     mode: RefMode,
+    m: M,
     stats: &mut Stats,
 ) {
-    let m = M::default();
+    assert_eq!(m.kind(), mode.kind(), "mode value and reference mode agree");
     let f = X::FRAC_BITS;
     let r = rect_from_raw::<X>(raw);
     let index = |i: i64, n: usize| mode.index(i, n);
@@ -165,10 +167,12 @@ fn check<T: Texel, const C: usize, X: Fixed + Coord>(
     stats: &mut Stats,
 ) {
     match mode {
-        RefMode::Border => check_one::<T, C, X, Border>(case, raw, mode, stats),
-        RefMode::Clamp => check_one::<T, C, X, ClampToEdge>(case, raw, mode, stats),
-        RefMode::Repeat => check_one::<T, C, X, Repeat>(case, raw, mode, stats),
-        RefMode::Mirror => check_one::<T, C, X, MirroredRepeat>(case, raw, mode, stats),
+        RefMode::Border => check_one::<T, C, X, Border>(case, raw, mode, Border, stats),
+        RefMode::Clamp => check_one::<T, C, X, ClampToEdge>(case, raw, mode, ClampToEdge, stats),
+        RefMode::Repeat => check_one::<T, C, X, Repeat>(case, raw, mode, Repeat, stats),
+        RefMode::Mirror => {
+            check_one::<T, C, X, MirroredRepeat>(case, raw, mode, MirroredRepeat, stats)
+        }
     }
 }
 
@@ -295,21 +299,21 @@ fn weight_truncation_u16_approaches_bound() {
         .collect();
     let tex = RefTexture::new(w, 1, 1, texels);
     let mut stats = Stats::default();
-    let mut rng = texsat_host_tests::SplitMix64::new(9);
+    let mut rng = texsat_host_tests::rng(9);
     with_case::<u16, 1, _>(&tex, 16, |case| {
         for _ in 0..3000 {
             // x0 = 3 (mod 4) and x1 = x0 + 2^(l+24) + 1 make x0 + x1 = 7 (mod 8): the three
             // truncated bits of each weight are all ones (7/8 of the largest truncation). The
             // side is 2^l + 2^-24 texels, whose lod is still exactly l.
-            let x0 = rng.range_i64(0, ((w as i64) << 22) - 1) * 4 + 3;
-            let y0 = rng.range_i64(-(1i64 << (l + 22)), 1i64 << (l + 22)) * 4 + 3;
+            let x0 = rng.random_range(0..=((w as i64) << 22) - 1) * 4 + 3;
+            let y0 = rng.random_range(-(1i64 << (l + 22))..=1i64 << (l + 22)) * 4 + 3;
             let side = (1i64 << (l + 24)) + 1;
             let raw = [x0, y0, x0 + side, y0 + side];
             assert_eq!(
                 case.pyramid.lod(&rect_from_raw::<I40F24>(raw)).unwrap(),
                 l << 8
             );
-            check_one::<u16, 1, I40F24, Border>(case, raw, RefMode::Border, &mut stats);
+            check_one::<u16, 1, I40F24, Border>(case, raw, RefMode::Border, Border, &mut stats);
         }
     });
     let bound = trilinear_bound(16);

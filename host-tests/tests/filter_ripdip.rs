@@ -26,7 +26,7 @@ use texsat::filters::rip::{self, RipMap};
 use texsat::filters::Sample;
 use texsat::{Border, ClampToEdge, Coord, MirroredRepeat, Rect, Repeat, Tally, Texel, Texture};
 use texsat_host_tests::strategies::{arb_interval, arb_mode, arb_texture};
-use texsat_host_tests::{rect_from_raw, RefMode, RefTexel, RefTexture, SplitMix64};
+use texsat_host_tests::{rect_from_raw, RefMode, RefTexel, RefTexture, RngExt};
 
 const OUT: f64 = 65536.0;
 
@@ -370,19 +370,25 @@ fn sampling_exhaustive_grid_every_mode() {
 /// `src/filters/{rip,dip}.rs` construct a case within 1% of it).
 #[test]
 fn arithmetic_bound_is_approached_at_f24() {
-    let mut rng = SplitMix64::new(24);
+    let mut rng = texsat_host_tests::rng(24);
     let (w, h) = (6, 5);
     // High-contrast texture: 0 or max.
     let texels = (0..w * h)
-        .map(|_| if rng.below(2) == 0 { 0 } else { 65535 })
+        .map(|_| {
+            if rng.random_range(0..2) == 0 {
+                0
+            } else {
+                65535
+            }
+        })
         .collect();
     let tex = RefTexture::new(w, h, 1, texels);
     let rects: Vec<[i64; 4]> = (0..3000)
         .map(|_| {
-            let x0 = rng.range_i64(-(2 << 24), 8 << 24);
-            let y0 = rng.range_i64(-(2 << 24), 7 << 24);
-            let sw = rng.range_i64(0, 3 << 24);
-            let sh = rng.range_i64(0, 3 << 24);
+            let x0 = rng.random_range(-(2 << 24)..=8 << 24);
+            let y0 = rng.random_range(-(2 << 24)..=7 << 24);
+            let sw = rng.random_range(0..=3 << 24);
+            let sh = rng.random_range(0..=3 << 24);
             [x0, y0, x0 + sw, y0 + sh]
         })
         .collect();

@@ -10,7 +10,8 @@
 //! * [`Modular`] and the tiled+modular combination: exact within the bound, and every box
 //!   beyond it refused with `TooWide { what: ModularBox, .. }` (exhaustive for integer corners;
 //!   the stated rule for fractional corners: `m * cells_x * cells_y < 2^k`, plus `2F` bits for
-//!   Paper and for boxes that straddle a copy of the texture under clamp, repeat and mirror);
+//!   Paper; boxes crossing the edge under clamp, repeat and mirror are split into in-range
+//!   pieces and need nothing extra in Stable);
 //!   `k = 16` for boxes up to 257 cells on a 300 x 200 texture;
 //! * the streaming builders against `build` (words bit for bit), and their typed refusals;
 //! * the all-255 `u8` texture at 4104 x 4104, the largest square whose worst case fits `u32`, in
@@ -29,11 +30,10 @@ use texsat::width::{bits_of, entry_bits_worst_case};
 use texsat::{
     Border, BoxLookup, BoxSum, ClampToEdge, Coord, Counter, Entry, Error, Layout, MirroredRepeat,
     NoCount, Paper, Quantity, Rect, Repeat, Sat, Shortcut, ShortcutMean, Stable, Tally, Texture,
+    Wide,
 };
 use texsat_host_tests::strategies::{arb_form, arb_interval, arb_mode, arb_texture};
-use texsat_host_tests::{
-    build_sat, rect_from_raw, RefForm, RefMode, RefTexel, RefTexture, SplitMix64,
-};
+use texsat_host_tests::{build_sat, rect_from_raw, RefForm, RefMode, RefTexel, RefTexture, RngExt};
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
@@ -135,7 +135,7 @@ fn lsum_int<L: BoxLookup<C>, const C: usize, K: Counter>(
     r: [i32; 4],
     mode: RefMode,
     k: &mut K,
-) -> Result<BoxSum<C>, Error> {
+) -> Result<BoxSum<u128, C>, Error> {
     let r = Rect::new(r[0], r[1], r[2], r[3]);
     match mode {
         RefMode::Border => l.box_sum_int(&r, Border, k),
@@ -143,6 +143,7 @@ fn lsum_int<L: BoxLookup<C>, const C: usize, K: Counter>(
         RefMode::Repeat => l.box_sum_int(&r, Repeat, k),
         RefMode::Mirror => l.box_sum_int(&r, MirroredRepeat, k),
     }
+    .map(|s| s.to_u128())
 }
 
 /// [`BoxLookup::box_sum`] under a run-time form and mode, for any layout.
@@ -152,7 +153,7 @@ fn lsum<L: BoxLookup<C>, X: Coord, const C: usize, K: Counter>(
     form: RefForm,
     mode: RefMode,
     k: &mut K,
-) -> Result<BoxSum<C>, Error> {
+) -> Result<BoxSum<u128, C>, Error> {
     macro_rules! go {
         ($form:expr) => {
             match mode {
@@ -161,6 +162,7 @@ fn lsum<L: BoxLookup<C>, X: Coord, const C: usize, K: Counter>(
                 RefMode::Repeat => l.box_sum(r, $form, Repeat, k),
                 RefMode::Mirror => l.box_sum(r, $form, MirroredRepeat, k),
             }
+            .map(|s| s.to_u128())
         };
     }
     match form {
@@ -177,7 +179,7 @@ fn lmean_shortcut<L: BoxLookup<C>, X: Coord, const C: usize>(
     mode: RefMode,
     s: &Shortcut,
     g: u32,
-) -> Result<ShortcutMean<C>, Error> {
+) -> Result<ShortcutMean<u128, C>, Error> {
     let k = &mut NoCount;
     macro_rules! go {
         ($form:expr) => {
@@ -187,6 +189,7 @@ fn lmean_shortcut<L: BoxLookup<C>, X: Coord, const C: usize>(
                 RefMode::Repeat => l.box_mean_shortcut(r, $form, Repeat, s, g, k),
                 RefMode::Mirror => l.box_mean_shortcut(r, $form, MirroredRepeat, s, g, k),
             }
+            .map(|s| s.to_u128())
         };
     }
     match form {
@@ -551,8 +554,8 @@ proptest! {
 
 /// What the stated rule says a modular layout does with the raw box `b` at `F = f`: `Ok(())`
 /// (answer exactly) or the refusal. Bound: `m * cells_x * cells_y` with `cells = ceil(hi) -
-/// floor(lo)` of the box (clipped to the texture under Border), plus `2F` bits for Paper and for
-/// a box that does not lie within one copy of the texture under clamp, repeat and mirror.
+/// floor(lo)` of the box (clipped to the texture under Border), plus `2F` bits for Paper (in
+/// every mode; a box crossing the edge needs nothing extra in Stable).
 fn modular_rule(
     mode: RefMode,
     paper: bool,
@@ -568,16 +571,6 @@ fn modular_rule(
     }
     let s = 1i128 << f;
     let cells = |lo: i128, hi: i128| ((hi + s - 1).div_euclid(s) - lo.div_euclid(s)) as u128;
-    // Whether [lo, hi) lies within one copy of the texture (a period for repeat, a half period
-    // for mirror, the texture itself for clamp).
-    let within = |lo: i128, hi: i128, n: usize| {
-        let end = (n as i128) << f;
-        match mode {
-            RefMode::Border => true,
-            RefMode::Clamp => lo >= 0 && hi <= end,
-            RefMode::Repeat | RefMode::Mirror => hi <= (lo.div_euclid(end) + 1) * end,
-        }
-    };
     let (cx, cy) = if mode == RefMode::Border {
         let clip = |lo: i128, hi: i128, n: usize| {
             let end = (n as i128) << f;
@@ -591,8 +584,11 @@ fn modular_rule(
     } else {
         (cells(x0, x1), cells(y0, y1))
     };
-    let straddles = !(within(x0, x1, w) && within(y0, y1, h));
-    let headroom = if paper || straddles { 2 * f } else { 0 };
+    // Paper's corner values are only known modulo 2^k: it needs 2F bits above the box's. Stable
+    // needs none, also for a box that crosses the texture's edge under clamp, repeat or mirror:
+    // such a box is split into in-range pieces each summing to at most the box (src/edge.rs).
+    // (The removed weighted path needed 2F bits there too; the rule changed with it.)
+    let headroom = if paper { 2 * f } else { 0 };
     let m = (1u128 << texel_bits) - 1;
     let needed = bits_of(m.saturating_mul(cx.saturating_mul(cy))) + headroom;
     if needed > k {
@@ -918,7 +914,10 @@ fn modular_fractional_rule_by_hand() {
         I24F8::from_num(18.5),
         I24F8::from_num(18.25),
     );
-    assert_eq!(m.box_sum(&r, Stable, Border, &mut NoCount), refused(17));
+    assert_eq!(
+        u128s(m.box_sum(&r, Stable, Border, &mut NoCount)),
+        refused(17)
+    );
     // [2.5, 17.5) x [3.25, 18.25): 16 x 16 = 256 cells: exact in Stable.
     let r = Rect::new(
         I24F8::from_num(2.5),
@@ -927,10 +926,13 @@ fn modular_fractional_rule_by_hand() {
         I24F8::from_num(18.25),
     );
     assert_eq!(
-        m.box_sum(&r, Stable, Border, &mut NoCount),
-        flat.box_sum(&r, Stable, Border, &mut NoCount)
+        u128s(m.box_sum(&r, Stable, Border, &mut NoCount)),
+        u128s(flat.box_sum(&r, Stable, Border, &mut NoCount))
     );
-    assert_eq!(m.box_sum(&r, Paper, Border, &mut NoCount), refused(16 + 16));
+    assert_eq!(
+        u128s(m.box_sum(&r, Paper, Border, &mut NoCount)),
+        refused(16 + 16)
+    );
     // Integer-aligned 257 x 1 cells exact, 258 refused; 16 x 16 at integers is 256 cells.
     let tex = RefTexture::random(300, 2, 1, 255, 6);
     let mut fst = vec![0u64; 600];
@@ -940,11 +942,14 @@ fn modular_fractional_rule_by_hand() {
     let q = |v: f64| I24F8::from_num(v);
     let r = Rect::new(q(10.0), q(0.0), q(267.0), q(1.0));
     assert_eq!(
-        m.box_sum(&r, Stable, Border, &mut NoCount),
-        flat.box_sum(&r, Stable, Border, &mut NoCount)
+        u128s(m.box_sum(&r, Stable, Border, &mut NoCount)),
+        u128s(flat.box_sum(&r, Stable, Border, &mut NoCount))
     );
     let r = Rect::new(q(10.0), q(0.0), q(267.5), q(1.0));
-    assert_eq!(m.box_sum(&r, Stable, Border, &mut NoCount), refused(17));
+    assert_eq!(
+        u128s(m.box_sum(&r, Stable, Border, &mut NoCount)),
+        refused(17)
+    );
     // One cell at F = 4: Paper fits exactly (8 + 8 bits); at F = 8 it does not.
     let r4 = Rect::new(
         I28F4::from_num(5.25),
@@ -953,32 +958,79 @@ fn modular_fractional_rule_by_hand() {
         I28F4::from_num(1.0),
     );
     assert_eq!(
-        m.box_sum(&r4, Paper, Border, &mut NoCount),
-        flat.box_sum(&r4, Paper, Border, &mut NoCount)
+        u128s(m.box_sum(&r4, Paper, Border, &mut NoCount)),
+        u128s(flat.box_sum(&r4, Paper, Border, &mut NoCount))
     );
     let r8 = Rect::new(q(5.25), q(0.5), q(5.75), q(1.0));
-    assert_eq!(m.box_sum(&r8, Paper, Border, &mut NoCount), refused(24));
     assert_eq!(
-        m.box_sum(&r8, Stable, Border, &mut NoCount),
-        flat.box_sum(&r8, Stable, Border, &mut NoCount)
+        u128s(m.box_sum(&r8, Paper, Border, &mut NoCount)),
+        refused(24)
     );
-    // Under Repeat a box straddling the right edge takes the weighted path, which needs 2F more
-    // bits even in Stable: 2 cells at F = 4 need 9 + 8 > 16; the same 2 cells inside, 9.
+    assert_eq!(
+        u128s(m.box_sum(&r8, Stable, Border, &mut NoCount)),
+        u128s(flat.box_sum(&r8, Stable, Border, &mut NoCount))
+    );
+    // Under Repeat a box straddling the right edge is split into in-range pieces (src/edge.rs);
+    // each piece's sum is at most the box's, so the Stable form needs no bits beyond the box's
+    // own: the rule is `m * cells_x * cells_y < 2^k` as for a box inside. (Before the split path
+    // these took a weighted path that needed 2F more bits even in Stable and were refused with
+    // 9 + 8 and 12 + 8 bits; those expectations no longer hold.)
+    // 2 cells (255 * 2 needs 9 bits): exact.
     let r = Rect::new(q4(298.5), q4(0.0), q4(299.5), q4(1.0));
     assert_eq!(
-        m.box_sum(&r, Stable, Repeat, &mut NoCount),
-        flat.box_sum(&r, Stable, Repeat, &mut NoCount)
+        u128s(m.box_sum(&r, Stable, Repeat, &mut NoCount)),
+        u128s(flat.box_sum(&r, Stable, Repeat, &mut NoCount))
     );
     let r = Rect::new(q4(299.5), q4(0.0), q4(300.5), q4(1.0));
-    assert_eq!(m.box_sum(&r, Stable, Repeat, &mut NoCount), refused(9 + 8));
+    let want = tex.exact_integrals(RefMode::Repeat, raw4(&r), 4);
+    assert_eq!(
+        u128s(m.box_sum(&r, Stable, Repeat, &mut NoCount)).map(|s| s.scaled_sums().to_vec()),
+        Ok(want)
+    );
+    // 11 cells (255 * 11 needs 12 bits): exact too.
     let r = Rect::new(q4(290.5), q4(0.0), q4(300.5), q4(1.0));
-    assert_eq!(m.box_sum(&r, Stable, Repeat, &mut NoCount), refused(12 + 8));
+    let want = tex.exact_integrals(RefMode::Repeat, raw4(&r), 4);
+    assert_eq!(
+        u128s(m.box_sum(&r, Stable, Repeat, &mut NoCount)).map(|s| s.scaled_sums().to_vec()),
+        Ok(want)
+    );
+    // Paper still needs its 2F: 12 + 8 bits > 16 on the same crossing box.
+    assert_eq!(
+        u128s(m.box_sum(&r, Paper, Repeat, &mut NoCount)),
+        refused(12 + 8)
+    );
+    // Crossing the edge, the bound is still the box's: 1 x 258 cells (255 * 258 >= 2^16) is
+    // refused in Stable (17 bits), 257 cells is exact.
+    let r = Rect::new(q4(200.5), q4(0.0), q4(457.0), q4(1.0));
+    let want = tex.exact_integrals(RefMode::Repeat, raw4(&r), 4);
+    assert_eq!(
+        u128s(m.box_sum(&r, Stable, Repeat, &mut NoCount)).map(|s| s.scaled_sums().to_vec()),
+        Ok(want)
+    );
+    let r = Rect::new(q4(200.5), q4(0.0), q4(457.5), q4(1.0));
+    assert_eq!(
+        u128s(m.box_sum(&r, Stable, Repeat, &mut NoCount)),
+        refused(17)
+    );
     // Shifted by whole periods it is the same box (cells are invariant), in range again.
     let r = Rect::new(q4(-1.5), q4(4.0), q4(-0.5), q4(5.0));
     assert_eq!(
-        m.box_sum(&r, Stable, Repeat, &mut NoCount),
-        flat.box_sum(&r, Stable, Repeat, &mut NoCount)
+        u128s(m.box_sum(&r, Stable, Repeat, &mut NoCount)),
+        u128s(flat.box_sum(&r, Stable, Repeat, &mut NoCount))
     );
+}
+
+/// The raw corners of a box as `[x0, y0, x1, y1]`.
+fn raw4<X: Coord>(r: &Rect<X>) -> [i64; 4] {
+    let r = r.to_raw();
+    [r.x0, r.y0, r.x1, r.y1]
+}
+
+/// A lookup's result with its sums as `u128` (to compare tables with different result words).
+fn u128s<W: Wide, const C: usize>(
+    r: Result<BoxSum<W, C>, Error>,
+) -> Result<BoxSum<u128, C>, Error> {
+    r.map(|s| s.to_u128())
 }
 
 fn q4(v: f64) -> I28F4 {
@@ -1009,23 +1061,23 @@ fn modular_k16_boxes_up_to_16x16() {
         let tw = tiled_words::<u8, u16, 1>(&tex, spec).unwrap();
         let t = Tiled::<u16>::from_words(&tw, spec, w, h, 8).unwrap();
         assert!(t.bits_per_entry() < 16.0);
-        let mut rng = SplitMix64::new(1234);
+        let mut rng = texsat_host_tests::rng(1234);
         let (mut exact, mut refused) = (0, 0);
         for n in 0..4000 {
             // Half the boxes within 257 cells, half larger.
             let (bw, bh) = if n % 2 == 0 {
-                let bw = rng.range_i64(1, 257);
-                (bw, rng.range_i64(1, (257 / bw).min(h as i64)))
+                let bw = rng.random_range(1..=257);
+                (bw, rng.random_range(1..=(257 / bw).min(h as i64)))
             } else {
-                let bw = rng.range_i64(1, w as i64);
+                let bw = rng.random_range(1..=w as i64);
                 let lo = (258 + bw - 1) / bw;
                 if lo > h as i64 {
                     continue;
                 }
-                (bw, rng.range_i64(lo, h as i64))
+                (bw, rng.random_range(lo..=h as i64))
             };
-            let x0 = rng.range_i64(0, w as i64 - bw) as i32;
-            let y0 = rng.range_i64(0, h as i64 - bh) as i32;
+            let x0 = rng.random_range(0..=w as i64 - bw) as i32;
+            let y0 = rng.random_range(0..=h as i64 - bh) as i32;
             let b = [x0, y0, x0 + bw as i32, y0 + bh as i32];
             let area = (bw * bh) as u128;
             for (name, got) in [
@@ -1067,7 +1119,10 @@ fn modular_k16_boxes_up_to_16x16() {
             let got = m.box_sum_int(&Rect::new(b[0], b[1], b[2], b[3]), Border, &mut NoCount);
             assert_eq!(got.is_ok(), ok, "{b:?}");
             if ok {
-                assert_eq!(got, lsum_int(&flat, b, RefMode::Border, &mut NoCount));
+                assert_eq!(
+                    u128s(got),
+                    lsum_int(&flat, b, RefMode::Border, &mut NoCount)
+                );
             }
         }
     }

@@ -2,9 +2,12 @@
 //!
 //! * box sums at `F` = 4, 8, 12, 16 (`I28F4`, `I24F8`, `I20F12`, `I16F16`) and integer corners,
 //!   inside and far outside (many periods for Repeat and Mirror), every mode, both forms,
-//!   `u16`/`u32`/`u64` entries, `u8`/`u16` texels, 1 and 3 channels: exact equality;
-//!   `Paper == Stable`; `mean_rounded` is the correctly rounded mean (checked by the defining
-//!   inequality in integers);
+//!   `u16`/`u32`/`u64` entries, `u8`/`u16` texels, 1 and 3 channels: exact equality, or the
+//!   documented refusal where the accumulator (`i32` for `u16` tables, so `F = 8` on a table
+//!   whose total has 15 or 16 bits) or the `u64` result word of `u16`/`u32` tables is too
+//!   narrow ([`expected_sums`]); `Paper == Stable` where both answer; `mean_rounded`, in the
+//!   table's own result word, is the correctly rounded mean (checked by the defining inequality
+//!   in integers);
 //! * the shortcut: taken exactly when both sides reach `min_side`, then the exactly rounded mean
 //!   of the box with rounded corners, within `error_bound + 2^-(g+1)` of the exact mean;
 //! * the streaming builder's rows, `build_checked`, and `from_table` against `Sat::build` and the
@@ -19,8 +22,9 @@ use texsat::width::bits_of;
 use texsat::{Coord, Entry, Error, NoCount, Quantity, RowStreamBuilder, Sat, Shortcut, Texture};
 use texsat_host_tests::strategies::{arb_form, arb_interval, arb_mode, arb_texture};
 use texsat_host_tests::{
-    build_sat, build_sat_checked, invalid_texels, is_rounded_mean, mean_error, mean_shortcut,
-    rect_from_raw, sum_fixed, sum_int, RefForm, RefMode, RefTexel, RefTexture,
+    acc_value_bits_for_entry, build_sat, build_sat_checked, expected_sums, invalid_texels,
+    is_rounded_mean, mean_error, mean_shortcut, rect_from_raw, sum_fixed_native, sum_int_native,
+    wide_bits_for_entry, RefForm, RefMode, RefTexel, RefTexture,
 };
 
 /// Cases per property (each case checks several boxes).
@@ -61,7 +65,9 @@ fn arb_case(
     })
 }
 
-/// Both forms on every box: exact sums, `Paper == Stable`, sides, rounded means.
+/// Both forms on every box: the result the documented rules give ([`expected_sums`]: exact
+/// sums, or the typed refusal where the accumulator or the result word is too narrow),
+/// `Paper == Stable` where both answer, sides, rounded means in the table's own result word.
 fn check_fixed<X: Fixed + Coord, T: RefTexel, E: Entry, const C: usize>(
     tex: &RefTexture,
     boxes: &[([i64; 4], RefMode, u32)],
@@ -69,55 +75,64 @@ fn check_fixed<X: Fixed + Coord, T: RefTexel, E: Entry, const C: usize>(
     let f = X::FRAC_BITS;
     let mut st = vec![E::ZERO; tex.width * tex.height * C];
     let sat = build_sat::<T, E, C>(tex, &mut st).unwrap();
+    let (acc, wide) = (
+        acc_value_bits_for_entry(E::BITS),
+        wide_bits_for_entry(E::BITS),
+    );
     for &(b, mode, g) in boxes {
         let r = rect_from_raw::<X>(b);
-        let want = tex.exact_integrals(mode, b, f);
-        let p = sum_fixed(&sat, &r, RefForm::Paper, mode, &mut NoCount);
-        let s = sum_fixed(&sat, &r, RefForm::Stable, mode, &mut NoCount);
-        let (p, s) = match (p, s) {
-            (Ok(p), Ok(s)) => (p, s),
-            other => {
-                return Err(TestCaseError::fail(format!(
-                    "{mode:?} {b:?} F={f}: {other:?}"
-                )))
-            }
-        };
-        prop_assert_eq!(p, s, "paper != stable, {:?} {:?}", mode, b);
-        prop_assert_eq!(
-            &p.scaled_sums()[..],
-            &want[..],
-            "{:?} {:?} F={}",
-            mode,
-            b,
-            f
-        );
-        prop_assert_eq!(p.frac_bits(), f);
-        let sides = ((b[2] - b[0]) as u128, (b[3] - b[1]) as u128);
-        prop_assert_eq!(p.sides_raw(), sides);
-        let area = sides.0 * sides.1;
-        if area == 0 {
-            prop_assert_eq!(p.mean_rounded(0, g, &mut NoCount), Err(Error::ZeroArea));
-            continue;
-        }
-        let all = p.means_rounded(g, &mut NoCount).unwrap();
-        for (c, &sum) in want.iter().enumerate() {
-            let m = p.mean_rounded(c, g, &mut NoCount).unwrap();
-            prop_assert!(
-                is_rounded_mean(sum, area, g, m),
-                "mean {} of {}/{} at g={} ({:?} {:?})",
-                m,
-                sum,
-                area,
-                g,
+        let mut answered = Vec::new();
+        for form in RefForm::ALL {
+            // In the table's own result word: the means below run its own division (u64 for u16
+            // and u32 tables); the sums are compared as u128 with the u128 reference.
+            let got = sum_fixed_native(&sat, &r, form, mode, &mut NoCount);
+            let want = expected_sums(tex, mode, b, f, Some(form), acc, wide);
+            prop_assert_eq!(
+                got.map(|s| s.to_u128().scaled_sums().to_vec()),
+                want.clone(),
+                "{:?} {:?} {:?} F={}",
+                form,
                 mode,
-                b
+                b,
+                f
             );
-            prop_assert_eq!(all[c], m);
+            if let (Ok(p), Ok(want)) = (got, want) {
+                answered.push((p, want));
+            }
         }
-        prop_assert_eq!(
-            p.mean_rounded(C, g, &mut NoCount),
-            Err(Error::NoSuchChannel)
-        );
+        if let [(p, _), (s, _)] = &answered[..] {
+            prop_assert_eq!(p, s, "paper != stable, {:?} {:?}", mode, b);
+        }
+        for (p, want) in answered {
+            prop_assert_eq!(p.frac_bits(), f);
+            let sides = ((b[2] - b[0]) as u64, (b[3] - b[1]) as u64);
+            prop_assert_eq!(p.sides_raw(), sides);
+            let area = sides.0 as u128 * sides.1 as u128;
+            if area == 0 {
+                prop_assert_eq!(p.mean_rounded(0, g, &mut NoCount), Err(Error::ZeroArea));
+                continue;
+            }
+            let all = p.means_rounded(g, &mut NoCount).unwrap();
+            for (c, &sum) in want.iter().enumerate() {
+                let m = p.mean_rounded(c, g, &mut NoCount).unwrap();
+                let m: u128 = m.into();
+                prop_assert!(
+                    is_rounded_mean(sum, area, g, m),
+                    "mean {} of {}/{} at g={} ({:?} {:?})",
+                    m,
+                    sum,
+                    area,
+                    g,
+                    mode,
+                    b
+                );
+                prop_assert_eq!(all[c].into(), m);
+            }
+            prop_assert_eq!(
+                p.mean_rounded(C, g, &mut NoCount),
+                Err(Error::NoSuchChannel)
+            );
+        }
     }
     Ok(())
 }
@@ -155,7 +170,8 @@ fixed_props! {
     f8_u8_u16_tiny_c3: I24F8, u8, u16, 3, max_dim = 16, max = 255, far = 50;
 }
 
-/// Integer corners (`box_sum_int`), the whole `i32` range reachable.
+/// Integer corners (`box_sum_int`), the whole `i32` range reachable: exact sums (or the typed
+/// refusal where a sum does not fit the result word), rounded means in the table's own word.
 fn check_int<T: RefTexel, E: Entry, const C: usize>(
     tex: &RefTexture,
     boxes: &[([i64; 4], RefMode, u32)],
@@ -164,24 +180,31 @@ fn check_int<T: RefTexel, E: Entry, const C: usize>(
     let sat = build_sat::<T, E, C>(tex, &mut st).unwrap();
     for &(b, mode, g) in boxes {
         let r = b.map(|v| v as i32);
-        let want = tex.exact_integrals(mode, b, 0);
-        let got = sum_int(&sat, r, mode, &mut NoCount);
-        let got = match got {
-            Ok(v) => v,
-            Err(e) => return Err(TestCaseError::fail(format!("{mode:?} {r:?}: {e:?}"))),
-        };
+        let want = expected_sums(
+            tex,
+            mode,
+            b,
+            0,
+            None,
+            acc_value_bits_for_entry(E::BITS),
+            wide_bits_for_entry(E::BITS),
+        );
+        let got = sum_int_native(&sat, r, mode, &mut NoCount);
         prop_assert_eq!(
-            got.scaled_sums().to_vec(),
+            got.map(|s| s.to_u128().scaled_sums().to_vec()),
             want.clone(),
             "{:?} {:?}",
             mode,
             r
         );
+        let (Ok(got), Ok(want)) = (got, want) else {
+            continue;
+        };
         prop_assert_eq!(got.frac_bits(), 0);
-        let area = ((b[2] - b[0]) * (b[3] - b[1])) as u128;
+        let area = (b[2] - b[0]) as u128 * (b[3] - b[1]) as u128;
         if area > 0 {
             let m = got.mean_rounded(0, g, &mut NoCount).unwrap();
-            prop_assert!(is_rounded_mean(want[0], area, g, m));
+            prop_assert!(is_rounded_mean(want[0], area, g, m.into()));
         }
     }
     Ok(())

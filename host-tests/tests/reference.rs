@@ -6,7 +6,7 @@ use fixed::types::I24F8;
 use texsat::{NoCount, Rect};
 use texsat_host_tests::{
     axis_weights, build_sat, invalid_texels, is_rounded_mean, mean_error, sum_fixed, RefForm,
-    RefMode, RefTexture, SplitMix64, U256,
+    RefMode, RefTexture, Rng, RngExt, TestRng, U256,
 };
 
 /// The 4 x 3 texture `1..=12` of the crate docs.
@@ -101,13 +101,13 @@ fn hand_computed_integrals() {
 
 #[test]
 fn axis_weights_conserve_length() {
-    let mut rng = SplitMix64::new(1);
+    let mut rng = texsat_host_tests::rng(1);
     for _ in 0..2000 {
-        let n = rng.range_i64(1, 6) as usize;
-        let f = rng.range_i64(0, 6) as u32;
+        let n = rng.random_range(1..=6) as usize;
+        let f = rng.random_range(0..=6) as u32;
         let end = (n as i64) << f;
-        let lo = rng.range_i64(-5 * end, 6 * end);
-        let hi = lo + rng.range_i64(0, 8 * end);
+        let lo = rng.random_range(-5 * end..=6 * end);
+        let hi = lo + rng.random_range(0..=8 * end);
         for mode in RefMode::ALL {
             let w = axis_weights(mode, lo, hi, n, f);
             let total: u128 = w.iter().sum();
@@ -127,21 +127,24 @@ fn axis_weights_conserve_length() {
 
 #[test]
 fn closed_form_matches_direct_summation() {
-    let mut rng = SplitMix64::new(2);
+    let mut rng = texsat_host_tests::rng(2);
     for case in 0..400 {
-        let (w, h) = (rng.range_i64(1, 5) as usize, rng.range_i64(1, 5) as usize);
+        let (w, h) = (
+            rng.random_range(1..=5) as usize,
+            rng.random_range(1..=5) as usize,
+        );
         let ch = if case % 3 == 0 { 3 } else { 1 };
         let t = RefTexture::random(w, h, ch, 255, case);
         let f = [0u32, 1, 2, 4][case as usize % 4];
         let (ex, ey) = ((w as i64) << f, (h as i64) << f);
         for _ in 0..8 {
-            let x0 = rng.range_i64(-6 * ex, 6 * ex);
-            let y0 = rng.range_i64(-6 * ey, 6 * ey);
+            let x0 = rng.random_range(-6 * ex..=6 * ex);
+            let y0 = rng.random_range(-6 * ey..=6 * ey);
             let b = [
                 x0,
                 y0,
-                x0 + rng.range_i64(0, 5 * ex),
-                y0 + rng.range_i64(0, 5 * ey),
+                x0 + rng.random_range(0..=5 * ex),
+                y0 + rng.random_range(0..=5 * ey),
             ];
             for mode in RefMode::ALL {
                 let closed = t.exact_integrals(mode, b, f);
@@ -159,21 +162,24 @@ fn closed_form_matches_direct_summation() {
 
 #[test]
 fn f64_reference_matches_exact() {
-    let mut rng = SplitMix64::new(3);
+    let mut rng = texsat_host_tests::rng(3);
     for case in 0..200 {
-        let (w, h) = (rng.range_i64(1, 6) as usize, rng.range_i64(1, 6) as usize);
+        let (w, h) = (
+            rng.random_range(1..=6) as usize,
+            rng.random_range(1..=6) as usize,
+        );
         let t = RefTexture::random(w, h, 1, 255, 100 + case);
         let f = 6;
         let scale = (1u64 << f) as f64;
         let (ex, ey) = ((w as i64) << f, (h as i64) << f);
         for _ in 0..6 {
-            let x0 = rng.range_i64(-3 * ex, 3 * ex);
-            let y0 = rng.range_i64(-3 * ey, 3 * ey);
+            let x0 = rng.random_range(-3 * ex..=3 * ex);
+            let y0 = rng.random_range(-3 * ey..=3 * ey);
             let b = [
                 x0,
                 y0,
-                x0 + rng.range_i64(0, 3 * ex),
-                y0 + rng.range_i64(0, 3 * ey),
+                x0 + rng.random_range(0..=3 * ex),
+                y0 + rng.random_range(0..=3 * ey),
             ];
             for mode in RefMode::ALL {
                 let exact = t.exact_integral(mode, b, f, 0) as f64 / (scale * scale);
@@ -220,7 +226,7 @@ fn wide_integers() {
             lo: 1 << 127
         }
     );
-    let mut rng = SplitMix64::new(4);
+    let mut rng = texsat_host_tests::rng(4);
     for _ in 0..1000 {
         let a = rng.next_u64() as u128;
         let b = rng.next_u64() as u128;
@@ -266,15 +272,18 @@ fn rounded_mean_inequality_by_brute_force() {
 /// 2^-(g+1) of the f64 mean.
 #[test]
 fn texsat_matches_f64_reference() {
-    let mut rng = SplitMix64::new(5);
+    let mut rng = texsat_host_tests::rng(5);
     for case in 0..60u64 {
-        let (w, h) = (rng.range_i64(1, 9) as usize, rng.range_i64(1, 9) as usize);
+        let (w, h) = (
+            rng.random_range(1..=9) as usize,
+            rng.random_range(1..=9) as usize,
+        );
         let t = RefTexture::random(w, h, 1, 255, 200 + case);
         let mut st = vec![0u32; w * h];
         let sat = build_sat::<u8, u32, 1>(&t, &mut st).unwrap();
         for _ in 0..10 {
-            let q = |rng: &mut SplitMix64, n: usize| {
-                rng.range_i64(-3 * 256 * n as i64, 4 * 256 * n as i64) as f64 / 256.0
+            let q = |rng: &mut TestRng, n: usize| {
+                rng.random_range(-3 * 256 * n as i64..=4 * 256 * n as i64) as f64 / 256.0
             };
             let (a, b) = (q(&mut rng, w), q(&mut rng, w));
             let (c, d) = (q(&mut rng, h), q(&mut rng, h));

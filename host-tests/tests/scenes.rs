@@ -4,7 +4,7 @@
 use texsat::footprint::{Footprint, Perspective};
 use texsat_host_tests::ewa::{ewa_gaussian, ewa_gaussian_capped, EwaEllipse};
 use texsat_host_tests::scenes::*;
-use texsat_host_tests::{RefMode, RefTexture, SplitMix64};
+use texsat_host_tests::{RefMode, RefTexture, Rng, RngExt, TestRng};
 
 fn scene_with(
     texture: RefTexture,
@@ -96,7 +96,7 @@ fn naive_polygon_integral(tex: &RefTexture, mode: RefMode, poly: &[(f64, f64)]) 
 #[test]
 fn polygon_integral_matches_naive_cell_clipping() {
     let tex = RefTexture::random(13, 9, 1, 255, 7);
-    let mut rng = SplitMix64::new(99);
+    let mut rng = texsat_host_tests::rng(99);
     let mut scratch = ClipScratch::default();
     for mode in RefMode::ALL {
         let cols = ExtendedColumns::new(&tex, mode);
@@ -104,7 +104,7 @@ fn polygon_integral_matches_naive_cell_clipping() {
             // A random convex quad (a perspective image of a square) or triangle, up to ~80
             // texels across, partly outside the texture; half of them mirrored (other
             // orientation).
-            let r = |rng: &mut SplitMix64, lo: f64, hi: f64| {
+            let r = |rng: &mut TestRng, lo: f64, hi: f64| {
                 lo + (hi - lo) * (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
             };
             let scale = if case % 3 == 0 { 60.0 } else { 6.0 };
@@ -325,11 +325,11 @@ fn ewa_of_magnified_footprint_is_close_to_bilinear() {
         })
         .collect();
     let tex = RefTexture::new(n, n, 1, texels);
-    let mut rng = SplitMix64::new(4);
+    let mut rng = texsat_host_tests::rng(4);
     let mut worst: f64 = 0.0;
     for _ in 0..200 {
-        let u = 6.0 + (rng.below(20_000) as f64) / 1000.0;
-        let v = 6.0 + (rng.below(20_000) as f64) / 1000.0;
+        let u = 6.0 + (rng.random_range(0..20_000) as f64) / 1000.0;
+        let v = 6.0 + (rng.random_range(0..20_000) as f64) / 1000.0;
         let fp = Footprint {
             u,
             v,
@@ -426,8 +426,8 @@ fn ewa_ellipse_is_oriented_along_the_compression() {
 #[test]
 fn ewa_row_walk_matches_bounding_box_brute_force_and_cap_is_close() {
     let tex = RefTexture::random(64, 64, 1, 255, 21);
-    let mut rng = SplitMix64::new(5);
-    let f = |rng: &mut SplitMix64, s: f64| s * ((rng.below(20_001) as f64) / 10_000.0 - 1.0);
+    let mut rng = texsat_host_tests::rng(5);
+    let f = |rng: &mut TestRng, s: f64| s * ((rng.random_range(0..20_001) as f64) / 10_000.0 - 1.0);
     for case in 0..40 {
         let s = if case % 4 == 0 { 20.0 } else { 3.0 };
         let fp = Footprint {
