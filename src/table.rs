@@ -8,7 +8,7 @@
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
 use crate::texture::{check_dimensions, Texture};
-use crate::width::{self, bits_of};
+use crate::width;
 
 /// A summed-area table over borrowed storage.
 ///
