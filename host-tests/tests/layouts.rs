@@ -1630,3 +1630,82 @@ fn bits_per_entry_targets() {
     );
     assert!(bpe(TiledSpec::tiles(4, 4).unwrap().with_modulus(16)) < 16.0);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Timing (by hand)
+// ---------------------------------------------------------------------------------------------
+
+/// Nanoseconds per 16-read `Stable` lookup on the flat table, tiles 8 x 8 and modular `k = 16`
+/// over a 1024 x 1024 random `u8` texture: 10^6 random boxes of fractional corners (`F = 4`),
+/// sides up to 15 texels (at most 256 cells, so the modular layout answers every one). Run by
+/// hand, in release:
+///
+/// `cargo test -p texsat-host-tests --release --test layouts -- --ignored --nocapture timing`
+#[test]
+#[ignore]
+fn timing_stable_lookups() {
+    use std::hint::black_box;
+    use std::time::Instant;
+    let _g = big_lock();
+    const N: usize = 1024;
+    const LOOKUPS: usize = 1_000_000;
+    let tex = RefTexture::random(N, N, 1, 255, 2024);
+    let mut fst = vec![0u32; N * N];
+    let flat = build_sat::<u8, u32, 1>(&tex, &mut fst).unwrap();
+    let spec = TiledSpec::tiles(8, 8).unwrap();
+    let tw = tiled_words::<u8, u32, 1>(&tex, spec).unwrap();
+    let tiled = Tiled::<u32>::from_words(&tw, spec, N, N, 8).unwrap();
+    let k = 16;
+    let mw = modular_words::<u8, u32, 1>(&tex, k).unwrap();
+    let modular = Modular::<u32>::from_words(&mw, N, N, 8, k).unwrap();
+    let mut rng = SplitMix64::new(77);
+    let end = (N as i64) << 4;
+    let boxes: Vec<Rect<I28F4>> = (0..LOOKUPS)
+        .map(|_| {
+            let (bw, bh) = (rng.range_i64(1, 15 << 4), rng.range_i64(1, 15 << 4));
+            let x0 = rng.range_i64(0, end - bw);
+            let y0 = rng.range_i64(0, end - bh);
+            rect_from_raw::<I28F4>([x0, y0, x0 + bw, y0 + bh])
+        })
+        .collect();
+    fn run<L: BoxLookup<1>>(l: &L, boxes: &[Rect<I28F4>]) -> (f64, u128, Tally) {
+        let mut t = Tally::new();
+        for r in boxes.iter().take(10_000) {
+            l.box_sum(r, Stable, Border, &mut t).unwrap();
+        }
+        let mut best = f64::MAX;
+        let mut acc = 0u128;
+        for _ in 0..3 {
+            let start = Instant::now();
+            for r in boxes {
+                let s = black_box(l).box_sum(black_box(r), Stable, Border, &mut NoCount);
+                acc = acc.wrapping_add(s.map(|s| s.sum()).unwrap_or(1));
+            }
+            best = best.min(start.elapsed().as_secs_f64() * 1e9 / boxes.len() as f64);
+        }
+        (best, black_box(acc), t)
+    }
+    let (nf, sf, tf) = run(&flat, &boxes);
+    let (nt, st, tt) = run(&tiled, &boxes);
+    let (nm, sm, tm) = run(&modular, &boxes);
+    assert_eq!(sf, st);
+    assert_eq!(sf, sm);
+    let per_read = |ns: f64, t: &Tally| ns / (t.reads as f64 / 10_000.0);
+    println!(
+        "flat    {nf:8.1} ns/lookup  {:5.2} reads/lookup  {:6.2} ns/read",
+        tf.reads as f64 / 1e4,
+        per_read(nf, &tf)
+    );
+    println!(
+        "tiled   {nt:8.1} ns/lookup  {:5.2} reads/lookup  {:6.2} ns/read  ({:.2}x flat per read)",
+        tt.reads as f64 / 1e4,
+        per_read(nt, &tt),
+        per_read(nt, &tt) / per_read(nf, &tf)
+    );
+    println!(
+        "modular {nm:8.1} ns/lookup  {:5.2} reads/lookup  {:6.2} ns/read  ({:.2}x flat per read)",
+        tm.reads as f64 / 1e4,
+        per_read(nm, &tm),
+        per_read(nm, &tm) / per_read(nf, &tf)
+    );
+}
