@@ -380,6 +380,12 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         Ok(())
     }
 
+    /// The sizes the writes use (tests: to make a write fail).
+    #[cfg(test)]
+    pub(super) fn sizes_mut(&mut self) -> &mut Sizes {
+        &mut self.sizes
+    }
+
     /// Checks that every row arrived and returns the layout.
     pub fn finish(self) -> Result<Modular<'a, E, C>, Error> {
         if self.rows_done != self.height {

@@ -235,6 +235,19 @@ impl Axis {
         a
     }
 
+    /// The same axis with the power-of-two shortcut off: the digits by division (tests).
+    #[cfg(test)]
+    pub(super) fn by_division(mut self) -> Axis {
+        self.pow2 = false;
+        self
+    }
+
+    /// Whether the digits are shifts and masks.
+    #[cfg(test)]
+    pub(super) fn is_pow2(&self) -> bool {
+        self.pow2
+    }
+
     /// Components: levels + 1.
     #[inline(always)]
     pub(super) const fn components(&self) -> usize {
@@ -680,44 +693,82 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         }
     }
 
-    /// `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`): straight-line
-    /// code over the four components.
+    /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
+    /// straight-line code over the four components. (Also correct, via the general path, for
+    /// any other spec: the lookups use it only for one level.)
     #[inline(always)]
-    fn corner_one_level<K: Counter>(&self, x: u32, y: u32, k: &mut K) -> [E; C] {
+    pub(super) fn corner_one_level<K: Counter>(&self, x: u32, y: u32, out: &mut [E; C], k: &mut K) {
         let g = &self.geo;
-        let mut out = [E::ZERO; C];
+        if g.ax.levels != 1 || g.ay.levels != 1 {
+            return self.corner_general(x, y, out, k);
+        }
         let (Some((dx, ix0, qx)), Some((dy, iy0, qy))) = (g.ax.step(0, x), g.ay.step(0, y)) else {
-            return out;
+            return;
         };
         let (ix1, iy1) = (qx.wrapping_sub(1), qy.wrapping_sub(1));
         let [r0, r1, ..] = &g.comps;
         let ([c00, c01, ..], [c10, c11, ..]) = (r0, r1);
         if dx != 0 {
             if dy != 0 {
-                self.add_entry(c00, ix0, iy0, &mut out, k);
+                self.add_entry(c00, ix0, iy0, out, k);
             }
             if qy != 0 {
-                self.add_entry(c01, ix0, iy1, &mut out, k);
+                self.add_entry(c01, ix0, iy1, out, k);
             }
         }
         if qx != 0 {
             if dy != 0 {
-                self.add_entry(c10, ix1, iy0, &mut out, k);
+                self.add_entry(c10, ix1, iy0, out, k);
             }
             if qy != 0 {
-                self.add_entry(c11, ix1, iy1, &mut out, k);
+                self.add_entry(c11, ix1, iy1, out, k);
             }
         }
         let fields = ((dx != 0) as u32 + (qx != 0) as u32) * ((dy != 0) as u32 + (qy != 0) as u32);
         if fields > 1 {
             k.adds((fields - 1).saturating_mul(C as u32));
         }
-        if let Some(m) = g.spec.modulus {
-            for o in out.iter_mut() {
-                *o = o.low_bits(m);
+    }
+
+    /// Adds `S(x, y)` (`0 < x <= w`, `0 < y <= h`) to `out` for any spec: the digits of both
+    /// coordinates, then one field per pair of non-zero digits.
+    #[inline(always)]
+    pub(super) fn corner_general<K: Counter>(&self, x: u32, y: u32, out: &mut [E; C], k: &mut K) {
+        let g = &self.geo;
+        let (dx, dy) = (g.ax.digits(x), g.ay.digits(y));
+        let mut fields = 0u32;
+        for ((row, &ddx), &ix) in g
+            .comps
+            .iter()
+            .zip(dx.digit.iter())
+            .zip(dx.index.iter())
+            .take(g.ax.components())
+        {
+            if ddx == 0 {
+                continue;
+            }
+            for ((comp, &ddy), &iy) in row
+                .iter()
+                .zip(dy.digit.iter())
+                .zip(dy.index.iter())
+                .take(g.ay.components())
+            {
+                if ddy == 0 {
+                    continue;
+                }
+                self.add_entry(comp, ix, iy, out, k);
+                fields += 1;
             }
         }
-        out
+        if fields > 1 {
+            k.adds((fields - 1).saturating_mul(C as u32));
+        }
+    }
+
+    /// The geometry (tests).
+    #[cfg(test)]
+    pub(super) fn geometry(&self) -> &Geometry {
+        &self.geo
     }
 
     /// The spec.
@@ -776,51 +827,12 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         if x.wrapping_sub(1) >= g.width || y.wrapping_sub(1) >= g.height {
             return out;
         }
-        if g.ax.levels == 1 && g.ay.levels == 1 {
-            return self.corner_one_level(x as u32, y as u32, k);
-        }
         // x <= w and y <= h are below 2^31: lossless.
-        let (dx, dy) = (g.ax.digits(x as u32), g.ay.digits(y as u32));
-        let mut fields = 0u32;
-        for ((row, &ddx), &ix) in g
-            .comps
-            .iter()
-            .zip(dx.digit.iter())
-            .zip(dx.index.iter())
-            .take(g.ax.components())
-        {
-            if ddx == 0 {
-                continue;
-            }
-            for ((comp, &ddy), &iy) in row
-                .iter()
-                .zip(dy.digit.iter())
-                .zip(dy.index.iter())
-                .take(g.ay.components())
-            {
-                if ddy == 0 {
-                    continue;
-                }
-                let offset = comp.offset(ix, iy);
-                let read = u32::try_from(comp.stride_bits).unwrap_or(u32::MAX);
-                k.reads(1, read);
-                k.words(
-                    ((offset % WORD_BITS as u64) as u32)
-                        .saturating_add(read)
-                        .div_ceil(WORD_BITS),
-                );
-                let mut at = offset;
-                for o in out.iter_mut() {
-                    let v = read_masked(self.words, at, comp.bits, comp.mask);
-                    // Sums of parts of S: no wrap on a valid layout (E holds the total).
-                    *o = o.wrapping_add(E::from_u64_truncating(v));
-                    at = at.wrapping_add(comp.bits as u64);
-                }
-                fields += 1;
-            }
-        }
-        if fields > 1 {
-            k.adds((fields - 1).saturating_mul(C as u32));
+        let (x, y) = (x as u32, y as u32);
+        if g.ax.levels == 1 && g.ay.levels == 1 {
+            self.corner_one_level(x, y, &mut out, k);
+        } else {
+            self.corner_general(x, y, &mut out, k);
         }
         if let Some(m) = g.spec.modulus {
             for o in out.iter_mut() {
