@@ -142,7 +142,12 @@ pub(crate) fn read_masked(words: &[u32], offset: u64, len: u32, mask: u64) -> u6
     let Ok(first) = usize::try_from(offset / WORD_BITS as u64) else {
         return 0;
     };
-    let mut v = (word(words, first, 0) | word(words, first, 1) << 32).wrapping_shr(shift);
+    // Two words with one range check; at the end of the slice, word by word (0 past it).
+    let pair = match words.get(first..first.wrapping_add(2)) {
+        Some(&[a, b]) => a as u64 | (b as u64) << 32,
+        _ => word(words, first, 0) | word(words, first, 1) << 32,
+    };
+    let mut v = pair.wrapping_shr(shift);
     if shift.wrapping_add(len) > 64 {
         // shift is in 1..=31 here: the third word supplies the top `shift + len - 64` bits.
         v |= word(words, first, 2).wrapping_shl(64 - shift);
