@@ -10,6 +10,10 @@
 //! box overlaps times `m`, plus `2F` bits for [`crate::Paper`] and the edge-mode weighted path,
 //! whose corner values are only known modulo `2^k` (the [`crate::Stable`] form reduces its
 //! box-bounded differences first and needs no headroom).
+//!
+//! Sizes are computed in `u64` with checks ([`Modular::words_needed`] is a `const fn`); a corner
+//! is one read of `k C` bits (two 32-bit words for `k C <= 33`); corrupted words give wrong
+//! sums, never a panic.
 
 use super::packed::{
     bits_of_mul, check_dimensions, mask, read_field, read_masked, words_of_bits, write_field,

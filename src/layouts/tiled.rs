@@ -24,6 +24,15 @@
 //!
 //! Crow's §3.0 sketch stores only `C_00` and a corner per region, which loses the edge strips;
 //! see `docs/layouts.md` and the `CrowLiteral` test in host-tests.
+//!
+//! ## Sizes, digits, safety
+//! Every size and bit offset is computed once, in `u64` with checks, when the layout is made
+//! ([`Tiled::words_needed`] is a `const fn`); a layout whose size overflows `u64` bits or the
+//! target's `usize` words is refused with [`Error::TextureTooLarge`], so on a 32-bit target
+//! exactly as on a 64-bit one no storage that is too short is accepted. The digits of a corner
+//! are shifts and masks when every block is a power of two times the one before (8 x 8 tiles,
+//! 2 in 16, ...), divisions by non-zero radices otherwise. Reads go through `get`: a corrupted
+//! layout (from [`Tiled::from_words`]) gives wrong sums, never a panic.
 
 use core::num::NonZeroU32;
 
