@@ -1693,9 +1693,21 @@ fn timing_stable_lookups() {
     let only = std::env::var("TIMING_ONLY").unwrap_or_default();
     let skip = |name: &str| !only.is_empty() && only != name;
     let none = || (f64::NAN, 0u128, Tally::new());
-    let (nf, sf, tf) = if skip("flat") { none() } else { run(&flat, &boxes) };
-    let (nt, st, tt) = if skip("tiled") { none() } else { run(&tiled, &boxes) };
-    let (nm, sm, tm) = if skip("modular") { none() } else { run(&modular, &boxes) };
+    let (nf, sf, tf) = if skip("flat") {
+        none()
+    } else {
+        run(&flat, &boxes)
+    };
+    let (nt, st, tt) = if skip("tiled") {
+        none()
+    } else {
+        run(&tiled, &boxes)
+    };
+    let (nm, sm, tm) = if skip("modular") {
+        none()
+    } else {
+        run(&modular, &boxes)
+    };
     if only.is_empty() {
         assert_eq!(sf, st);
         assert_eq!(sf, sm);
