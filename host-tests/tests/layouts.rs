@@ -1635,7 +1635,8 @@ fn bits_per_entry_targets() {
 // Timing (by hand)
 // ---------------------------------------------------------------------------------------------
 
-/// Nanoseconds per 16-read `Stable` lookup on the flat table, tiles 8 x 8 and modular `k = 16`
+/// Nanoseconds per 16-read `Stable` lookup on the flat table, tiles 8 x 8 (`TIMING_SPEC` sets
+/// others) and modular `k = 16`
 /// over a 1024 x 1024 random `u8` texture (`TIMING_N` sets another side): 10^6 random boxes of fractional corners (`F = 4`),
 /// sides up to 15 texels (at most 256 cells, so the modular layout answers every one). Run by
 /// hand, in release:
@@ -1656,7 +1657,14 @@ fn timing_stable_lookups() {
     let tex = RefTexture::random(n, n, 1, 255, 2024);
     let mut fst = vec![0u32; n * n];
     let flat = build_sat::<u8, u32, 1>(&tex, &mut fst).unwrap();
-    let spec = TiledSpec::tiles(8, 8).unwrap();
+    // TIMING_SPEC=2,16 (or 3,5 ...: block sizes on both axes) times another tiled spec.
+    let spec = match std::env::var("TIMING_SPEC") {
+        Ok(v) => {
+            let blocks: Vec<u32> = v.split(',').map(|b| b.trim().parse().unwrap()).collect();
+            TiledSpec::square(&blocks).unwrap()
+        }
+        Err(_) => TiledSpec::tiles(8, 8).unwrap(),
+    };
     let tw = tiled_words::<u8, u32, 1>(&tex, spec).unwrap();
     let tiled = Tiled::<u32>::from_words(&tw, spec, n, n, 8).unwrap();
     let k = 16;
