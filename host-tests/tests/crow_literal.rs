@@ -374,7 +374,7 @@ fn tiled_with_same_tiles_is_exact_for_every_box() {
         let flat = Sat::build(&t, &mut flat_st).unwrap();
         let spec = TiledSpec::tiles(r as u32, r as u32).unwrap();
         let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, w, h, 8).unwrap()];
-        let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, w)];
+        let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
         let tiled = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
         let lit = CrowLiteral::build(&tex, r, 8);
         let ex = Exact::new(&tex);

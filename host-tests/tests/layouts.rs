@@ -93,7 +93,7 @@ fn tiled_words<T: RefTexel, E: Entry, const C: usize>(
     let texels = tex.texels_as::<T>();
     let t = Texture::<T, C>::new(&texels, tex.width, tex.height)?;
     let mut words = vec![0u32; Tiled::<E, C>::words_needed(spec, tex.width, tex.height, T::BITS)?];
-    let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, tex.width)];
+    let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, tex.width)?];
     Tiled::<E, C>::build(&t, spec, &mut words, &mut scratch)?;
     Ok(words)
 }
@@ -105,7 +105,7 @@ fn modular_words<T: RefTexel, E: Entry, const C: usize>(
 ) -> Result<Vec<u32>, Error> {
     let texels = tex.texels_as::<T>();
     let t = Texture::<T, C>::new(&texels, tex.width, tex.height)?;
-    let mut words = vec![0u32; Modular::<E, C>::words_needed(tex.width, tex.height, k)];
+    let mut words = vec![0u32; Modular::<E, C>::words_needed(tex.width, tex.height, k)?];
     let mut row = vec![E::ZERO; tex.width * C];
     Modular::<E, C>::build(&t, k, &mut words, &mut row)?;
     Ok(words)
@@ -1141,7 +1141,7 @@ fn check_tiled_stream<T: RefTexel, E: Entry, const C: usize>(tex: &RefTexture, s
     let rows: Vec<&[T]> = texels.chunks_exact(w * C).collect();
     for fill in [0u32, 0xA5A5_A5A5, u32::MAX] {
         let mut words = vec![fill; built.len()];
-        let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, w) + 3];
+        let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, w).unwrap() + 3];
         let storage_bits = {
             let mut b =
                 TiledBuilder::<E, C>::new(spec, w, h, T::BITS, &mut words, &mut scratch).unwrap();
@@ -1203,7 +1203,7 @@ fn tiled_builder_refusals() {
     let texels = tex.texels_as::<u8>();
     let spec = TiledSpec::square(&[2, 4]).unwrap();
     let need = Tiled::<u32>::words_needed(spec, w, h, 8).unwrap();
-    let sneed = Tiled::<u32>::scratch_needed(spec, w);
+    let sneed = Tiled::<u32>::scratch_needed(spec, w).unwrap();
     assert_eq!(sneed, (spec.y.components() + 1) * (w + 1));
     let built = tiled_words::<u8, u32, 1>(&tex, spec).unwrap();
 
@@ -1232,7 +1232,7 @@ fn tiled_builder_refusals() {
         }
     );
     // The value type must hold the worst case: 255 * 20 * 20 needs 17 bits, more than u16.
-    let mut s16 = vec![0u16; Tiled::<u16>::scratch_needed(spec, 20)];
+    let mut s16 = vec![0u16; Tiled::<u16>::scratch_needed(spec, 20).unwrap()];
     let mut big = vec![0u32; Tiled::<u16>::words_needed(spec, 20, 20, 8).unwrap()];
     assert_eq!(
         TiledBuilder::<u16>::new(spec, 20, 20, 8, &mut big, &mut s16).unwrap_err(),
@@ -1292,7 +1292,7 @@ fn tiled_builder_refusals() {
 
     // Three channels: the row length counts channels.
     let mut words3 = vec![0u32; Tiled::<u32, 3>::words_needed(spec, w, h, 8).unwrap()];
-    let mut scratch3 = vec![0u32; Tiled::<u32, 3>::scratch_needed(spec, w)];
+    let mut scratch3 = vec![0u32; Tiled::<u32, 3>::scratch_needed(spec, w).unwrap()];
     let mut b = TiledBuilder::<u32, 3>::new(spec, w, h, 8, &mut words3, &mut scratch3).unwrap();
     assert_eq!(
         b.push_row(&texels[..w]).unwrap_err(),
@@ -1308,7 +1308,7 @@ fn modular_builder_refusals() {
     let (w, h, k) = (10usize, 6usize, 12u32);
     let tex = RefTexture::random(w, h, 1, 255, 43);
     let texels = tex.texels_as::<u8>();
-    let need = Modular::<u32>::words_needed(w, h, k);
+    let need = Modular::<u32>::words_needed(w, h, k).unwrap();
     assert_eq!(need, (w * h * k as usize).div_ceil(32));
     let built = modular_words::<u8, u32, 1>(&tex, k).unwrap();
     let mut words = vec![0u32; need];
@@ -1395,7 +1395,7 @@ fn tiled_builder_refuses_texels_wider_than_declared() {
     let k = 13;
     let spec = TiledSpec::tiles(4, 4).unwrap().with_modulus(k);
     let mut words = vec![0u32; Tiled::<u16>::words_needed(spec, w, h, 8).unwrap()];
-    let mut scratch = vec![0u16; Tiled::<u16>::scratch_needed(spec, w)];
+    let mut scratch = vec![0u16; Tiled::<u16>::scratch_needed(spec, w).unwrap()];
     let wide = vec![300u16; w];
     let mut b = TiledBuilder::<u16>::new(spec, w, h, 8, &mut words, &mut scratch).unwrap();
     let first = b.push_row(&wide);
@@ -1440,7 +1440,7 @@ fn extreme_4104_all_255() {
     let e = (N as i64) << 8;
     {
         let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, N, N, 8).unwrap()];
-        let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, N)];
+        let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, N).unwrap()];
         let l = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
         assert_eq!(l.value_bits(), 32);
         assert!(l.bits_per_entry() < 16.5, "{}", l.bits_per_entry());
@@ -1528,7 +1528,7 @@ fn extreme_4104_all_255() {
 
     // Modular k = 16 on the same texture.
     let k = 16;
-    let mut words = vec![0u32; Modular::<u32>::words_needed(N, N, k)];
+    let mut words = vec![0u32; Modular::<u32>::words_needed(N, N, k).unwrap()];
     let mut row = vec![0u32; N];
     let m = Modular::<u32>::build(&t, k, &mut words, &mut row).unwrap();
     assert_eq!(m.max_exact_area(), 257);
@@ -1680,8 +1680,153 @@ fn bits_per_entry_targets() {
     assert_eq!(bpe(TiledSpec::FLAT_PACKED), 30.0);
     // Modular k = 16 is 16 bits, tiled mod 2^16 less.
     assert_eq!(
-        Modular::<u32>::words_needed(n, n, 16) as f64 * 32.0 / (n * n) as f64,
+        Modular::<u32>::words_needed(n, n, 16).unwrap() as f64 * 32.0 / (n * n) as f64,
         16.0
     );
     assert!(bpe(TiledSpec::tiles(4, 4).unwrap().with_modulus(16)) < 16.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing (by hand)
+// ---------------------------------------------------------------------------------------------
+
+/// Nanoseconds per 16-read `Stable` lookup on the flat table, tiles 8 x 8 (`TIMING_SPEC` sets
+/// others) and modular `k = 16`
+/// over a 1024 x 1024 random `u8` texture (`TIMING_N` sets another side): 10^6 random boxes of fractional corners (`F = 4`),
+/// sides up to 15 texels (at most 256 cells, so the modular layout answers every one). Run by
+/// hand, in release:
+///
+/// `cargo test -p texsat-host-tests --release --test layouts -- --ignored --nocapture timing`
+#[test]
+#[ignore]
+fn timing_stable_lookups() {
+    use std::hint::black_box;
+    use std::time::Instant;
+    let _g = big_lock();
+    // TIMING_N=256 for a texture whose tables fit the L2 cache.
+    let n: usize = std::env::var("TIMING_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1024);
+    const LOOKUPS: usize = 1_000_000;
+    let tex = RefTexture::random(n, n, 1, 255, 2024);
+    let mut fst = vec![0u32; n * n];
+    let flat = build_sat::<u8, u32, 1>(&tex, &mut fst).unwrap();
+    // TIMING_SPEC=2,16 (or 3,5 ...: block sizes on both axes) times another tiled spec.
+    let spec = match std::env::var("TIMING_SPEC") {
+        Ok(v) => {
+            let blocks: Vec<u32> = v.split(',').map(|b| b.trim().parse().unwrap()).collect();
+            TiledSpec::square(&blocks).unwrap()
+        }
+        Err(_) => TiledSpec::tiles(8, 8).unwrap(),
+    };
+    let tw = tiled_words::<u8, u32, 1>(&tex, spec).unwrap();
+    let tiled = Tiled::<u32>::from_words(&tw, spec, n, n, 8).unwrap();
+    let k = 16;
+    let mw = modular_words::<u8, u32, 1>(&tex, k).unwrap();
+    let modular = Modular::<u32>::from_words(&mw, n, n, 8, k).unwrap();
+    let mut rng = SplitMix64::new(77);
+    let end = (n as i64) << 4;
+    let boxes: Vec<Rect<I28F4>> = (0..LOOKUPS)
+        .map(|_| {
+            let (bw, bh) = (rng.range_i64(1, 15 << 4), rng.range_i64(1, 15 << 4));
+            let x0 = rng.range_i64(0, end - bw);
+            let y0 = rng.range_i64(0, end - bh);
+            rect_from_raw::<I28F4>([x0, y0, x0 + bw, y0 + bh])
+        })
+        .collect();
+    fn run<L: BoxLookup<1>>(l: &L, boxes: &[Rect<I28F4>]) -> (f64, u128, Tally) {
+        let mut t = Tally::new();
+        for r in boxes.iter().take(10_000) {
+            l.box_sum(r, Stable, Border, &mut t).unwrap();
+        }
+        let mut best = f64::MAX;
+        let mut acc = 0u128;
+        for _ in 0..3 {
+            let start = Instant::now();
+            for r in boxes {
+                let s = black_box(l).box_sum(black_box(r), Stable, Border, &mut NoCount);
+                acc = acc.wrapping_add(s.map(|s| s.sum()).unwrap_or(1));
+            }
+            best = best.min(start.elapsed().as_secs_f64() * 1e9 / boxes.len() as f64);
+        }
+        (best, black_box(acc), t)
+    }
+    // TIMING_ONLY=flat|tiled|modular times one layout (for `perf stat`).
+    let only = std::env::var("TIMING_ONLY").unwrap_or_default();
+    let skip = |name: &str| !only.is_empty() && only != name;
+    let none = || (f64::NAN, 0u128, Tally::new());
+    let (nf, sf, tf) = if skip("flat") {
+        none()
+    } else {
+        run(&flat, &boxes)
+    };
+    let (nt, st, tt) = if skip("tiled") {
+        none()
+    } else {
+        run(&tiled, &boxes)
+    };
+    let (nm, sm, tm) = if skip("modular") {
+        none()
+    } else {
+        run(&modular, &boxes)
+    };
+    if only.is_empty() {
+        assert_eq!(sf, st);
+        assert_eq!(sf, sm);
+    }
+    let per_read = |ns: f64, t: &Tally| ns / (t.reads as f64 / 10_000.0);
+    println!(
+        "flat    {nf:8.1} ns/lookup  {:5.2} reads/lookup  {:6.2} ns/read",
+        tf.reads as f64 / 1e4,
+        per_read(nf, &tf)
+    );
+    println!(
+        "tiled   {nt:8.1} ns/lookup  {:5.2} reads/lookup  {:6.2} ns/read  ({:.2}x flat per read)",
+        tt.reads as f64 / 1e4,
+        per_read(nt, &tt),
+        per_read(nt, &tt) / per_read(nf, &tf)
+    );
+    println!(
+        "modular {nm:8.1} ns/lookup  {:5.2} reads/lookup  {:6.2} ns/read  ({:.2}x flat per read)",
+        tm.reads as f64 / 1e4,
+        per_read(nm, &tm),
+        per_read(nm, &tm) / per_read(nf, &tf)
+    );
+    // The corner reads alone, at the 16 integer corners each lookup reads (no lookup arithmetic).
+    let corners: Vec<(usize, usize)> = boxes
+        .iter()
+        .flat_map(|r| {
+            let xs = [r.x0, r.x1].map(|v| (v.to_bits() >> 4) as usize);
+            let ys = [r.y0, r.y1].map(|v| (v.to_bits() >> 4) as usize);
+            let c = move |v: usize| [v, (v + 1).min(n)];
+            xs.into_iter()
+                .flat_map(c)
+                .flat_map(move |x| ys.into_iter().flat_map(c).map(move |y| (x, y)))
+        })
+        .collect();
+    fn run_corners<L: Layout<1>>(l: &L, corners: &[(usize, usize)]) -> (f64, u64) {
+        let mut best = f64::MAX;
+        let mut acc = 0u64;
+        for _ in 0..3 {
+            let start = Instant::now();
+            for &(x, y) in corners {
+                let v = black_box(l).corner(x, y, &mut NoCount);
+                acc = acc.wrapping_add(v[0].to_u64());
+            }
+            best = best.min(start.elapsed().as_secs_f64() * 1e9 / corners.len() as f64);
+        }
+        (best, black_box(acc))
+    }
+    if only.is_empty() {
+        let (cf, _) = run_corners(&flat, &corners);
+        let (ct, _) = run_corners(&tiled, &corners);
+        let (cm, _) = run_corners(&modular, &corners);
+        println!(
+            "corner  flat {cf:.2} ns, tiled {ct:.2} ns ({:.2}x per field: {:.2} fields), modular {cm:.2} ns ({:.2}x)",
+            ct / cf / (tt.reads as f64 / tf.reads as f64),
+            tt.reads as f64 / tf.reads as f64,
+            cm / cf
+        );
+    }
 }

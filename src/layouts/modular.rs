@@ -10,14 +10,20 @@
 //! box overlaps times `m`, plus `2F` bits for [`crate::Paper`] and the edge-mode weighted path,
 //! whose corner values are only known modulo `2^k` (the [`crate::Stable`] form reduces its
 //! box-bounded differences first and needs no headroom).
+//!
+//! Sizes are computed in `u64` with checks ([`Modular::words_needed`] is a `const fn`); a corner
+//! is one read of `k C` bits (two 32-bit words for `k C <= 33`); corrupted words give wrong
+//! sums, never a panic.
 
-use super::packed::{read_bits, write_bits, WORD_BITS};
+use super::packed::{
+    bits_of_mul, check_dimensions, mask, read_field, read_masked, words_of_bits, write_field,
+    WORD_BITS,
+};
 use super::Layout;
 use crate::cost::Counter;
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
-use crate::texture::{check_dimensions, Texture};
-use crate::width::{self, bits_of};
+use crate::texture::Texture;
 
 /// The flat table modulo `2^k`, `k`-bit fields packed in 32-bit words.
 #[derive(Debug, Clone, Copy)]
@@ -27,20 +33,97 @@ pub struct Modular<'a, E: Entry, const C: usize = 1> {
     height: usize,
     texel_bits: u32,
     k: u32,
+    sizes: Sizes,
     _e: core::marker::PhantomData<E>,
 }
 
 /// `k` for boxes of at most `max_area` texels: `bits_of((2^b - 1) * max_area)`.
 pub const fn modulus_bits_for(texel_bits: u32, max_area: u64) -> u32 {
-    bits_of(width::max_texel(texel_bits) * max_area as u128)
+    if texel_bits <= 64 {
+        bits_of_mul(mask(texel_bits), max_area)
+    } else if max_area == 0 {
+        0
+    } else {
+        // (2^b - 1) a = a 2^b - a with a < 2^b: bits_of(a) + b, one less if a is a power of two.
+        let a_bits = 64 - max_area.leading_zeros();
+        texel_bits
+            .saturating_add(a_bits)
+            .saturating_sub(max_area.is_power_of_two() as u32)
+    }
 }
 
-fn check_k<E: Entry>(texel_bits: u32, k: u32) -> Result<(), Error> {
-    width::check_texel_bits(texel_bits)?;
+/// Refuses `k` outside `texel_bits..=E::BITS` (and texel widths outside `1..=16`).
+const fn check_k<E: Entry>(texel_bits: u32, k: u32) -> Result<(), Error> {
+    if let Err(e) = crate::width::check_texel_bits(texel_bits) {
+        return Err(e);
+    }
     if k < texel_bits || k > E::BITS || k == 0 {
         Err(Error::InvalidModulus { bits: k })
     } else {
         Ok(())
+    }
+}
+
+/// The sizes of a modular layout in bits, computed once and checked: every field offset of a
+/// valid corner is below `total_bits`, so the lookups' offset arithmetic cannot wrap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Sizes {
+    /// Bits of one entry, all channels: `k C`.
+    pub(super) entry_bits: u64,
+    /// Bits of one table row: `w k C`.
+    pub(super) row_bits: u64,
+    /// Bits of the table: `w h k C`.
+    pub(super) total_bits: u64,
+    /// `ceil(total_bits / 32)`.
+    pub(super) words: usize,
+    /// The low `entry_bits` bits set (all ones from 64 on).
+    pub(super) entry_mask: u64,
+}
+
+impl Sizes {
+    /// The sizes of a `w x h` table of `channels` channels at `k <= 64` bits, or
+    /// `TextureTooLarge` if the bits overflow `u64` or the words exceed `max_words` (the
+    /// target's `usize::MAX`; tests pass `u32::MAX` to check a 32-bit target on any host).
+    pub(super) const fn new(
+        width: usize,
+        height: usize,
+        k: u32,
+        channels: usize,
+        max_words: u64,
+    ) -> Result<Sizes, Error> {
+        if let Err(e) = check_dimensions(width, height, channels) {
+            return Err(e);
+        }
+        if k == 0 || k > 64 {
+            return Err(Error::InvalidModulus { bits: k });
+        }
+        let too_large = Error::TextureTooLarge {
+            dimension: if width > height { width } else { height },
+        };
+        // `usize` has at most 64 bits, so `as u64` is lossless.
+        let Some(entry_bits) = (k as u64).checked_mul(channels as u64) else {
+            return Err(too_large);
+        };
+        let Some(row_bits) = entry_bits.checked_mul(width as u64) else {
+            return Err(too_large);
+        };
+        let Some(total_bits) = row_bits.checked_mul(height as u64) else {
+            return Err(too_large);
+        };
+        let Some(words) = words_of_bits(total_bits, max_words) else {
+            return Err(too_large);
+        };
+        Ok(Sizes {
+            entry_bits,
+            row_bits,
+            total_bits,
+            words,
+            entry_mask: if entry_bits >= 64 {
+                u64::MAX
+            } else {
+                mask(entry_bits as u32)
+            },
+        })
     }
 }
 
@@ -50,9 +133,43 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
         modulus_bits_for(texel_bits, max_area)
     }
 
-    /// Words a `w x h` table at `k` bits needs: `ceil(w h C k / 32)`.
-    pub fn words_needed(width: usize, height: usize, k: u32) -> usize {
-        super::packed::words_for(width * height * C, k)
+    /// Words a `w x h` table at `k` bits needs: `ceil(w h C k / 32)`, computed in `u64` and
+    /// checked. Refuses `k` outside `1..=E::BITS` ([`Error::InvalidModulus`]), an empty or
+    /// oversized texture ([`Error::EmptyTexture`], [`Error::TextureTooLarge`]), and, with
+    /// [`Error::TextureTooLarge`], a table whose size overflows `u64` bits or `usize` words (on a
+    /// 32-bit target, more than `2^32 - 1` words).
+    ///
+    /// A `const fn`, so firmware can size a `static` at compile time:
+    ///
+    /// ```
+    /// use texsat::layouts::Modular;
+    /// use texsat::{BoxLookup, Border, NoCount, Rect, Texture};
+    /// const K: u32 = Modular::<u32>::bits_for_max_area(8, 16 * 16); // 16 bits
+    /// const WORDS: usize = match Modular::<u32>::words_needed(64, 48, K) {
+    ///     Ok(n) => n,
+    ///     Err(_) => panic!(),
+    /// };
+    /// static IMAGE: [u32; WORDS] = [0; WORDS]; // e.g. written by a host tool into flash
+    /// assert_eq!(WORDS, 64 * 48 * 16 / 32);
+    ///
+    /// let texels = [3u8; 64 * 48];
+    /// let tex = Texture::<u8>::new(&texels, 64, 48)?;
+    /// let mut words = [0u32; WORDS];
+    /// let mut row = [0u32; 64];
+    /// let m = Modular::<u32>::build(&tex, K, &mut words, &mut row)?;
+    /// let s = m.box_sum_int(&Rect::new(10, 10, 26, 26), Border, &mut NoCount)?;
+    /// assert_eq!(s.sum(), 3 * 256);
+    /// let _flash = Modular::<u32>::from_words(&IMAGE, 64, 48, 8, K)?;
+    /// # Ok::<(), texsat::Error>(())
+    /// ```
+    pub const fn words_needed(width: usize, height: usize, k: u32) -> Result<usize, Error> {
+        if k == 0 || k > E::BITS {
+            return Err(Error::InvalidModulus { bits: k });
+        }
+        match Sizes::new(width, height, k, C, usize::MAX as u64) {
+            Ok(s) => Ok(s.words),
+            Err(e) => Err(e),
+        }
     }
 
     /// Builds the table of `texture` modulo `2^k` into `words`, using `row` (`w * C` entries) as
@@ -80,11 +197,10 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
         k: u32,
     ) -> Result<Self, Error> {
         check_k::<E>(texel_bits, k)?;
-        check_dimensions(width, height, C)?;
-        let need = Self::words_needed(width, height, k);
-        if words.len() < need {
+        let sizes = Sizes::new(width, height, k, C, usize::MAX as u64)?;
+        if words.len() < sizes.words {
             return Err(Error::StorageTooSmall {
-                needed: need,
+                needed: sizes.words,
                 got: words.len(),
             });
         }
@@ -94,13 +210,15 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
             height,
             texel_bits,
             k,
+            sizes,
             _e: core::marker::PhantomData,
         })
     }
 
     /// The largest box area (in texel cells) whose sum is always exact: `floor((2^k - 1) / m)`.
     pub fn max_exact_area(&self) -> u128 {
-        ((1u128 << self.k) - 1) / width::max_texel(self.texel_bits)
+        // k <= 64 and m = 2^b - 1 >= 1: computed in u64, widened for the signature.
+        u128::from(mask(self.k).checked_div(mask(self.texel_bits)).unwrap_or(0))
     }
 
     /// The storage words.
@@ -127,23 +245,50 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
         Some(self.k)
     }
     fn storage_bits(&self) -> u64 {
-        (self.width * self.height * C) as u64 * self.k as u64
+        self.sizes.total_bits
     }
+    /// One field of `k C` bits: read at once (two or three words) when `k C <= 64`, else one
+    /// `k`-bit read per channel. Corners outside `[0, w] x [0, h]` read nothing and give 0.
     #[inline]
     fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
         let mut out = [E::ZERO; C];
-        if x == 0 || y == 0 {
+        // x - 1 < w and y - 1 < h: also refuses x = 0 and y = 0 (wrapping to usize::MAX).
+        if x.wrapping_sub(1) >= self.width || y.wrapping_sub(1) >= self.height {
             return out;
         }
-        let entry = ((y - 1) * self.width + (x - 1)) as u64;
-        let offset = entry * C as u64 * self.k as u64;
-        let span = (offset % WORD_BITS as u64) as u32 + self.k * C as u32;
-        k.reads(1, self.k * C as u32);
-        k.words(span.div_ceil(WORD_BITS));
-        for (c, o) in out.iter_mut().enumerate() {
-            *o = E::from_u64_truncating(
-                read_bits(self.words, offset + (c as u32 * self.k) as u64, self.k).0,
-            );
+        let s = &self.sizes;
+        // Below total_bits for x <= w, y <= h (checked when the sizes were made): no wrap.
+        let offset = ((y - 1) as u64)
+            .wrapping_mul(s.row_bits)
+            .wrapping_add(((x - 1) as u64).wrapping_mul(s.entry_bits));
+        let read = u32::try_from(s.entry_bits).unwrap_or(u32::MAX);
+        k.reads(1, read);
+        k.words(
+            ((offset % WORD_BITS as u64) as u32)
+                .saturating_add(read)
+                .div_ceil(WORD_BITS),
+        );
+        if C == 1 || s.entry_bits <= 64 {
+            // One read of all channels (k C <= 64 bits; for C = 1, k <= 64).
+            let v = read_masked(self.words, offset, s.entry_bits as u32, s.entry_mask);
+            if C == 1 {
+                for o in out.iter_mut() {
+                    *o = E::from_u64_truncating(v);
+                }
+            } else {
+                let m = mask(self.k);
+                let mut shift = 0u32;
+                for o in out.iter_mut() {
+                    *o = E::from_u64_truncating(v.wrapping_shr(shift) & m);
+                    shift = shift.wrapping_add(self.k);
+                }
+            }
+        } else {
+            let mut at = offset;
+            for o in out.iter_mut() {
+                *o = E::from_u64_truncating(read_field(self.words, at, self.k));
+                at = at.wrapping_add(self.k as u64);
+            }
         }
         out
     }
@@ -158,6 +303,7 @@ pub struct ModularBuilder<'a, 's, E: Entry, const C: usize = 1> {
     height: usize,
     texel_bits: u32,
     k: u32,
+    sizes: Sizes,
     rows_done: usize,
 }
 
@@ -172,21 +318,20 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         row: &'s mut [E],
     ) -> Result<Self, Error> {
         check_k::<E>(texel_bits, k)?;
-        check_dimensions(width, height, C)?;
-        let need = Modular::<E, C>::words_needed(width, height, k);
-        if words.len() < need {
+        let sizes = Sizes::new(width, height, k, C, usize::MAX as u64)?;
+        if words.len() < sizes.words {
             return Err(Error::StorageTooSmall {
-                needed: need,
+                needed: sizes.words,
                 got: words.len(),
             });
         }
-        if row.len() < width * C {
-            return Err(Error::StorageTooSmall {
-                needed: width * C,
-                got: row.len(),
-            });
-        }
-        let row = &mut row[..width * C];
+        let need = width
+            .checked_mul(C)
+            .ok_or(Error::TextureTooLarge { dimension: width })?;
+        let got = row.len();
+        let row = row
+            .get_mut(..need)
+            .ok_or(Error::StorageTooSmall { needed: need, got })?;
         row.fill(E::ZERO);
         Ok(ModularBuilder {
             words,
@@ -195,47 +340,54 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             height,
             texel_bits,
             k,
+            sizes,
             rows_done: 0,
         })
     }
 
-    /// Consumes the next texture row. The additions wrap modulo `2^k` on purpose.
+    /// Consumes the next texture row. The additions wrap modulo `2^k` on purpose. A refused row
+    /// (wrong length, a texel wider than `texel_bits`) changes nothing.
     pub fn push_row<T: Texel>(&mut self, texels: &[T]) -> Result<(), Error> {
         if self.rows_done >= self.height {
             return Err(Error::TooManyRows);
         }
-        if texels.len() != self.width * C {
+        if texels.len() != self.row.len() {
             return Err(Error::RowLength {
-                expected: self.width * C,
+                expected: self.row.len(),
                 got: texels.len(),
             });
         }
-        let max = width::max_texel(self.texel_bits);
+        let max = mask(self.texel_bits);
+        for t in texels {
+            let v = t.to_u16();
+            if u64::from(v) > max {
+                return Err(Error::TooWide {
+                    what: Quantity::Entry,
+                    bits_needed: u16::BITS - v.leading_zeros(),
+                    bits_available: self.texel_bits,
+                });
+            }
+        }
+        let k = self.k;
         let mut run = [E::ZERO; C];
-        let base = (self.rows_done * self.width * C) as u64;
-        for (x, (o, t)) in self
-            .row
-            .chunks_exact_mut(C)
-            .zip(texels.chunks_exact(C))
-            .enumerate()
-        {
-            for c in 0..C {
-                let v = t[c].to_u16();
-                if v as u128 > max {
-                    return Err(Error::TooWide {
-                        what: Quantity::Entry,
-                        bits_needed: bits_of(v as u128),
-                        bits_available: self.texel_bits,
-                    });
-                }
-                run[c] = run[c].wrapping_add(E::from(v)).low_bits(self.k);
-                o[c] = o[c].wrapping_add(run[c]).low_bits(self.k);
-                let offset = (base + (x * C + c) as u64) * self.k as u64;
-                write_bits(self.words, offset, self.k, o[c].to_u64());
+        // rows_done < h: the row's fields end at or before total_bits (no wrap).
+        let mut offset = (self.rows_done as u64).wrapping_mul(self.sizes.row_bits);
+        for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+            for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+                *r = r.wrapping_add(E::from(tv.to_u16())).low_bits(k);
+                *ov = ov.wrapping_add(*r).low_bits(k);
+                write_field(self.words, offset, k, ov.to_u64())?;
+                offset = offset.wrapping_add(k as u64);
             }
         }
         self.rows_done += 1;
         Ok(())
+    }
+
+    /// The sizes the writes use (tests: to make a write fail).
+    #[cfg(test)]
+    pub(super) fn sizes_mut(&mut self) -> &mut Sizes {
+        &mut self.sizes
     }
 
     /// Checks that every row arrived and returns the layout.
@@ -252,6 +404,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             height: self.height,
             texel_bits: self.texel_bits,
             k: self.k,
+            sizes: self.sizes,
             _e: core::marker::PhantomData,
         })
     }

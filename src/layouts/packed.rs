@@ -3,68 +3,242 @@
 //! Field `i` of a `b`-bit array occupies bits `[i b, (i + 1) b)` of the little-endian bit stream
 //! formed by the words (bit 0 of word 0 first). A field of up to 64 bits touches one to three
 //! words; readers report the number of words touched, which is what a 32-bit memory port pays.
+//!
+//! Sizes are computed in `u64` bits and converted to `usize` words with a check, so they are the
+//! same on 32- and 64-bit targets or refused: [`words_for_checked`] is a `const fn`, for sizing a
+//! `static` at compile time.
+//!
+//! Nothing here panics: reads past the end of the slice give zero bits, writes that do not fit
+//! are refused.
+
+use crate::error::Error;
+use crate::texture::MAX_DIMENSION;
 
 /// Bits per storage word.
 pub const WORD_BITS: u32 = 32;
 
-/// Words needed for `count` fields of `bits` bits: `ceil(count * bits / 32)`.
+/// Words needed for `count` fields of `bits` bits: `ceil(count * bits / 32)`, saturating at
+/// `usize::MAX` (which no slice holds, so a size check against it still refuses). See
+/// [`words_for_checked`] for the checked form.
 pub const fn words_for(count: usize, bits: u32) -> usize {
-    let total = count as u128 * bits as u128;
-    total.div_ceil(WORD_BITS as u128) as usize
+    match words_for_checked(count, bits) {
+        Some(n) => n,
+        None => usize::MAX,
+    }
+}
+
+/// Words needed for `count` fields of `bits` bits, `ceil(count * bits / 32)`, or `None` if the
+/// bit count overflows `u64` or the word count does not fit `usize` (on a 32-bit target: more
+/// than `2^32 - 1` words).
+///
+/// ```
+/// use texsat::layouts::packed::words_for_checked;
+/// const WORDS: usize = match words_for_checked(1000, 12) {
+///     Some(n) => n,
+///     None => panic!("does not fit"),
+/// };
+/// static TABLE: [u32; WORDS] = [0; WORDS];
+/// assert_eq!(TABLE.len(), 375);
+/// assert_eq!(words_for_checked(usize::MAX, 64), None);
+/// ```
+pub const fn words_for_checked(count: usize, bits: u32) -> Option<usize> {
+    // `usize` has at most 64 bits on every target Rust supports, so `as u64` is lossless.
+    match (count as u64).checked_mul(bits as u64) {
+        Some(total) => words_of_bits(total, usize::MAX as u64),
+        None => None,
+    }
+}
+
+/// `ceil(bits / 32)` as `usize`, or `None` if it exceeds `max_words` (callers pass
+/// `usize::MAX as u64`; tests pass `u32::MAX as u64` to check a 32-bit target's arithmetic on a
+/// 64-bit host).
+pub(crate) const fn words_of_bits(bits: u64, max_words: u64) -> Option<usize> {
+    let words = bits.div_ceil(WORD_BITS as u64);
+    if words > max_words || words > usize::MAX as u64 {
+        None
+    } else {
+        Some(words as usize)
+    }
+}
+
+/// The size check every layout shares (the `const` twin of the texture's): both sides in
+/// `1..=2^31 - 1` and at least one channel.
+pub(crate) const fn check_dimensions(
+    width: usize,
+    height: usize,
+    channels: usize,
+) -> Result<(), Error> {
+    if width == 0 || height == 0 || channels == 0 {
+        return Err(Error::EmptyTexture);
+    }
+    if width > MAX_DIMENSION || height > MAX_DIMENSION {
+        return Err(Error::TextureTooLarge {
+            dimension: if width > height { width } else { height },
+        });
+    }
+    Ok(())
+}
+
+/// `bits_of(a * b)`: the position of the highest set bit of the exact 128-bit product (`0` for
+/// `0`), without a 128-bit multiply (32-bit limbs, as a 32-bit core would do it).
+pub(crate) const fn bits_of_mul(a: u64, b: u64) -> u32 {
+    const M: u64 = 0xFFFF_FFFF;
+    let (a1, a0, b1, b0) = (a >> 32, a & M, b >> 32, b & M);
+    // Each partial product is below 2^64; `mid` below 3 * 2^32; `hi` below 2^64 because the
+    // whole product is below 2^128: no step wraps.
+    let (p00, p01, p10, p11) = (
+        a0.wrapping_mul(b0),
+        a0.wrapping_mul(b1),
+        a1.wrapping_mul(b0),
+        a1.wrapping_mul(b1),
+    );
+    let mid = (p00 >> 32).wrapping_add(p01 & M).wrapping_add(p10 & M);
+    let lo = (p00 & M) | (mid << 32);
+    let hi = p11
+        .wrapping_add(p01 >> 32)
+        .wrapping_add(p10 >> 32)
+        .wrapping_add(mid >> 32);
+    if hi == 0 {
+        64 - lo.leading_zeros()
+    } else {
+        128 - hi.leading_zeros()
+    }
+}
+
+/// The low `len` bits set (`len <= 64`; `0` gives `0`, more than 64 all ones).
+#[inline(always)]
+pub(crate) const fn mask(len: u32) -> u64 {
+    if len >= 64 {
+        u64::MAX
+    } else {
+        1u64.wrapping_shl(len).wrapping_sub(1)
+    }
+}
+
+/// Word `first + i` of `words` widened to `u64`, `0` past the end.
+#[inline(always)]
+fn word(words: &[u32], first: usize, i: usize) -> u64 {
+    match first.checked_add(i) {
+        Some(j) => match words.get(j) {
+            Some(&w) => w as u64,
+            None => 0,
+        },
+        None => 0,
+    }
+}
+
+/// The `len`-bit field (`1 <= len <= 64`) at bit `offset` of `words`; bits past the end of the
+/// slice read as 0. Two 32-bit words joined in a `u64` when `offset % 32 + len <= 64` (every
+/// field of at most 33 bits), a third one otherwise.
+#[inline(always)]
+pub(crate) fn read_field(words: &[u32], offset: u64, len: u32) -> u64 {
+    read_masked(words, offset, len, mask(len))
+}
+
+/// [`read_field`] with `mask(len)` precomputed.
+#[inline(always)]
+pub(crate) fn read_masked(words: &[u32], offset: u64, len: u32, mask: u64) -> u64 {
+    let shift = (offset % WORD_BITS as u64) as u32;
+    let Ok(first) = usize::try_from(offset / WORD_BITS as u64) else {
+        return 0;
+    };
+    // Two words with one range check; at the end of the slice, word by word (0 past it).
+    let pair = match words.get(first..first.wrapping_add(2)) {
+        Some(&[a, b]) => a as u64 | (b as u64) << 32,
+        _ => word(words, first, 0) | word(words, first, 1) << 32,
+    };
+    let mut v = pair.wrapping_shr(shift);
+    if shift.wrapping_add(len) > 64 {
+        // shift is in 1..=31 here: the third word supplies the top `shift + len - 64` bits.
+        v |= word(words, first, 2).wrapping_shl(64 - shift);
+    }
+    v & mask
 }
 
 /// Reads `len <= 64` bits starting at bit `offset` of `words`; returns the value and the number
 /// of words touched. Bits past the end of the slice read as 0 (callers size the slice with
-/// [`words_for`], so this never happens for a valid layout).
+/// [`words_for`], so this never happens for a valid layout); `len` above 64 reads 64 bits.
 #[inline]
 pub fn read_bits(words: &[u32], offset: u64, len: u32) -> (u64, u32) {
     if len == 0 {
         return (0, 0);
     }
-    let first = (offset / WORD_BITS as u64) as usize;
+    let len = if len > 64 { 64 } else { len };
     let shift = (offset % WORD_BITS as u64) as u32;
-    let touched = (shift + len).div_ceil(WORD_BITS);
-    let mut acc: u128 = 0;
-    for k in 0..touched as usize {
-        let w = words.get(first + k).copied().unwrap_or(0) as u128;
-        acc |= w << (k as u32 * WORD_BITS);
-    }
-    let mask = if len == 64 {
-        u64::MAX
-    } else {
-        (1u64 << len) - 1
-    };
-    (((acc >> shift) as u64) & mask, touched)
+    (
+        read_field(words, offset, len),
+        (shift + len).div_ceil(WORD_BITS),
+    )
 }
 
 /// Writes the low `len <= 64` bits of `value` at bit `offset` (other bits untouched). Returns
-/// `false` (writing nothing) if the field does not fit the slice or `value` has more than `len`
-/// bits.
+/// `false` (writing nothing) if the field does not fit the slice, `value` has more than `len`
+/// bits, or `len` exceeds 64.
 #[inline]
 pub fn write_bits(words: &mut [u32], offset: u64, len: u32, value: u64) -> bool {
     if len == 0 {
         return value == 0;
     }
-    if len < 64 && value >> len != 0 {
+    if len > 64 || value & !mask(len) != 0 {
         return false;
     }
-    let first = (offset / WORD_BITS as u64) as usize;
     let shift = (offset % WORD_BITS as u64) as u32;
     let touched = (shift + len).div_ceil(WORD_BITS) as usize;
-    if first
-        .checked_add(touched)
-        .is_none_or(|end| end > words.len())
-    {
+    let Ok(first) = usize::try_from(offset / WORD_BITS as u64) else {
         return false;
-    }
-    let field_mask: u128 = ((1u128 << len) - 1) << shift;
-    let bits: u128 = (value as u128) << shift;
-    for k in 0..touched {
-        let m = (field_mask >> (k as u32 * WORD_BITS)) as u32;
-        let b = (bits >> (k as u32 * WORD_BITS)) as u32;
-        words[first + k] = (words[first + k] & !m) | (b & m);
+    };
+    let Some(end) = first.checked_add(touched) else {
+        return false;
+    };
+    let Some(dst) = words.get_mut(first..end) else {
+        return false;
+    };
+    let m = mask(len);
+    // The field and its mask moved to `shift`: the low 64 bits, then what spills into a third
+    // word (only when shift + len > 64, so shift > 0).
+    let (lo_v, lo_m) = (value.wrapping_shl(shift), m.wrapping_shl(shift));
+    let (hi_v, hi_m) = if shift == 0 {
+        (0, 0)
+    } else {
+        (value.wrapping_shr(64 - shift), m.wrapping_shr(64 - shift))
+    };
+    let parts = [
+        (lo_v as u32, lo_m as u32),
+        ((lo_v >> 32) as u32, (lo_m >> 32) as u32),
+        (hi_v as u32, hi_m as u32),
+    ];
+    for (w, (b, pm)) in dst.iter_mut().zip(parts) {
+        *w = (*w & !pm) | (b & pm);
     }
     true
+}
+
+/// [`write_bits`] with the reason of a refusal: [`Error::StorageTooSmall`] (in words) if the
+/// field does not fit the slice, [`Error::TooWide`] if the value has more than `len` bits.
+#[inline]
+pub(crate) fn write_field(
+    words: &mut [u32],
+    offset: u64,
+    len: u32,
+    value: u64,
+) -> Result<(), Error> {
+    if write_bits(words, offset, len, value) {
+        return Ok(());
+    }
+    if len > 64 || value & !mask(len) != 0 {
+        return Err(Error::TooWide {
+            what: crate::error::Quantity::Field,
+            bits_needed: 64 - value.leading_zeros(),
+            bits_available: len,
+        });
+    }
+    Err(Error::StorageTooSmall {
+        needed: match words_of_bits(offset.saturating_add(len as u64), usize::MAX as u64) {
+            Some(n) => n,
+            None => usize::MAX,
+        },
+        got: words.len(),
+    })
 }
 
 #[cfg(test)]
@@ -90,8 +264,47 @@ mod tests {
                         read_bits(&[0xA5A5_A5A5u32; 8], 0, offset.min(64) as u32).0
                     );
                 }
+                let end = offset + len as u64;
+                if end < 8 * 32 {
+                    let rest = (8 * 32 - end).min(64) as u32;
+                    assert_eq!(
+                        read_bits(&words, end, rest).0,
+                        read_bits(&[0xA5A5_A5A5u32; 8], end, rest).0,
+                        "len {len} offset {offset}: bits after the field"
+                    );
+                }
             }
         }
+    }
+
+    /// The reads against a `u128` reference (tests may use `u128`): every width, every offset,
+    /// including fields that run past the end of the slice (those bits read as 0).
+    #[test]
+    fn read_matches_u128_reference() {
+        let words = [
+            0x0123_4567u32,
+            0x89AB_CDEF,
+            0xFEDC_BA98,
+            0x7654_3210,
+            0xDEAD_BEEF,
+        ];
+        let bit = |i: u64| -> u64 {
+            words
+                .get((i / 32) as usize)
+                .map_or(0, |&w| (w as u64 >> (i % 32)) & 1)
+        };
+        for len in 1..=64u32 {
+            for offset in 0..200u64 {
+                let want = (0..len as u64).fold(0u64, |v, i| v | bit(offset + i) << i);
+                assert_eq!(read_field(&words, offset, len), want, "{len} {offset}");
+                assert_eq!(read_bits(&words, offset, len).0, want, "{len} {offset}");
+            }
+        }
+        // Offsets whose word index does not fit the slice (or usize) read 0.
+        assert_eq!(read_bits(&words, u64::MAX - 3, 64), (0, 3));
+        assert_eq!(read_bits(&words, u64::MAX, 1).0, 0);
+        assert_eq!(read_bits(&words, 3, 0), (0, 0));
+        assert_eq!(read_bits(&words, 0, 200).0, read_bits(&words, 0, 64).0);
     }
 
     #[test]
@@ -99,7 +312,71 @@ mod tests {
         let mut words = [0u32; 2];
         assert!(!write_bits(&mut words, 40, 32, 1));
         assert!(!write_bits(&mut words, 0, 4, 16));
+        assert!(!write_bits(&mut words, 0, 65, 1));
+        assert!(!write_bits(&mut words, u64::MAX - 10, 8, 1));
+        assert!(write_bits(&mut words, 0, 0, 0));
+        assert!(!write_bits(&mut words, 0, 0, 1));
+        assert_eq!(words, [0, 0]);
+        assert_eq!(
+            write_field(&mut words, 40, 32, 1),
+            Err(Error::StorageTooSmall { needed: 3, got: 2 })
+        );
+        assert_eq!(
+            write_field(&mut words, 0, 4, 16),
+            Err(Error::TooWide {
+                what: crate::error::Quantity::Field,
+                bits_needed: 5,
+                bits_available: 4
+            })
+        );
         assert_eq!(words_for(3, 12), 2);
         assert_eq!(words_for(0, 12), 0);
+        assert_eq!(words_for_checked(3, 12), Some(2));
+        assert_eq!(words_for_checked(usize::MAX, 64), None);
+        assert_eq!(words_for(usize::MAX, 64), usize::MAX);
+    }
+
+    /// The 32-bit target's conversion, checked on any host: `2^32 - 1` words fit, one more does
+    /// not (on a 64-bit host it does).
+    #[test]
+    fn words_of_bits_on_32_bit_targets() {
+        let max32 = u32::MAX as u64;
+        assert_eq!(words_of_bits(max32 * 32, max32), Some(u32::MAX as usize));
+        assert_eq!(words_of_bits(max32 * 32 + 1, max32), None);
+        assert_eq!(words_of_bits(u64::MAX, max32), None);
+        assert_eq!(
+            words_of_bits(max32 * 32 + 1, u64::MAX),
+            Some(u32::MAX as usize + 1)
+        );
+        assert_eq!(
+            words_of_bits(u64::MAX, u64::MAX),
+            Some((u64::MAX / 32 + 1) as usize)
+        );
+    }
+
+    #[test]
+    fn bits_of_mul_matches_u128() {
+        let vals = [
+            0u64,
+            1,
+            2,
+            3,
+            255,
+            256,
+            65535,
+            (1 << 31) - 1,
+            1 << 32,
+            (1 << 32) + 1,
+            u64::MAX / 3,
+            (1 << 62) - 1,
+            u64::MAX - 1,
+            u64::MAX,
+        ];
+        for &a in &vals {
+            for &b in &vals {
+                let want = 128 - (a as u128 * b as u128).leading_zeros();
+                assert_eq!(bits_of_mul(a, b), want, "{a} * {b}");
+            }
+        }
     }
 }

@@ -173,3 +173,574 @@ fn tiled_modular_combination() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Firmware-grade core: the fuzz findings, the const sizes, the power-of-two digits
+// ---------------------------------------------------------------------------------------------
+
+use super::modular::Sizes;
+use super::packed::words_for_checked;
+use super::tiled::{Axis, Geometry};
+use crate::Error;
+
+const MAX32: u64 = u32::MAX as u64;
+
+/// `bits_of` in `u128` (tests may use it).
+fn bits128(v: u128) -> u32 {
+    128 - v.leading_zeros()
+}
+
+/// Stored positions of component `p` on an axis of `n` texels, by a formula other than the
+/// layout's: the multiples of `b_p` up to `n` minus those of `b_{p+1}`.
+fn count128(blocks: &[u32], p: usize, n: u128) -> u128 {
+    let b = if p == 0 { 1 } else { blocks[p - 1] as u128 };
+    match blocks.get(p) {
+        Some(&nb) => n / b - n / nb as u128,
+        None => n / b,
+    }
+}
+
+fn max_len128(blocks: &[u32], p: usize, n: u128) -> u128 {
+    let b = if p == 0 { 1 } else { blocks[p - 1] as u128 };
+    match blocks.get(p) {
+        Some(&nb) if n >= nb as u128 => nb as u128 - b,
+        _ => n / b * b,
+    }
+}
+
+/// Checks `g` against sizes and offsets computed independently in `u128`: every component
+/// starts where the previous one ends, its last entry ends inside it (the lookups' `u64`
+/// offsets do not wrap), and the total is the sum. Returns the total bits.
+fn check_geometry_u128(g: &Geometry, channels: usize) -> u128 {
+    let (bx, by) = (g.spec.x.blocks(), g.spec.y.blocks());
+    let m = (1u128 << g.texel_bits) - 1;
+    let mut offset = 0u128;
+    for p in 0..g.spec.x.components() {
+        for q in 0..g.spec.y.components() {
+            let (cx, cy) = (
+                count128(bx, p, g.width as u128),
+                count128(by, q, g.height as u128),
+            );
+            let len = max_len128(bx, p, g.width as u128) * max_len128(by, q, g.height as u128);
+            let mut bits = bits128(m * len);
+            if let Some(k) = g.spec.modulus {
+                bits = bits.min(k);
+            }
+            let c = &g.comps[p][q];
+            let what = (g.spec, g.width, g.height, p, q);
+            assert_eq!(c.offset_bits as u128, offset, "{what:?}");
+            assert_eq!(c.bits, bits, "{what:?}");
+            let stride = bits as u128 * channels as u128;
+            assert_eq!(c.stride_bits as u128, stride, "{what:?}");
+            assert_eq!(c.row_bits as u128, cy * stride, "{what:?}");
+            let size = cx * cy * stride;
+            if cx > 0 && cy > 0 {
+                let last = c.offset((cx - 1) as u32, (cy - 1) as u32) as u128;
+                assert_eq!(last + stride, offset + size, "{what:?}: last entry");
+            }
+            offset += size;
+        }
+    }
+    assert_eq!(g.total_bits as u128, offset);
+    assert_eq!(g.words as u128, offset.div_ceil(32));
+    offset
+}
+
+/// Fuzz finding "the tiled size arithmetic can overflow and accept too-short storage"
+/// (`Geometry::new`'s `offset += ...`): a layout of exactly `2^64` bits (`2^29 x 2^29` fields
+/// of 64 bits, a modulus of `2^64`) wrapped to 0 bits in release builds, so `from_words`
+/// accepted an empty slice. Every size is now checked in `u64`: `TextureTooLarge`.
+#[test]
+fn fuzz_tiled_size_overflow_refused() {
+    // Tiles of 2 x 2: 2^30 x 2^30 texels, 2^58 tiles of 16 + 2 * 46 + 64 bits.
+    for (n, spec) in [
+        (1usize << 29, TiledSpec::FLAT_PACKED.with_modulus(64)),
+        (1 << 30, TiledSpec::tiles(2, 2).unwrap().with_modulus(64)),
+    ] {
+        let too_large = Err(Error::TextureTooLarge { dimension: n });
+        assert_eq!(Tiled::<u64>::words_needed(spec, n, n, 16), too_large);
+        assert_eq!(
+            Tiled::<u64>::from_words(&[], spec, n, n, 16).map(|_| ()),
+            too_large.map(|_: usize| ())
+        );
+        assert_eq!(
+            TiledBuilder::<u64>::new(spec, n, n, 16, &mut [], &mut []).map(|_| ()),
+            too_large.map(|_: usize| ())
+        );
+    }
+    // Channels multiply: 2^28 x 2^28 x 64 bits x 4 channels = 2^64 bits.
+    let n4 = 1usize << 28;
+    assert_eq!(
+        Tiled::<u64, 4>::words_needed(TiledSpec::FLAT_PACKED.with_modulus(64), n4, n4, 16),
+        Err(Error::TextureTooLarge { dimension: n4 })
+    );
+    // One row less fits u64 bits: the exact word count (on a 64-bit target), and short storage
+    // is refused with it.
+    let n = 1usize << 29;
+    let spec = TiledSpec::FLAT_PACKED.with_modulus(64);
+    let g = Geometry::new_for(spec, n, n - 1, 16, 1, u64::MAX).unwrap();
+    assert_eq!(check_geometry_u128(&g, 1), (n * (n - 1)) as u128 * 64);
+    #[cfg(target_pointer_width = "64")]
+    assert_eq!(
+        Tiled::<u64>::from_words(&[0; 8], spec, n, n - 1, 16).unwrap_err(),
+        Error::StorageTooSmall {
+            needed: n * (n - 1) * 2,
+            got: 8
+        }
+    );
+    // Texture sides past 2^31 - 1, and fields past 64 bits, as before.
+    assert_eq!(
+        Tiled::<u64>::words_needed(spec, 1 << 31, 1, 8),
+        Err(Error::TextureTooLarge { dimension: 1 << 31 })
+    );
+    assert_eq!(
+        Tiled::<u64>::words_needed(TiledSpec::FLAT_PACKED, (1 << 31) - 1, (1 << 31) - 1, 16),
+        Err(Error::TooWide {
+            what: crate::Quantity::Field,
+            bits_needed: 78,
+            bits_available: 64
+        })
+    );
+    // The scratch size is checked too.
+    assert_eq!(
+        Tiled::<u32, 2>::scratch_needed(TiledSpec::tiles(4, 4).unwrap(), usize::MAX / 2),
+        Err(Error::TextureTooLarge {
+            dimension: usize::MAX / 2
+        })
+    );
+    assert_eq!(
+        Tiled::<u32>::scratch_needed(TiledSpec::tiles(4, 4).unwrap(), usize::MAX),
+        Err(Error::TextureTooLarge {
+            dimension: usize::MAX
+        })
+    );
+}
+
+/// Fuzz findings "`words()`'s `as usize`" and "`field_offset` in `usize`" of the tiled layout:
+/// on a 32-bit target the word count was truncated and the entry index `ix * count_y + iy`
+/// wrapped. The geometry is computed in `u64` and the word count checked against the target's
+/// `usize` (`Geometry::new_for` with `u32::MAX` is the 32-bit target's check, run here on any
+/// host), with sides whose products overflow `u32`.
+#[test]
+fn fuzz_tiled_sizes_on_32_bit_targets() {
+    let m64 = u64::MAX;
+    // 65536 x 65536 16-bit texels, flat packed: 48-bit fields, 3 * 2^31 words: exact in u64,
+    // refused on a 32-bit target (the old `as usize` kept 0 of it).
+    let flat = TiledSpec::FLAT_PACKED;
+    let g = Geometry::new_for(flat, 65536, 65536, 16, 1, m64).unwrap();
+    assert_eq!(check_geometry_u128(&g, 1), 48 << 32);
+    assert_eq!(g.words as u128, 3 << 31);
+    assert_eq!(
+        Geometry::new_for(flat, 65536, 65536, 16, 1, MAX32),
+        Err(Error::TextureTooLarge { dimension: 65536 })
+    );
+    // Offsets whose entry index and bit offset overflow u32, for every kind of spec.
+    let specs = [
+        TiledSpec::tiles(8, 8).unwrap(),
+        TiledSpec::tiles(3, 5).unwrap(),
+        TiledSpec::square(&[2, 16]).unwrap(),
+        TiledSpec::square(&[2, 6, 12]).unwrap(),
+        TiledSpec::square(&[2, 4, 8, 16]).unwrap(),
+        TiledSpec::tiles(8, 8).unwrap().with_modulus(20),
+    ];
+    for spec in specs {
+        for (w, h, b) in [
+            (65536usize, 65536usize, 16u32),
+            (46341, 46341, 8),
+            ((1 << 31) - 1, 3, 8),
+            (3, (1 << 31) - 1, 16),
+            (4104, 4104, 8),
+            (100_000, 70_000, 1),
+        ] {
+            let g = Geometry::new_for(spec, w, h, b, 1, m64).unwrap();
+            let total = check_geometry_u128(&g, 1);
+            let g3 = Geometry::new_for(spec, w, h, b, 3, m64).unwrap();
+            check_geometry_u128(&g3, 3);
+            // The 32-bit target takes it iff the words fit u32.
+            let on32 = Geometry::new_for(spec, w, h, b, 1, MAX32);
+            if total.div_ceil(32) <= MAX32 as u128 {
+                assert_eq!(on32, Ok(g), "{spec:?} {w}x{h}");
+            } else {
+                assert_eq!(
+                    on32,
+                    Err(Error::TextureTooLarge {
+                        dimension: w.max(h)
+                    }),
+                    "{spec:?} {w}x{h}"
+                );
+            }
+        }
+    }
+    // Just below and just above 2^32 - 1 words on a 32-bit target: 32-bit fields (modulus 32)
+    // at 65536 x 65535 (2^32 - 2^16 words) and 65536 x 65536 (2^32 words).
+    let spec = TiledSpec::FLAT_PACKED.with_modulus(32);
+    assert!(Geometry::new_for(spec, 65536, 65535, 16, 1, MAX32).is_ok());
+    assert_eq!(
+        Geometry::new_for(spec, 65536, 65536, 16, 1, MAX32),
+        Err(Error::TextureTooLarge { dimension: 65536 })
+    );
+}
+
+/// Fuzz finding "the modular size arithmetic is unchecked on 32-bit targets": `words_needed`'s
+/// `width * height * C`, `storage_bits`, the corner's and the builder's offsets were `usize`
+/// products (2^17 x 2^16 wrapped to 2^33 mod 2^32 = 0 entries on a 32-bit target). The sizes
+/// are computed once in `u64` with checks (`Sizes::new` with `u32::MAX` words is the 32-bit
+/// target's check) and the offsets of valid corners stay below them.
+#[test]
+fn fuzz_modular_sizes_checked() {
+    let s = Sizes::new(1 << 17, 1 << 16, 32, 1, u64::MAX).unwrap();
+    assert_eq!((s.total_bits, s.words as u64), (1 << 38, 1 << 33));
+    assert_eq!(
+        Sizes::new(1 << 17, 1 << 16, 32, 1, MAX32),
+        Err(Error::TextureTooLarge { dimension: 1 << 17 })
+    );
+    // 2^32 - 2^16 words fit a 32-bit target, 2^32 do not.
+    assert_eq!(
+        Sizes::new(65536, 65535, 32, 1, MAX32).map(|s| s.words as u64),
+        Ok((1 << 32) - (1 << 16))
+    );
+    assert!(Sizes::new(65536, 65536, 32, 1, MAX32).is_err());
+    // u64 bits overflow: (2^31 - 1)^2 entries x 64 bits x 4 channels.
+    let n = (1usize << 31) - 1;
+    assert_eq!(
+        Modular::<u64, 4>::words_needed(n, n, 64),
+        Err(Error::TextureTooLarge { dimension: n })
+    );
+    assert!(Modular::<u64, 4>::from_words(&[], n, n, 8, 64).is_err());
+    assert!(ModularBuilder::<u64, 4>::new(n, n, 8, 64, &mut [], &mut []).is_err());
+    // k is checked against the value type; dimensions as for every layout.
+    assert_eq!(
+        Modular::<u16>::words_needed(4, 4, 17),
+        Err(Error::InvalidModulus { bits: 17 })
+    );
+    assert_eq!(
+        Modular::<u32>::words_needed(4, 4, 0),
+        Err(Error::InvalidModulus { bits: 0 })
+    );
+    assert_eq!(
+        Modular::<u32>::words_needed(0, 4, 8),
+        Err(Error::EmptyTexture)
+    );
+    // Exact products, checked against u128, and the same as the packed helper.
+    for (w, h, k, c) in [
+        (65536usize, 65536usize, 16u32, 1usize),
+        (46341, 46341, 31, 3),
+        (n, 1, 64, 4),
+        (1, n, 17, 2),
+        (12, 9, 12, 1),
+    ] {
+        let s = Sizes::new(w, h, k, c, u64::MAX).unwrap();
+        let total = w as u128 * h as u128 * k as u128 * c as u128;
+        assert_eq!(s.total_bits as u128, total);
+        assert_eq!(s.words as u128, total.div_ceil(32));
+        assert_eq!(s.row_bits as u128, w as u128 * k as u128 * c as u128);
+        assert_eq!(s.entry_bits as u128, k as u128 * c as u128);
+        assert_eq!(words_for_checked(w * h * c, k), Some(s.words));
+    }
+    // storage_bits is the checked total.
+    let mut words = [0u32; 64];
+    let m = Modular::<u32, 3>::from_words(&words, 7, 5, 8, 19).unwrap();
+    assert_eq!(m.storage_bits(), 7 * 5 * 3 * 19);
+    words[0] = 1;
+    assert_eq!(words[0], 1);
+}
+
+/// Fuzz finding "the modular builder ignores `write_bits`'s result": a write that does not fit
+/// the storage is now an error. (With valid sizes no write fails; the test moves the second
+/// row's fields past the end of the storage to make one fail.)
+#[test]
+fn fuzz_modular_builder_failed_write_is_an_error() {
+    let (w, h, k) = (5usize, 3usize, 12u32);
+    let tex = texture(w, h, 1);
+    let mut words = [0u32; 64];
+    let mut row = [0u32; 8];
+    let mut b = ModularBuilder::<u32>::new(w, h, 8, k, &mut words, &mut row).unwrap();
+    b.push_row(&tex[..w]).unwrap();
+    // Row 1 would start at bit 64 * 32: word 64, past the 64 words.
+    b.sizes_mut().row_bits = 64 * 32;
+    assert_eq!(
+        b.push_row(&tex[w..2 * w]),
+        Err(Error::StorageTooSmall {
+            needed: (64 * 32 + 12u64).div_ceil(32) as usize,
+            got: 64
+        })
+    );
+}
+
+/// Xorshift words: a corrupted flash image.
+fn noise(n: usize, seed: u32) -> [u32; 4096] {
+    let mut out = [0u32; 4096];
+    let mut s = seed.wrapping_mul(2654435761) | 1;
+    for v in out.iter_mut().take(n) {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        *v = s;
+    }
+    out
+}
+
+/// Every corner (in range, on the edges and far outside) and every integer box under every
+/// mode, and fractional boxes inside: must not panic. Returns a checksum so nothing is
+/// optimized away.
+fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
+    let (w, h) = (l.width(), l.height());
+    let mut sum = 0u64;
+    let mut k = Tally::new();
+    for y in (0..=h + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
+        for x in (0..=w + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
+            let v = l.corner(x, y, &mut k);
+            if x > w || y > h || x == 0 || y == 0 {
+                assert!(v.iter().all(|e| e.to_u64() == 0), "({x}, {y})");
+            }
+            sum = v.iter().fold(sum, |s, e| s.wrapping_add(e.to_u64()));
+        }
+    }
+    // Every box on the small textures; on the larger ones, boxes from the corner.
+    let (wi, hi) = (w as i32, h as i32);
+    let lo = if w * h <= 35 { -1 } else { wi - 1 };
+    for x0 in lo..=wi + 1 {
+        for x1 in x0..=wi + 1 {
+            for y0 in -1..=hi + 1 {
+                for y1 in y0..=hi + 1 {
+                    let r = Rect::new(x0, y0, x1, y1);
+                    for s in [
+                        l.box_sum_int(&r, Border, &mut k),
+                        l.box_sum_int(&r, Repeat, &mut k),
+                    ]
+                    .into_iter()
+                    .flatten()
+                    {
+                        sum = sum.wrapping_add(s.sum() as u64);
+                    }
+                }
+            }
+        }
+    }
+    let f = |v: f64| I28F4::from_num(v);
+    for (x0, y0, x1, y1) in [(0.0, 0.0, w as f64, h as f64), (0.25, 0.5, 0.75, 0.5625)] {
+        let r = Rect::new(f(x0), f(y0), f(x1), f(y1));
+        if let Ok(s) = l.box_sum(&r, Stable, Border, &mut k) {
+            sum = sum.wrapping_add(s.sum() as u64);
+        }
+    }
+    sum
+}
+
+/// Fuzz finding "`Tiled::from_words` with corrupted words must never panic": random words,
+/// all ones, and storage one word longer than needed, under every spec, value type and channel
+/// count; every corner (also out of range: those give 0) and every integer box. Modular too.
+#[test]
+fn fuzz_corrupt_words_never_panic() {
+    let specs = [
+        TiledSpec::FLAT_PACKED,
+        TiledSpec::tiles(4, 4).unwrap(),
+        TiledSpec::tiles(3, 5).unwrap(),
+        TiledSpec::square(&[2, 6, 12]).unwrap(),
+        TiledSpec::square(&[2, 4, 8, 16]).unwrap(),
+        TiledSpec::tiles(4, 4).unwrap().with_modulus(13),
+    ];
+    let mut check = 0u64;
+    for (w, h) in [(1usize, 1usize), (7, 5), (16, 16), (13, 17)] {
+        for (n, spec) in specs.iter().enumerate() {
+            for fill in 0..3u32 {
+                let words = |need: usize| -> [u32; 4096] {
+                    match fill {
+                        0 => noise(need + 1, (w * 97 + h * 13 + n) as u32),
+                        1 => [u32::MAX; 4096],
+                        _ => noise(4096, 7),
+                    }
+                };
+                let need = Tiled::<u32>::words_needed(*spec, w, h, 8).unwrap();
+                let ws = words(need);
+                let t = Tiled::<u32>::from_words(&ws[..need], *spec, w, h, 8).unwrap();
+                check = check.wrapping_add(poke(&t));
+                // 16-bit texels (refused under the 13-bit modulus), 3 channels, u64 values.
+                if let Ok(need) = Tiled::<u64, 3>::words_needed(*spec, w, h, 16) {
+                    let ws = words(need);
+                    let t = Tiled::<u64, 3>::from_words(&ws[..need], *spec, w, h, 16).unwrap();
+                    check = check.wrapping_add(poke(&t));
+                }
+                // 1-bit texels, u16 values.
+                let need = Tiled::<u16>::words_needed(*spec, w, h, 1).unwrap();
+                let ws = words(need);
+                let t = Tiled::<u16>::from_words(&ws[..need], *spec, w, h, 1).unwrap();
+                check = check.wrapping_add(poke(&t));
+            }
+        }
+        for k in [8u32, 13, 32] {
+            let need = Modular::<u32>::words_needed(w, h, k).unwrap();
+            let ws = noise(need, k);
+            let m = Modular::<u32>::from_words(&ws[..need], w, h, 8, k).unwrap();
+            check = check.wrapping_add(poke(&m));
+        }
+        for k in [16u32, 40, 64] {
+            let need = Modular::<u64, 3>::words_needed(w, h, k).unwrap();
+            let ws = [u32::MAX; 4096];
+            let m = Modular::<u64, 3>::from_words(&ws[..need], w, h, 16, k).unwrap();
+            check = check.wrapping_add(poke(&m));
+        }
+    }
+    assert_ne!(check, 0);
+}
+
+/// The power-of-two digits (shifts and masks) equal the division digits and the definition
+/// `d_p = (x mod b_{p+1}) / b_p` (top: `x / b_L`), with the index of `trunc_p(x)` equal to
+/// the number of stored positions of component `p` in `[1, trunc_p(x)]` minus one, for every
+/// `x` up to 5000 and a few far ones; `step` gives the same level by level.
+#[test]
+fn pow2_digits_equal_division_digits() {
+    let pow2: [&[u32]; 7] = [
+        &[2],
+        &[8],
+        &[2, 16],
+        &[4, 8, 64],
+        &[2, 4, 8, 16],
+        &[1024],
+        &[1 << 30],
+    ];
+    let other: [&[u32]; 5] = [&[3], &[2, 6, 12], &[3, 6], &[4, 12], &[5, 10, 20, 40]];
+    for (blocks, is_pow2) in pow2
+        .iter()
+        .map(|b| (*b, true))
+        .chain(other.iter().map(|b| (*b, false)))
+        .chain([(&[][..], true)])
+    {
+        let a = Axis::new(&AxisLevels::new(blocks).unwrap());
+        assert_eq!(a.is_pow2(), is_pow2, "{blocks:?}");
+        let d = a.by_division();
+        let xs = (0..5000u32).chain([u32::MAX, (1 << 31) - 1, 1 << 30, 123_456_789]);
+        for x in xs {
+            let (fast, slow) = (a.digits(x), d.digits(x));
+            let mut q = x;
+            for p in 0..=blocks.len() {
+                let b = if p == 0 { 1 } else { blocks[p - 1] };
+                let want = match blocks.get(p) {
+                    Some(&nb) => (x % nb) / b,
+                    None => x / b,
+                };
+                assert_eq!(fast.digit[p], want, "{blocks:?} x={x} p={p}");
+                assert_eq!(slow.digit[p], want, "{blocks:?} x={x} p={p}");
+                let (sd, si, sq) = a.step(p, q).unwrap();
+                assert_eq!(sd, want);
+                q = sq;
+                if want != 0 {
+                    let t = x - x % b;
+                    let idx = count128(blocks, p, t as u128) - 1;
+                    assert_eq!(fast.index[p] as u128, idx, "{blocks:?} x={x} p={p}");
+                    assert_eq!(slow.index[p], fast.index[p]);
+                    assert_eq!(si, fast.index[p]);
+                }
+            }
+            assert_eq!(a.step(blocks.len() + 1, q), None);
+        }
+    }
+}
+
+/// The straight-line one-level corner equals the general one on every corner (power-of-two
+/// tiles, other tiles, and mixed axes), and both equal the flat table on every box: the
+/// power-of-two fast path against the general path, exhaustively.
+#[test]
+fn pow2_fast_path_equals_general_path_every_box() {
+    let level = |b: &[u32]| AxisLevels::new(b).unwrap();
+    let mixed = |x: &[u32], y: &[u32]| TiledSpec {
+        x: level(x),
+        y: level(y),
+        modulus: None,
+    };
+    let specs = [
+        TiledSpec::tiles(4, 4).unwrap(),
+        TiledSpec::tiles(8, 2).unwrap(),
+        TiledSpec::tiles(2, 16).unwrap(),
+        TiledSpec::tiles(3, 5).unwrap(),
+        TiledSpec::tiles(4, 3).unwrap(),
+        TiledSpec::tiles(6, 8).unwrap(),
+        TiledSpec::square(&[2, 4, 8, 16]).unwrap(),
+        TiledSpec::square(&[2, 6, 12]).unwrap(),
+        mixed(&[2, 8], &[3]),
+        mixed(&[3, 9], &[4, 16]),
+        mixed(&[], &[4]),
+        mixed(&[5], &[]),
+        TiledSpec::tiles(4, 4).unwrap().with_modulus(13),
+        TiledSpec::tiles(3, 5).unwrap().with_modulus(13),
+    ];
+    for (w, h) in [(9usize, 10usize), (16, 13), (17, 17), (32, 5), (5, 33)] {
+        let tex = texture(w, h, (w * 7 + h) as u32);
+        let t = Texture::<u8>::new(&tex[..w * h], w, h).unwrap();
+        let mut flat_st = [0u32; 4096];
+        let flat = Sat::build(&t, &mut flat_st).unwrap();
+        for spec in specs {
+            let mut words = [0u32; 4096];
+            let mut scratch = [0u32; 512];
+            let l = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
+            let g = l.geometry();
+            for y in 1..=h as u32 {
+                for x in 1..=w as u32 {
+                    let (mut fast, mut general) = ([0u32], [0u32]);
+                    let (mut kf, mut kg) = (Tally::new(), Tally::new());
+                    l.corner_one_level(x, y, &mut fast, &mut kf);
+                    l.corner_general(x, y, &mut general, &mut kg);
+                    assert_eq!(fast, general, "{spec:?} ({x},{y})");
+                    assert_eq!(kf, kg, "{spec:?} ({x},{y})");
+                    let want = flat.corner(x as usize, y as usize).unwrap()[0];
+                    let got = l.corner(x as usize, y as usize, &mut NoCount)[0];
+                    match spec.modulus {
+                        Some(m) => assert_eq!(got, want & ((1 << m) - 1)),
+                        None => assert_eq!(got, want, "{spec:?} ({x},{y})"),
+                    }
+                }
+            }
+            assert!(g.total_bits > 0);
+            if spec.modulus.is_none() {
+                check_all_boxes(&l, &flat);
+            }
+        }
+    }
+}
+
+/// The sizes are `const fn`s: a `static` sized at compile time, built into at run time.
+#[test]
+fn const_sizes_for_statics() {
+    const SPEC: TiledSpec = match TiledSpec::tiles(8, 8) {
+        Ok(s) => s,
+        Err(_) => panic!(),
+    };
+    const TW: usize = match Tiled::<u32>::words_needed(SPEC, 40, 24, 8) {
+        Ok(n) => n,
+        Err(_) => panic!(),
+    };
+    const TS: usize = match Tiled::<u32>::scratch_needed(SPEC, 40) {
+        Ok(n) => n,
+        Err(_) => panic!(),
+    };
+    const MW: usize = match Modular::<u32>::words_needed(40, 24, 16) {
+        Ok(n) => n,
+        Err(_) => panic!(),
+    };
+    const PW: usize = match words_for_checked(40 * 24, 13) {
+        Some(n) => n,
+        None => panic!(),
+    };
+    static FLASH: [u32; TW] = [0; TW];
+    assert_eq!(Tiled::<u32>::words_needed(SPEC, 40, 24, 8), Ok(TW));
+    assert_eq!(TS, 3 * 41);
+    assert_eq!(MW, 40 * 24 / 2);
+    assert_eq!(PW, (40 * 24 * 13usize).div_ceil(32));
+    let tex = texture(40, 24, 5);
+    let t = Texture::<u8>::new(&tex[..40 * 24], 40, 24).unwrap();
+    let mut words = [0u32; TW];
+    let mut scratch = [0u32; TS];
+    let l = Tiled::<u32>::build(&t, SPEC, &mut words, &mut scratch).unwrap();
+    let mut flat_st = [0u32; 4096];
+    let flat = Sat::build(&t, &mut flat_st).unwrap();
+    assert_eq!(l.corner(40, 24, &mut NoCount), flat.corner(40, 24).unwrap());
+    let z = Tiled::<u32>::from_words(&FLASH, SPEC, 40, 24, 8).unwrap();
+    assert_eq!(z.corner(40, 24, &mut NoCount), [0]);
+    let mut mw = [0u32; MW];
+    let mut row = [0u32; 40];
+    let m = Modular::<u32>::build(&t, 16, &mut mw, &mut row).unwrap();
+    assert_eq!(
+        m.box_sum_int(&Rect::new(3, 4, 10, 9), Border, &mut NoCount),
+        flat.box_sum_int(&Rect::new(3, 4, 10, 9), Border, &mut NoCount)
+    );
+}

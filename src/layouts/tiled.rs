@@ -24,14 +24,27 @@
 //!
 //! Crow's §3.0 sketch stores only `C_00` and a corner per region, which loses the edge strips;
 //! see `docs/layouts.md` and the `CrowLiteral` test in host-tests.
+//!
+//! ## Sizes, digits, safety
+//! Every size and bit offset is computed once, in `u64` with checks, when the layout is made
+//! ([`Tiled::words_needed`] is a `const fn`); a layout whose size overflows `u64` bits or the
+//! target's `usize` words is refused with [`Error::TextureTooLarge`], so on a 32-bit target
+//! exactly as on a 64-bit one no storage that is too short is accepted. The digits of a corner
+//! are shifts and masks when every block is a power of two times the one before (8 x 8 tiles,
+//! 2 in 16, ...), divisions by non-zero radices otherwise. Reads go through `get`: a corrupted
+//! layout (from [`Tiled::from_words`]) gives wrong sums, never a panic.
 
-use super::packed::{read_bits, write_bits, WORD_BITS};
+use core::num::NonZeroU32;
+
+use super::packed::{
+    bits_of_mul, check_dimensions, mask, read_masked, words_of_bits, write_field, WORD_BITS,
+};
 use super::Layout;
 use crate::cost::Counter;
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
-use crate::texture::{check_dimensions, Texture};
-use crate::width::{self, bits_of};
+use crate::texture::Texture;
+use crate::width;
 
 /// The most block levels per axis.
 pub const MAX_LEVELS: usize = 4;
@@ -59,7 +72,7 @@ impl AxisLevels {
         let mut out = [0u32; MAX_LEVELS];
         let mut prev = 1u32;
         let mut i = 0;
-        while i < blocks.len() {
+        while i < blocks.len() && i < MAX_LEVELS {
             let b = blocks[i];
             if b < 2 || b <= prev || !b.is_multiple_of(prev) {
                 return Err(Error::InvalidLevels);
@@ -76,79 +89,12 @@ impl AxisLevels {
 
     /// The block sizes.
     pub fn blocks(&self) -> &[u32] {
-        &self.blocks[..self.len]
+        self.blocks.get(..self.len).unwrap_or(&[])
     }
 
     /// Number of components along this axis: levels + 1.
     pub const fn components(&self) -> usize {
         self.len + 1
-    }
-
-    const fn block(&self, p: usize) -> usize {
-        if p == 0 {
-            1
-        } else {
-            self.blocks[p - 1] as usize
-        }
-    }
-
-    /// `b_{p+1}`, or `None` for the top component.
-    const fn next(&self, p: usize) -> Option<usize> {
-        if p < self.len {
-            Some(self.blocks[p] as usize)
-        } else {
-            None
-        }
-    }
-
-    /// Digit `d_p` of `x`.
-    #[inline(always)]
-    const fn digit(&self, p: usize, x: usize) -> usize {
-        let b = self.block(p);
-        match self.next(p) {
-            Some(nb) => (x % nb) / b,
-            None => x / b,
-        }
-    }
-
-    /// `trunc_p(x)`: `x` rounded down to a multiple of `b_p`.
-    #[inline(always)]
-    const fn trunc(&self, p: usize, x: usize) -> usize {
-        x - x % self.block(p)
-    }
-
-    /// Index of the stored position `X = trunc_p(X)` with a non-zero digit.
-    #[inline(always)]
-    const fn index(&self, p: usize, x: usize) -> usize {
-        let b = self.block(p);
-        match self.next(p) {
-            Some(nb) => (x / nb) * (nb / b - 1) + (x % nb) / b - 1,
-            None => x / b - 1,
-        }
-    }
-
-    /// Stored positions of component `p` on an axis of `n` texels.
-    const fn count(&self, p: usize, n: usize) -> usize {
-        let b = self.block(p);
-        match self.next(p) {
-            Some(nb) => (n / nb) * (nb / b - 1) + (n % nb) / b,
-            None => n / b,
-        }
-    }
-
-    /// The longest interval `d_p b_p` of component `p` on an axis of `n` texels.
-    const fn max_len(&self, p: usize, n: usize) -> usize {
-        let b = self.block(p);
-        match self.next(p) {
-            Some(nb) => {
-                if n >= nb {
-                    nb - b
-                } else {
-                    (n / b) * b
-                }
-            }
-            None => (n / b) * b,
-        }
     }
 }
 
@@ -211,54 +157,322 @@ impl TiledSpec {
     }
 }
 
+/// Components per axis, at most.
 const N: usize = MAX_LEVELS + 1;
 
-/// Where component `(p, q)` lives and how wide its fields are.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-struct Component {
-    offset_bits: u64,
-    bits: u32,
-    count_x: usize,
-    count_y: usize,
+const ONE: NonZeroU32 = NonZeroU32::MIN;
+
+/// `a / b` by a divisor the type proves non-zero (`checked_div` so that it is a `const fn`; the
+/// `None` arm is unreachable).
+const fn div(a: u64, b: NonZeroU32) -> u64 {
+    match a.checked_div(b.get() as u64) {
+        Some(q) => q,
+        None => 0,
+    }
+}
+
+/// The mixed-radix digits of one coordinate: per component `p`, the digit `d_p` and the index
+/// of the stored position `trunc_p(x)` among those of component `p` (meaningful when
+/// `d_p != 0`). Entries past the axis's components are 0.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Digits {
+    pub(super) digit: [u32; N],
+    pub(super) index: [u32; N],
+}
+
+/// One axis of a geometry, precomputed for the lookups: the block sizes and the radices
+/// `r_p = b_{p+1} / b_p` as non-zero divisors and, when every radix is a power of two (8 x 8
+/// tiles, 2 in 16, ...), as shifts and masks.
+///
+/// With `q_0 = x` and `q_{p+1} = floor(q_p / r_p)` (so `q_p = floor(x / b_p)`), the digit is
+/// `d_p = q_p - q_{p+1} r_p` (`q_L` for the top component) and the index of `trunc_p(x)` is
+/// `q_{p+1} (r_p - 1) + d_p - 1` (`q_L - 1` at the top): every one of the `q_{p+1}` whole
+/// blocks of `b_{p+1}` before it holds `r_p - 1` stored positions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Axis {
+    /// Levels `L`; components `L + 1`.
+    levels: usize,
+    /// `b_0 = 1, b_1, ..., b_L` (1 past `L`).
+    block: [NonZeroU32; N],
+    /// `r_p` for `p < L` (1 past).
+    radix: [NonZeroU32; MAX_LEVELS],
+    /// `log2 r_p` when `pow2`.
+    shift: [u32; MAX_LEVELS],
+    /// `r_p - 1`.
+    low: [u32; MAX_LEVELS],
+    /// Every radix is a power of two: the digits are shifts and masks.
+    pow2: bool,
+}
+
+impl Axis {
+    /// The axis of `levels` (whose blocks `AxisLevels::new` has checked; a block that would break
+    /// the checks ends the levels there, so the divisors are non-zero whatever the input).
+    pub(super) const fn new(levels: &AxisLevels) -> Axis {
+        let mut a = Axis {
+            levels: 0,
+            block: [ONE; N],
+            radix: [ONE; MAX_LEVELS],
+            shift: [0; MAX_LEVELS],
+            low: [0; MAX_LEVELS],
+            pow2: true,
+        };
+        let mut prev = ONE;
+        let mut p = 0;
+        while p < MAX_LEVELS && p < levels.len {
+            let b = levels.blocks[p];
+            let Some(bn) = NonZeroU32::new(b) else {
+                break;
+            };
+            if b <= prev.get() || !b.is_multiple_of(prev.get()) {
+                break;
+            }
+            let Some(r) = NonZeroU32::new(div(b as u64, prev) as u32) else {
+                break;
+            };
+            a.block[p + 1] = bn;
+            a.radix[p] = r;
+            a.low[p] = r.get() - 1;
+            if r.is_power_of_two() {
+                a.shift[p] = r.trailing_zeros();
+            } else {
+                a.pow2 = false;
+            }
+            prev = bn;
+            p += 1;
+            a.levels = p;
+        }
+        a
+    }
+
+    /// The same axis with the power-of-two shortcut off: the digits by division (tests).
+    #[cfg(test)]
+    pub(super) fn by_division(mut self) -> Axis {
+        self.pow2 = false;
+        self
+    }
+
+    /// Whether the digits are shifts and masks.
+    #[cfg(test)]
+    pub(super) fn is_pow2(&self) -> bool {
+        self.pow2
+    }
+
+    /// Components: levels + 1.
+    #[inline(always)]
+    pub(super) const fn components(&self) -> usize {
+        self.levels + 1
+    }
+
+    /// The digits and indices of `x` (see [`Axis`]).
+    #[inline(always)]
+    pub(super) fn digits(&self, x: u32) -> Digits {
+        let mut out = Digits {
+            digit: [0; N],
+            index: [0; N],
+        };
+        let mut q = x;
+        let levels = self
+            .radix
+            .iter()
+            .zip(self.shift.iter().zip(self.low.iter()))
+            .zip(out.digit.iter_mut().zip(out.index.iter_mut()))
+            .take(self.levels);
+        if self.pow2 {
+            for ((_, (&s, &low)), (d, i)) in levels {
+                let next = q.wrapping_shr(s);
+                *d = q & low;
+                *i = next.wrapping_mul(low).wrapping_add(*d).wrapping_sub(1);
+                q = next;
+            }
+        } else {
+            for ((&r, (_, &low)), (d, i)) in levels {
+                let next = q / r;
+                *d = q.wrapping_sub(next.wrapping_mul(r.get()));
+                *i = next.wrapping_mul(low).wrapping_add(*d).wrapping_sub(1);
+                q = next;
+            }
+        }
+        if let Some(d) = out.digit.get_mut(self.levels) {
+            *d = q;
+        }
+        if let Some(i) = out.index.get_mut(self.levels) {
+            *i = q.wrapping_sub(1);
+        }
+        out
+    }
+
+    /// One level of the digits: for `q = floor(x / b_p)`, the digit `d_p`, the index of
+    /// `trunc_p(x)` (meaningful when `d_p != 0`) and `floor(x / b_{p+1})`; `None` past the top
+    /// component.
+    #[inline(always)]
+    pub(super) fn step(&self, p: usize, q: u32) -> Option<(u32, u32, u32)> {
+        if p < self.levels && p < MAX_LEVELS {
+            let low = self.low[p];
+            let (d, next) = if self.pow2 {
+                (q & low, q.wrapping_shr(self.shift[p]))
+            } else {
+                let next = q / self.radix[p];
+                (q.wrapping_sub(next.wrapping_mul(self.radix[p].get())), next)
+            };
+            Some((
+                d,
+                next.wrapping_mul(low).wrapping_add(d).wrapping_sub(1),
+                next,
+            ))
+        } else if p == self.levels {
+            Some((q, q.wrapping_sub(1), 0))
+        } else {
+            None
+        }
+    }
+
+    /// Stored positions of component `p` on an axis of `n` texels: the `X` in `1..=n` that are
+    /// multiples of `b_p` with a non-zero digit `d_p`.
+    const fn count(&self, p: usize, n: u64) -> u64 {
+        if p >= N {
+            return 0;
+        }
+        let b = self.block[p];
+        if p < self.levels && p < MAX_LEVELS {
+            let nb = self.block[p + 1];
+            let r = self.radix[p].get() as u64;
+            let whole = div(n, nb);
+            whole * (r - 1) + div(n - whole * nb.get() as u64, b)
+        } else {
+            div(n, b)
+        }
+    }
+
+    /// The longest interval `d_p b_p` of component `p` on an axis of `n` texels.
+    const fn max_len(&self, p: usize, n: u64) -> u64 {
+        if p >= N {
+            return 0;
+        }
+        let b = self.block[p].get() as u64;
+        if p < self.levels && p < MAX_LEVELS {
+            let nb = self.block[p + 1].get() as u64;
+            if n >= nb {
+                return nb - b;
+            }
+        }
+        div(n, self.block[p]) * b
+    }
+
+    /// `b_p` (1 past the levels).
+    #[inline(always)]
+    fn block(&self, p: usize) -> u32 {
+        self.block.get(p).map_or(1, |b| b.get())
+    }
+}
+
+/// Where component `(p, q)` lives and how wide its fields are. Entry `(ix, iy)` channel `c`
+/// starts at bit `offset_bits + ix row_bits + iy stride_bits + c bits`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Component {
+    pub(super) offset_bits: u64,
+    /// Bits of one row of entries (`count_y` entries): `count_y * stride_bits`.
+    pub(super) row_bits: u64,
+    /// Bits of one entry, all channels: `bits * C`.
+    pub(super) stride_bits: u64,
+    /// Bits per field.
+    pub(super) bits: u32,
+    /// The low `bits` bits set.
+    pub(super) mask: u64,
+}
+
+impl Component {
+    const ZERO: Component = Component {
+        offset_bits: 0,
+        row_bits: 0,
+        stride_bits: 0,
+        bits: 0,
+        mask: 0,
+    };
+
+    /// Bit offset of entry `(ix, iy)` (channel 0). For the stored positions of a geometry
+    /// (`ix < count_x`, `iy < count_y`) it is below the geometry's `total_bits`, which
+    /// [`Geometry::new`] computed with checks: no wrap.
+    #[inline(always)]
+    pub(super) fn offset(&self, ix: u32, iy: u32) -> u64 {
+        self.offset_bits
+            .wrapping_add((ix as u64).wrapping_mul(self.row_bits))
+            .wrapping_add((iy as u64).wrapping_mul(self.stride_bits))
+    }
 }
 
 /// The computed geometry of a tiled layout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Geometry {
-    spec: TiledSpec,
-    width: usize,
-    height: usize,
-    texel_bits: u32,
-    channels: usize,
-    comps: [[Component; N]; N],
-    total_bits: u64,
+pub(super) struct Geometry {
+    pub(super) spec: TiledSpec,
+    pub(super) width: usize,
+    pub(super) height: usize,
+    pub(super) texel_bits: u32,
+    pub(super) channels: usize,
+    pub(super) ax: Axis,
+    pub(super) ay: Axis,
+    pub(super) comps: [[Component; N]; N],
+    /// Bits of storage, checked in `u64`.
+    pub(super) total_bits: u64,
+    /// `ceil(total_bits / 32)`, checked to fit `usize`.
+    pub(super) words: usize,
 }
 
 impl Geometry {
-    fn new(
+    /// The geometry on this target (`usize` words).
+    pub(super) const fn new(
         spec: TiledSpec,
         width: usize,
         height: usize,
         texel_bits: u32,
         channels: usize,
     ) -> Result<Self, Error> {
-        check_dimensions(width, height, channels)?;
-        width::check_texel_bits(texel_bits)?;
+        Self::new_for(spec, width, height, texel_bits, channels, usize::MAX as u64)
+    }
+
+    /// The geometry, with every size and offset computed in `u64` with checks, and the word
+    /// count refused above `max_words` (this target's `usize::MAX`; tests pass `u32::MAX` to
+    /// check a 32-bit target's arithmetic on any host). Overflow anywhere is
+    /// [`Error::TextureTooLarge`]: no storage could hold the layout.
+    pub(super) const fn new_for(
+        spec: TiledSpec,
+        width: usize,
+        height: usize,
+        texel_bits: u32,
+        channels: usize,
+        max_words: u64,
+    ) -> Result<Self, Error> {
+        if let Err(e) = check_dimensions(width, height, channels) {
+            return Err(e);
+        }
+        if let Err(e) = width::check_texel_bits(texel_bits) {
+            return Err(e);
+        }
         if let Some(k) = spec.modulus {
             if k < texel_bits || k == 0 || k > 64 {
                 return Err(Error::InvalidModulus { bits: k });
             }
         }
-        let m = width::max_texel(texel_bits);
-        let mut comps = [[Component::default(); N]; N];
+        let too_large = Error::TextureTooLarge {
+            dimension: if width > height { width } else { height },
+        };
+        let (ax, ay) = (Axis::new(&spec.x), Axis::new(&spec.y));
+        let m = mask(texel_bits);
+        // `usize` has at most 64 bits, so `as u64` is lossless.
+        let (w, h, ch) = (width as u64, height as u64, channels as u64);
+        let mut comps = [[Component::ZERO; N]; N];
         let mut offset = 0u64;
-        for (p, row) in comps.iter_mut().enumerate().take(spec.x.components()) {
-            for (q, comp) in row.iter_mut().enumerate().take(spec.y.components()) {
-                let (cx, cy) = (spec.x.count(p, width), spec.y.count(q, height));
-                let len = spec.x.max_len(p, width) as u128 * spec.y.max_len(q, height) as u128;
-                let mut bits = bits_of(m * len);
+        let mut p = 0;
+        while p < N && p < ax.components() {
+            let (cx, lx) = (ax.count(p, w), ax.max_len(p, w));
+            let mut q = 0;
+            while q < N && q < ay.components() {
+                let (cy, ly) = (ay.count(q, h), ay.max_len(q, h));
+                // Sides below 2^31: the area fits u64; m * area may not, hence bits_of_mul.
+                let mut bits = bits_of_mul(m, lx * ly);
                 if let Some(k) = spec.modulus {
-                    bits = bits.min(k);
+                    if bits > k {
+                        bits = k;
+                    }
                 }
                 if bits > 64 {
                     return Err(Error::TooWide {
@@ -267,28 +481,49 @@ impl Geometry {
                         bits_available: 64,
                     });
                 }
-                *comp = Component {
-                    offset_bits: offset,
-                    bits,
-                    count_x: cx,
-                    count_y: cy,
+                let Some(stride_bits) = (bits as u64).checked_mul(ch) else {
+                    return Err(too_large);
                 };
-                offset += cx as u64 * cy as u64 * bits as u64 * channels as u64;
+                let Some(row_bits) = stride_bits.checked_mul(cy) else {
+                    return Err(too_large);
+                };
+                let Some(size) = row_bits.checked_mul(cx) else {
+                    return Err(too_large);
+                };
+                comps[p][q] = Component {
+                    offset_bits: offset,
+                    row_bits,
+                    stride_bits,
+                    bits,
+                    mask: mask(bits),
+                };
+                offset = match offset.checked_add(size) {
+                    Some(v) => v,
+                    None => return Err(too_large),
+                };
+                q += 1;
             }
+            p += 1;
         }
+        let Some(words) = words_of_bits(offset, max_words) else {
+            return Err(too_large);
+        };
         Ok(Geometry {
             spec,
             width,
             height,
             texel_bits,
             channels,
+            ax,
+            ay,
             comps,
             total_bits: offset,
+            words,
         })
     }
 
     /// The value type must hold the worst-case total, or `k` bits for a modular spec.
-    fn check_value_type<E: Entry>(&self) -> Result<(), Error> {
+    const fn check_value_type<E: Entry>(&self) -> Result<(), Error> {
         match self.spec.modulus {
             Some(k) if k <= E::BITS => Ok(()),
             Some(k) => Err(Error::InvalidModulus { bits: k }),
@@ -298,19 +533,26 @@ impl Geometry {
         }
     }
 
-    fn words(&self) -> usize {
-        self.total_bits.div_ceil(WORD_BITS as u64) as usize
+    /// Component `(p, q)`, if the spec has it.
+    #[inline(always)]
+    pub(super) fn component(&self, p: usize, q: usize) -> Option<&Component> {
+        if p < self.ax.components() && q < self.ay.components() {
+            self.comps.get(p).and_then(|row| row.get(q))
+        } else {
+            None
+        }
     }
 
-    /// Bit offset of the fields of entry `(ix, iy)` of component `(p, q)`.
-    #[inline(always)]
-    fn field_offset(&self, p: usize, q: usize, ix: usize, iy: usize) -> (u64, u32) {
-        let c = &self.comps[p][q];
-        let entry = (ix * c.count_y + iy) as u64;
-        (
-            c.offset_bits + entry * c.bits as u64 * self.channels as u64,
-            c.bits,
-        )
+    /// Refuses storage shorter than the layout.
+    fn check_storage(&self, got: usize) -> Result<(), Error> {
+        if got < self.words {
+            Err(Error::StorageTooSmall {
+                needed: self.words,
+                got,
+            })
+        } else {
+            Ok(())
+        }
     }
 }
 
@@ -326,19 +568,69 @@ pub struct Tiled<'a, E: Entry, const C: usize = 1> {
 
 impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     /// Words of storage a `w x h` texture of `texel_bits`-bit texels needs under `spec`.
-    pub fn words_needed(
+    ///
+    /// Every size and offset is computed in `u64` with checks; a layout whose size overflows
+    /// `u64` bits or `usize` words (on a 32-bit target: more than `2^32 - 1` words) is refused
+    /// with [`Error::TextureTooLarge`], as are sides above `2^31 - 1`. Also
+    /// [`Error::EmptyTexture`], [`Error::InvalidTexelBits`], [`Error::InvalidModulus`] and
+    /// `TooWide { what: Field, .. }` for a field above 64 bits.
+    ///
+    /// A `const fn`, so firmware can size a `static` at compile time:
+    ///
+    /// ```
+    /// use texsat::layouts::{Tiled, TiledSpec};
+    /// use texsat::{Layout, NoCount, Texture};
+    /// const SPEC: TiledSpec = match TiledSpec::tiles(8, 8) {
+    ///     Ok(s) => s,
+    ///     Err(_) => panic!(),
+    /// };
+    /// const WORDS: usize = match Tiled::<u32>::words_needed(SPEC, 64, 48, 8) {
+    ///     Ok(n) => n,
+    ///     Err(_) => panic!(),
+    /// };
+    /// const SCRATCH: usize = match Tiled::<u32>::scratch_needed(SPEC, 64) {
+    ///     Ok(n) => n,
+    ///     Err(_) => panic!(),
+    /// };
+    /// static IMAGE: [u32; WORDS] = [0; WORDS]; // e.g. written by a host tool into flash
+    ///
+    /// let texels = [7u8; 64 * 48];
+    /// let tex = Texture::<u8>::new(&texels, 64, 48)?;
+    /// let mut words = [0u32; WORDS];
+    /// let mut scratch = [0u32; SCRATCH];
+    /// let t = Tiled::<u32>::build(&tex, SPEC, &mut words, &mut scratch)?;
+    /// assert_eq!(t.corner(64, 48, &mut NoCount), [7 * 64 * 48]);
+    /// let flash = Tiled::<u32>::from_words(&IMAGE, SPEC, 64, 48, 8)?;
+    /// assert_eq!(flash.corner(64, 48, &mut NoCount), [0]);
+    /// # Ok::<(), texsat::Error>(())
+    /// ```
+    pub const fn words_needed(
         spec: TiledSpec,
         width: usize,
         height: usize,
         texel_bits: u32,
     ) -> Result<usize, Error> {
-        Ok(Geometry::new(spec, width, height, texel_bits, C)?.words())
+        match Geometry::new(spec, width, height, texel_bits, C) {
+            Ok(g) => Ok(g.words),
+            Err(e) => Err(e),
+        }
     }
 
     /// Scratch entries the builder needs: one accumulator row per y component plus one row for
-    /// the current row's prefix sums, `(Ly + 2) (w + 1) C`.
-    pub fn scratch_needed(spec: TiledSpec, width: usize) -> usize {
-        (spec.y.components() + 1) * (width + 1) * C
+    /// the current row's prefix sums, `(Ly + 2) (w + 1) C`; [`Error::TextureTooLarge`] if that
+    /// overflows `usize`. A `const fn` (see [`Tiled::words_needed`]).
+    pub const fn scratch_needed(spec: TiledSpec, width: usize) -> Result<usize, Error> {
+        let too_large = Error::TextureTooLarge { dimension: width };
+        let Some(w1) = width.checked_add(1) else {
+            return Err(too_large);
+        };
+        let Some(row) = w1.checked_mul(C) else {
+            return Err(too_large);
+        };
+        match row.checked_mul(spec.y.components() + 1) {
+            Some(n) => Ok(n),
+            None => Err(too_large),
+        }
     }
 
     /// Builds the layout of `texture` into `words` (see [`Tiled::words_needed`]) using `scratch`
@@ -375,17 +667,117 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     ) -> Result<Self, Error> {
         let geo = Geometry::new(spec, width, height, texel_bits, C)?;
         geo.check_value_type::<E>()?;
-        if words.len() < geo.words() {
-            return Err(Error::StorageTooSmall {
-                needed: geo.words(),
-                got: words.len(),
-            });
-        }
+        geo.check_storage(words.len())?;
         Ok(Tiled {
             words,
             geo,
             _e: core::marker::PhantomData,
         })
+    }
+
+    /// Adds the `C` fields of entry `(ix, iy)` of `comp` to `out`, counting the read.
+    #[inline(always)]
+    fn add_entry<K: Counter>(
+        &self,
+        comp: &Component,
+        ix: u32,
+        iy: u32,
+        out: &mut [E; C],
+        k: &mut K,
+    ) {
+        let offset = comp.offset(ix, iy);
+        let read = u32::try_from(comp.stride_bits).unwrap_or(u32::MAX);
+        k.reads(1, read);
+        k.words(
+            ((offset % WORD_BITS as u64) as u32)
+                .saturating_add(read)
+                .div_ceil(WORD_BITS),
+        );
+        let mut at = offset;
+        for o in out.iter_mut() {
+            let v = read_masked(self.words, at, comp.bits, comp.mask);
+            // Sums of parts of S: no wrap on a valid layout (E holds the total).
+            *o = o.wrapping_add(E::from_u64_truncating(v));
+            at = at.wrapping_add(comp.bits as u64);
+        }
+    }
+
+    /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
+    /// straight-line code over the four components. (Also correct, via the general path, for
+    /// any other spec: the lookups use it only for one level.)
+    #[inline(always)]
+    pub(super) fn corner_one_level<K: Counter>(&self, x: u32, y: u32, out: &mut [E; C], k: &mut K) {
+        let g = &self.geo;
+        if g.ax.levels != 1 || g.ay.levels != 1 {
+            return self.corner_general(x, y, out, k);
+        }
+        let (Some((dx, ix0, qx)), Some((dy, iy0, qy))) = (g.ax.step(0, x), g.ay.step(0, y)) else {
+            return;
+        };
+        let (ix1, iy1) = (qx.wrapping_sub(1), qy.wrapping_sub(1));
+        let [r0, r1, ..] = &g.comps;
+        let ([c00, c01, ..], [c10, c11, ..]) = (r0, r1);
+        if dx != 0 {
+            if dy != 0 {
+                self.add_entry(c00, ix0, iy0, out, k);
+            }
+            if qy != 0 {
+                self.add_entry(c01, ix0, iy1, out, k);
+            }
+        }
+        if qx != 0 {
+            if dy != 0 {
+                self.add_entry(c10, ix1, iy0, out, k);
+            }
+            if qy != 0 {
+                self.add_entry(c11, ix1, iy1, out, k);
+            }
+        }
+        let fields = ((dx != 0) as u32 + (qx != 0) as u32) * ((dy != 0) as u32 + (qy != 0) as u32);
+        if fields > 1 {
+            k.adds((fields - 1).saturating_mul(C as u32));
+        }
+    }
+
+    /// Adds `S(x, y)` (`0 < x <= w`, `0 < y <= h`) to `out` for any spec: the digits of both
+    /// coordinates, then one field per pair of non-zero digits.
+    #[inline(always)]
+    pub(super) fn corner_general<K: Counter>(&self, x: u32, y: u32, out: &mut [E; C], k: &mut K) {
+        let g = &self.geo;
+        let (dx, dy) = (g.ax.digits(x), g.ay.digits(y));
+        let mut fields = 0u32;
+        for ((row, &ddx), &ix) in g
+            .comps
+            .iter()
+            .zip(dx.digit.iter())
+            .zip(dx.index.iter())
+            .take(g.ax.components())
+        {
+            if ddx == 0 {
+                continue;
+            }
+            for ((comp, &ddy), &iy) in row
+                .iter()
+                .zip(dy.digit.iter())
+                .zip(dy.index.iter())
+                .take(g.ay.components())
+            {
+                if ddy == 0 {
+                    continue;
+                }
+                self.add_entry(comp, ix, iy, out, k);
+                fields += 1;
+            }
+        }
+        if fields > 1 {
+            k.adds((fields - 1).saturating_mul(C as u32));
+        }
+    }
+
+    /// The geometry (tests).
+    #[cfg(test)]
+    pub(super) fn geometry(&self) -> &Geometry {
+        &self.geo
     }
 
     /// The spec.
@@ -395,16 +787,12 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
 
     /// Field width of component `(p, q)` (`p` the x level, `q` the y level), or `None`.
     pub fn field_bits(&self, p: usize, q: usize) -> Option<u32> {
-        if p < self.geo.spec.x.components() && q < self.geo.spec.y.components() {
-            Some(self.geo.comps[p][q].bits)
-        } else {
-            None
-        }
+        self.geo.component(p, q).map(|c| c.bits)
     }
 
     /// The most fields one `S(x, y)` reads: `(Lx + 1)(Ly + 1)`.
     pub fn max_fields_per_corner(&self) -> usize {
-        self.geo.spec.x.components() * self.geo.spec.y.components()
+        self.geo.ax.components() * self.geo.ay.components()
     }
 
     /// The storage words.
@@ -438,35 +826,22 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     fn storage_bits(&self) -> u64 {
         self.geo.total_bits
     }
+    /// One field per pair of non-zero digits. Corners outside `[0, w] x [0, h]` read nothing
+    /// and give 0.
     #[inline]
     fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
         let g = &self.geo;
         let mut out = [E::ZERO; C];
-        let mut fields = 0u32;
-        for p in 0..g.spec.x.components() {
-            if g.spec.x.digit(p, x) == 0 {
-                continue;
-            }
-            let ix = g.spec.x.index(p, g.spec.x.trunc(p, x));
-            for q in 0..g.spec.y.components() {
-                if g.spec.y.digit(q, y) == 0 {
-                    continue;
-                }
-                let iy = g.spec.y.index(q, g.spec.y.trunc(q, y));
-                let (offset, bits) = g.field_offset(p, q, ix, iy);
-                let span = (offset % WORD_BITS as u64) as u32 + bits * C as u32;
-                k.reads(1, bits * C as u32);
-                k.words(span.div_ceil(WORD_BITS));
-                for (c, o) in out.iter_mut().enumerate() {
-                    let (v, _) = read_bits(self.words, offset + (c as u32 * bits) as u64, bits);
-                    // Sums of parts of S: no wrap on a valid layout (E holds the total).
-                    *o = o.wrapping_add(E::from_u64_truncating(v));
-                }
-                fields += 1;
-            }
+        // x - 1 < w and y - 1 < h: also refuses x = 0 and y = 0 (wrapping to usize::MAX).
+        if x.wrapping_sub(1) >= g.width || y.wrapping_sub(1) >= g.height {
+            return out;
         }
-        if fields > 1 {
-            k.adds((fields - 1) * C as u32);
+        // x <= w and y <= h are below 2^31: lossless.
+        let (x, y) = (x as u32, y as u32);
+        if g.ax.levels == 1 && g.ay.levels == 1 {
+            self.corner_one_level(x, y, &mut out, k);
+        } else {
+            self.corner_general(x, y, &mut out, k);
         }
         if let Some(m) = g.spec.modulus {
             for o in out.iter_mut() {
@@ -484,6 +859,8 @@ pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
     scratch: &'s mut [E],
     geo: Geometry,
+    /// `(w + 1) C`: one scratch row.
+    row_len: usize,
     rows_done: usize,
 }
 
@@ -500,41 +877,56 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
     ) -> Result<Self, Error> {
         let geo = Geometry::new(spec, width, height, texel_bits, C)?;
         geo.check_value_type::<E>()?;
-        if words.len() < geo.words() {
-            return Err(Error::StorageTooSmall {
-                needed: geo.words(),
-                got: words.len(),
-            });
-        }
-        let need = Tiled::<E, C>::scratch_needed(spec, width);
-        if scratch.len() < need {
-            return Err(Error::StorageTooSmall {
-                needed: need,
-                got: scratch.len(),
-            });
-        }
-        let scratch = &mut scratch[..need];
+        geo.check_storage(words.len())?;
+        let need = Tiled::<E, C>::scratch_needed(spec, width)?;
+        let got = scratch.len();
+        let scratch = scratch
+            .get_mut(..need)
+            .ok_or(Error::StorageTooSmall { needed: need, got })?;
         scratch.fill(E::ZERO);
         Ok(TiledBuilder {
             words,
             scratch,
             geo,
+            // (w + 1) C <= need: no overflow.
+            row_len: (width + 1) * C,
             rows_done: 0,
         })
     }
 
-    /// Consumes the next texture row (`w * C` texels).
+    /// Consumes the next texture row (`w * C` texels). A refused row (wrong length, a texel
+    /// wider than `texel_bits`) changes nothing.
     pub fn push_row<T: Texel>(&mut self, texels: &[T]) -> Result<(), Error> {
-        let g = self.geo;
-        let (n, row) = (g.width, (g.width + 1) * C);
-        if self.rows_done >= g.height {
+        let TiledBuilder {
+            words,
+            scratch,
+            geo: g,
+            row_len,
+            rows_done,
+        } = self;
+        let row_len = *row_len;
+        if *rows_done >= g.height {
             return Err(Error::TooManyRows);
         }
+        // w C < (w + 1) C = row_len: no overflow.
+        let n = g.width;
         if texels.len() != n * C {
             return Err(Error::RowLength {
                 expected: n * C,
                 got: texels.len(),
             });
+        }
+        // The field widths are proved for `texel_bits`; a wider texel would break them.
+        let max = mask(g.texel_bits);
+        for t in texels {
+            let v = t.to_u16();
+            if u64::from(v) > max {
+                return Err(Error::TooWide {
+                    what: Quantity::Entry,
+                    bits_needed: u16::BITS - v.leading_zeros(),
+                    bits_available: g.texel_bits,
+                });
+            }
         }
         let overflow = Error::TooWide {
             what: Quantity::Entry,
@@ -549,82 +941,79 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 None => a.checked_add(b).ok_or(overflow),
             }
         };
-        let max = width::max_texel(g.texel_bits);
-        let (prefix, accs) = self.scratch.split_at_mut(row);
+        let short = Error::StorageTooSmall {
+            needed: row_len,
+            got: scratch.len(),
+        };
+        let (prefix, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
         // The row's prefix sums P[X], X = 0..=n.
         let mut run = [E::ZERO; C];
-        prefix[..C].fill(E::ZERO);
-        for (x, t) in texels.chunks_exact(C).enumerate() {
-            for c in 0..C {
-                let v = t[c].to_u16();
-                // The field widths are proved for `texel_bits`; a wider texel would break them.
-                if v as u128 > max {
-                    return Err(Error::TooWide {
-                        what: Quantity::Entry,
-                        bits_needed: bits_of(v as u128),
-                        bits_available: g.texel_bits,
-                    });
-                }
-                run[c] = add(run[c], E::from(v))?;
-                prefix[(x + 1) * C + c] = run[c];
+        let (p0, rest) = prefix.split_at_mut_checked(C).ok_or(short)?;
+        p0.fill(E::ZERO);
+        for (t, p) in texels.chunks_exact(C).zip(rest.chunks_exact_mut(C)) {
+            for ((tv, pv), r) in t.iter().zip(p.iter_mut()).zip(run.iter_mut()) {
+                *r = add(*r, E::from(tv.to_u16()))?;
+                *pv = *r;
             }
         }
         // Every y component accumulates the row.
-        for acc in accs.chunks_exact_mut(row) {
+        for acc in accs.chunks_exact_mut(row_len) {
             for (a, &p) in acc.iter_mut().zip(prefix.iter()) {
                 *a = add(*a, p)?;
             }
         }
-        let y = self.rows_done + 1;
-        for q in 0..g.spec.y.components() {
-            if !y.is_multiple_of(g.spec.y.block(q)) || g.spec.y.digit(q, y) == 0 {
+        // Row y ends a block of exactly one y component: that of its lowest non-zero digit
+        // (a multiple of b_q with d_q != 0). Likewise each x, for the x components.
+        let y = *rows_done + 1;
+        // y <= h < 2^31: lossless.
+        let dy = g.ay.digits(y as u32);
+        let Some(q) = dy
+            .digit
+            .iter()
+            .take(g.ay.components())
+            .position(|&d| d != 0)
+        else {
+            return Err(short);
+        };
+        let iy = dy.index.get(q).copied().unwrap_or(0);
+        let acc = accs.chunks_exact(row_len).nth(q).ok_or(short)?;
+        for x in 1..=n {
+            let dx = g.ax.digits(x as u32);
+            let Some(p) = dx
+                .digit
+                .iter()
+                .take(g.ax.components())
+                .position(|&d| d != 0)
+            else {
                 continue;
-            }
-            let iy = g.spec.y.index(q, y);
-            let acc = &accs[q * row..(q + 1) * row];
-            for p in 0..g.spec.x.components() {
-                let bx = g.spec.x.block(p);
-                let mut x = bx;
-                while x <= n {
-                    if g.spec.x.digit(p, x) != 0 {
-                        let lo = match g.spec.x.next(p) {
-                            Some(nb) => x - x % nb,
-                            None => 0,
-                        };
-                        let ix = g.spec.x.index(p, x);
-                        let (offset, bits) = g.field_offset(p, q, ix, iy);
-                        for c in 0..C {
-                            let mut v = acc[x * C + c].wrapping_sub(acc[lo * C + c]);
-                            if let Some(m) = modulus {
-                                v = v.low_bits(m);
-                            }
-                            if !write_bits(
-                                self.words,
-                                offset + (c as u32 * bits) as u64,
-                                bits,
-                                v.to_u64(),
-                            ) {
-                                return Err(Error::TooWide {
-                                    what: Quantity::Field,
-                                    bits_needed: bits_of(v.to_u128()),
-                                    bits_available: bits,
-                                });
-                            }
-                        }
-                    }
-                    x += bx;
+            };
+            let (d, ix) = (
+                dx.digit.get(p).copied().unwrap_or(0),
+                dx.index.get(p).copied().unwrap_or(0),
+            );
+            // The interval I_p(x) = [x - d_p b_p, x): x is a multiple of b_p here.
+            let lo = x - (d as usize) * (g.ax.block(p) as usize);
+            let comp = g.component(p, q).ok_or(short)?;
+            let (hi_v, lo_v) = (
+                acc.get(x * C..(x + 1) * C).ok_or(short)?,
+                acc.get(lo * C..(lo + 1) * C).ok_or(short)?,
+            );
+            let mut at = comp.offset(ix, iy);
+            for (&a, &b) in hi_v.iter().zip(lo_v.iter()) {
+                let mut v = a.wrapping_sub(b);
+                if let Some(m) = modulus {
+                    v = v.low_bits(m);
                 }
+                write_field(words, at, comp.bits, v.to_u64())?;
+                at = at.wrapping_add(comp.bits as u64);
             }
         }
-        // Reset the accumulators whose super-block ends here.
-        for q in 0..g.spec.y.components() {
-            if let Some(nb) = g.spec.y.next(q) {
-                if y.is_multiple_of(nb) {
-                    accs[q * row..(q + 1) * row].fill(E::ZERO);
-                }
-            }
+        // Reset the accumulators whose super-block ends here: those below q (y is a multiple of
+        // b_{q'+1} for q' < q).
+        for acc in accs.chunks_exact_mut(row_len).take(q) {
+            acc.fill(E::ZERO);
         }
-        self.rows_done += 1;
+        *rows_done += 1;
         Ok(())
     }
 

@@ -158,7 +158,7 @@ fn main() {
         ];
         for (name, spec) in specs {
             let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, n, n, 8).unwrap()];
-            let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n)];
+            let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n).unwrap()];
             let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
             rows.push(measure(name, "every box", &t, &flat, boxes, n as u64));
         }
@@ -176,7 +176,7 @@ fn main() {
             ),
         ] {
             let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, n, n, 8).unwrap()];
-            let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n)];
+            let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n).unwrap()];
             let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
             rows.push(measure(
                 name.into(),
@@ -189,7 +189,7 @@ fn main() {
         }
         for side in [16u64, 64] {
             let k = modulus_bits_for(8, side * side);
-            let mut words = vec![0u32; Modular::<u32>::words_needed(n, n, k)];
+            let mut words = vec![0u32; Modular::<u32>::words_needed(n, n, k).unwrap()];
             let mut row = vec![0u32; n];
             let m = Modular::<u32>::build(&tex, k, &mut words, &mut row).unwrap();
             let exact = if side == 16 {

@@ -871,7 +871,7 @@ fn packed_facts<T: Texel, const C: usize>(data: &[T], w: usize, h: usize, p: Pac
         Packed::Tiled(spec) => {
             let n = Tiled::<u64, C>::words_needed(spec, w, h, T::BITS).unwrap();
             let mut words = vec![0u32; n];
-            let mut scratch = vec![0u64; Tiled::<u64, C>::scratch_needed(spec, w)];
+            let mut scratch = vec![0u64; Tiled::<u64, C>::scratch_needed(spec, w).unwrap()];
             let t = Tiled::<u64, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
             let field_bits: Vec<Vec<u32>> = (0..spec.x.components())
                 .map(|p| {
@@ -895,7 +895,7 @@ fn packed_facts<T: Texel, const C: usize>(data: &[T], w: usize, h: usize, p: Pac
             v
         }
         Packed::Modular(k) => {
-            let n = Modular::<u64, C>::words_needed(w, h, k);
+            let n = Modular::<u64, C>::words_needed(w, h, k).unwrap();
             let mut words = vec![0u32; n];
             let mut row = vec![0u64; w * C];
             let l = Modular::<u64, C>::build(&tex, k, &mut words, &mut row).unwrap();

@@ -344,7 +344,7 @@ fn build_tiled<'a>(
     let spec = keep(spec, what, f)?;
     let words = keep(Tiled::<u32>::words_needed(spec, w, h, 8), what, f)?;
     st.0 = vec![0; words];
-    st.1 = vec![0; Tiled::<u32>::scratch_needed(spec, w)];
+    st.1 = vec![0; keep(Tiled::<u32>::scratch_needed(spec, w), what, f)?];
     keep(Tiled::build(tex, spec, &mut st.0, &mut st.1), what, f)
 }
 
@@ -396,7 +396,7 @@ impl Storage {
             "tiled 2 in 16",
             f,
         );
-        modular.0 = vec![0; Modular::<u64>::words_needed(w, h, modular_k)];
+        modular.0 = vec![0; Modular::<u64>::words_needed(w, h, modular_k).unwrap_or(0)];
         modular.1 = vec![0; w];
         let modular = keep(
             Modular::build(&tex, modular_k, &mut modular.0, &mut modular.1),
@@ -453,7 +453,8 @@ pub fn choose_modular_k<M: TentMode + Copy>(
     let max_cells = inputs.iter().map(Input::cells).max().unwrap_or(1).max(1);
     let k0 = texsat::layouts::modulus_bits_for(8, max_cells).clamp(8, 64);
     let refused_at = |k: u32| -> usize {
-        let mut words = vec![0u32; Modular::<u64>::words_needed(tex.width(), tex.height(), k)];
+        let mut words =
+            vec![0u32; Modular::<u64>::words_needed(tex.width(), tex.height(), k).unwrap_or(0)];
         let mut row = vec![0u64; tex.width()];
         let Ok(m) = Modular::build(tex, k, &mut words, &mut row) else {
             return inputs.len();

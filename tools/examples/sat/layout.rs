@@ -374,7 +374,7 @@ fn tiled<T: Texel, E: Entry, const C: usize, J: LayoutJob>(
     let (w, h) = (texture.width(), texture.height());
     let words_needed = Tiled::<E, C>::words_needed(spec, w, h, T::BITS)?;
     let mut words = vec![0u32; words_needed];
-    let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, w)];
+    let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, w)?];
     let t = Tiled::<E, C>::build(texture, spec, &mut words, &mut scratch)?;
     let field_bits = (0..spec.x.components())
         .map(|p| {
@@ -398,7 +398,7 @@ fn modular<T: Texel, E: Entry, const C: usize, J: LayoutJob>(
     job: J,
 ) -> Result<J::Out, Error> {
     let (w, h) = (texture.width(), texture.height());
-    let words_needed = Modular::<E, C>::words_needed(w, h, k);
+    let words_needed = Modular::<E, C>::words_needed(w, h, k)?;
     let mut words = vec![0u32; words_needed];
     let mut row = vec![E::ZERO; w * C];
     let m = Modular::<E, C>::build(texture, k, &mut words, &mut row)?;
