@@ -511,7 +511,7 @@ fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
                     .into_iter()
                     .flatten()
                     {
-                        sum = sum.wrapping_add(s.sum() as u64);
+                        sum = sum.wrapping_add(Into::<u128>::into(s.sum()) as u64);
                     }
                 }
             }
@@ -521,7 +521,7 @@ fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
     for (x0, y0, x1, y1) in [(0.0, 0.0, w as f64, h as f64), (0.25, 0.5, 0.75, 0.5625)] {
         let r = Rect::new(f(x0), f(y0), f(x1), f(y1));
         if let Ok(s) = l.box_sum(&r, Stable, Border, &mut k) {
-            sum = sum.wrapping_add(s.sum() as u64);
+            sum = sum.wrapping_add(Into::<u128>::into(s.sum()) as u64);
         }
     }
     sum
