@@ -302,8 +302,10 @@ pub const fn stable_multiplies(texel_bits: u32, max_side: usize, frac_bits: u32)
     let f1 = frac_bits.saturating_add(1);
     [
         MulShape {
-            data_bits: bits_of(
-                max_texel(texel_bits).saturating_mul((max_side as u128).saturating_add(1)),
+            data_bits: bits_of_product(
+                max_texel_u64(texel_bits),
+                (max_side as u64).saturating_add(1),
+                1,
             ),
             frac_bits: f1,
         },

@@ -130,6 +130,36 @@ grep -q "undefined symbol: $UNDEF" "$OUT/selftest/panic.log" ||
   die "self-test: the selftest-panic build failed, but not with 'undefined symbol: $UNDEF' (log: $OUT/selftest/panic.log)"
 echo "ok: a panic-free firmware links; one with [0u8; 4][black_box(9)] fails with 'undefined symbol: $UNDEF'"
 
+# --- IR check: no 128-bit integer operation on the paths of u16/u32 tables ---------------------
+# The gate's tables are u32 (and its filters' u8/u16 texels), so the optimized, fat-LTO IR of a
+# linking firmware must hold no i128 anywhere except in the helpers whose *signature* is 128-bit
+# (gate_width_u128: width::bits_of(u128) and friends, host/compile-time analysis), the fixed
+# crate's float conversion behind Rect::from_f64/from_f32 (host conveniences), and the firmware's
+# own main, which passes gate_width_u128 its u128 argument. (On 32-bit ARM a 128-bit division is
+# inlined, so symbol names cannot show it: the IR is the proof.)
+ir_check() {
+  local features=$1 name=$2 ll
+  rm -f "$TARGET_DIR/$TARGET/release/deps/"*.ll
+  if ! CARGO_TARGET_DIR=$TARGET_DIR cargo rustc --release --locked --target "$TARGET" --bin "$BIN" --no-default-features ${features:+--features "$features"} -- --emit=llvm-ir >"$OUT/$name/ir.log" 2>&1; then
+    echo "!!! IR CHECK: the --emit=llvm-ir build failed (log: $OUT/$name/ir.log)"
+    return 1
+  fi
+  ll=$(ls -t "$TARGET_DIR/$TARGET/release/deps/"*.ll 2>/dev/null | head -n 1)
+  [ -n "$ll" ] || { echo "!!! IR CHECK: no .ll file produced"; return 1; }
+  awk '/^define/{fn=$0; seen=0} /^}/{fn=""} fn != "" && !/^define/ && /^[^;!#]/ && !/#dbg/ && /[ (<{\[]i128[ ,)>}\]*]/ {if(!seen){print fn; seen=1}}' "$ll" \
+    | grep -oE '@[^(]+' | sed 's/^@//' >"$OUT/$name/i128-functions.txt"
+  local bad
+  bad=$(grep -vE 'gate_width_u128|from_f(64|32)|__cortex_m_rt_main|^main$' "$OUT/$name/i128-functions.txt" || true)
+  local allowed
+  allowed=$(grep -cE 'gate_width_u128|from_f(64|32)|__cortex_m_rt_main|^main$' "$OUT/$name/i128-functions.txt" || true)
+  if [ -n "$bad" ]; then
+    echo "!!! IR CHECK FAILED for '$name': 128-bit integer operations in the optimized IR of:"
+    echo "$bad" | sed 's/^/!!!   /'
+    return 1
+  fi
+  echo "IR check: no i128 on any u16/u32 path ($allowed allowed function(s) with a 128-bit signature or float conversion; list: $OUT/$name/i128-functions.txt)"
+}
+
 declare -A STATUS
 FAILED=()
 for set in "${SETS[@]}"; do
@@ -144,6 +174,12 @@ for set in "${SETS[@]}"; do
     STATUS[$name]="links: no panic path"
     echo "LINKS: no panic path remains. Flash (release, opt-level s, fat LTO):"
     sizes "$dir/gate.elf"
+    if ! ir_check "$features" "$name"; then
+      STATUS[$name]="FAILS: i128 in the IR"
+      FAILED+=("$name")
+    else
+      STATUS[$name]="links: no panic path; no i128 on u16/u32 paths"
+    fi
     if [ "${LINK_GATE_DIAGNOSE:-}" = always ]; then diagnose "$features" "$name"; fi
   elif grep -q "undefined symbol: $UNDEF" "$dir/build.log"; then
     STATUS[$name]="FAILS: a panic path remains"

@@ -216,9 +216,9 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
     }
 
     /// The largest box area (in texel cells) whose sum is always exact: `floor((2^k - 1) / m)`.
-    pub fn max_exact_area(&self) -> u128 {
-        // k <= 64 and m = 2^b - 1 >= 1: computed in u64, widened for the signature.
-        u128::from(mask(self.k).checked_div(mask(self.texel_bits)).unwrap_or(0))
+    pub fn max_exact_area(&self) -> u64 {
+        // k <= 64 and m = 2^b - 1 >= 1.
+        mask(self.k).checked_div(mask(self.texel_bits)).unwrap_or(0)
     }
 
     /// The storage words.
