@@ -374,7 +374,7 @@ fn main() {
     // 5. Tiled (8 x 8 tiles) vs flat, per table value read.
     let spec = TiledSpec::tiles(8, 8).unwrap();
     let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, N, N, 8).unwrap()];
-    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, N)];
+    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, N).unwrap()];
     let tiled = Tiled::<u32>::build(&texture, spec, &mut words, &mut scratch).unwrap();
     let reads = |l: &dyn Fn(&Rect<I24F8>, &mut Tally)| {
         let mut k = Tally::new();
@@ -422,7 +422,7 @@ fn main() {
 
     // 6. Modular (k for boxes up to 65 x 65 cells) vs flat.
     let k = modulus_bits_for(8, 65 * 65);
-    let mut mwords = vec![0u32; Modular::<u32>::words_needed(N, N, k)];
+    let mut mwords = vec![0u32; Modular::<u32>::words_needed(N, N, k).unwrap()];
     let mut mrow = vec![0u32; N];
     let modular = Modular::<u32>::build(&texture, k, &mut mwords, &mut mrow).unwrap();
     let (tm, tf) = time_pair(

@@ -615,7 +615,7 @@ fn exhaustive_modular<T: RefTexel, E: Entry, const C: usize>(tex: &RefTexture, k
     assert_eq!(m.modulus(), Some(k));
     assert_eq!(m.bits_per_entry(), k as f64);
     assert_eq!(
-        m.max_exact_area(),
+        u128::from(m.max_exact_area()),
         ((1u128 << k) - 1) / ((1u128 << T::BITS) - 1)
     );
     let tw_a =
@@ -1725,13 +1725,13 @@ fn timing_stable_lookups() {
     let k = 16;
     let mw = modular_words::<u8, u32, 1>(&tex, k).unwrap();
     let modular = Modular::<u32>::from_words(&mw, n, n, 8, k).unwrap();
-    let mut rng = SplitMix64::new(77);
+    let mut rng = texsat_host_tests::rng(77);
     let end = (n as i64) << 4;
     let boxes: Vec<Rect<I28F4>> = (0..LOOKUPS)
         .map(|_| {
-            let (bw, bh) = (rng.range_i64(1, 15 << 4), rng.range_i64(1, 15 << 4));
-            let x0 = rng.range_i64(0, end - bw);
-            let y0 = rng.range_i64(0, end - bh);
+            let (bw, bh): (i64, i64) = (rng.random_range(1..15 << 4), rng.random_range(1..15 << 4));
+            let x0 = rng.random_range(0..end - bw);
+            let y0 = rng.random_range(0..end - bh);
             rect_from_raw::<I28F4>([x0, y0, x0 + bw, y0 + bh])
         })
         .collect();
@@ -1746,7 +1746,7 @@ fn timing_stable_lookups() {
             let start = Instant::now();
             for r in boxes {
                 let s = black_box(l).box_sum(black_box(r), Stable, Border, &mut NoCount);
-                acc = acc.wrapping_add(s.map(|s| s.sum()).unwrap_or(1));
+                acc = acc.wrapping_add(s.map(|s| s.sum().into()).unwrap_or(1));
             }
             best = best.min(start.elapsed().as_secs_f64() * 1e9 / boxes.len() as f64);
         }

@@ -322,9 +322,9 @@ fn i64_limit_coordinates_tiled_and_modular() {
     let texture = Texture::<u8>::new(&texels, 9, 7).unwrap();
     let spec = TiledSpec::tiles(4, 4).unwrap();
     let mut tw = vec![0u32; Tiled::<u32>::words_needed(spec, 9, 7, 8).unwrap()];
-    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, 9)];
+    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, 9).unwrap()];
     let tiled = Tiled::<u32>::build(&texture, spec, &mut tw, &mut scratch).unwrap();
-    let mut mw = vec![0u32; Modular::<u32>::words_needed(9, 7, 20)];
+    let mut mw = vec![0u32; Modular::<u32>::words_needed(9, 7, 20).unwrap()];
     let mut row = vec![0u32; 9];
     let modular = Modular::<u32>::build(&texture, 20, &mut mw, &mut row).unwrap();
     let mut answered = 0;
@@ -475,12 +475,12 @@ fn inverted_and_empty_boxes_every_layout() {
     inverted_and_empty(&Sat::build(&texture, &mut s64).unwrap(), "u64");
     let spec = TiledSpec::tiles(4, 4).unwrap();
     let mut tw = vec![0u32; Tiled::<u32>::words_needed(spec, 9, 7, 8).unwrap()];
-    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, 9)];
+    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, 9).unwrap()];
     inverted_and_empty(
         &Tiled::<u32>::build(&texture, spec, &mut tw, &mut scratch).unwrap(),
         "tiled",
     );
-    let mut mw = vec![0u32; Modular::<u32>::words_needed(9, 7, 16)];
+    let mut mw = vec![0u32; Modular::<u32>::words_needed(9, 7, 16).unwrap()];
     let mut row = vec![0u32; 9];
     inverted_and_empty(
         &Modular::<u32>::build(&texture, 16, &mut mw, &mut row).unwrap(),
@@ -571,7 +571,7 @@ fn crossing_boxes_exact_every_mode_form_word_and_layout() {
         let t64 = Sat::build(&texture, &mut s64).unwrap();
         let spec = TiledSpec::tiles(2, 3).unwrap();
         let mut tw = vec![0u32; Tiled::<u32>::words_needed(spec, w, h, 8).unwrap()];
-        let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, w)];
+        let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
         let tiled = Tiled::<u32>::build(&texture, spec, &mut tw, &mut scratch).unwrap();
         let fields = tiled.max_fields_per_corner() as u64;
         let mut n = 0;
@@ -710,7 +710,7 @@ fn modular_k_at_box_bound_answers_crossing_boxes_in_stable() {
             ] {
                 let k = modulus_bits_for(8, cx * cy);
                 assert_eq!(k, bits_of(255 * (cx * cy) as u128));
-                let mut mw = vec![0u32; Modular::<u32>::words_needed(40, 30, k)];
+                let mut mw = vec![0u32; Modular::<u32>::words_needed(40, 30, k).unwrap()];
                 let mut row = vec![0u32; 40];
                 let m = Modular::<u32>::build(&texture, k, &mut mw, &mut row).unwrap();
                 for mode in [RefMode::Repeat, RefMode::Clamp, RefMode::Mirror] {

@@ -405,7 +405,7 @@ fn modular<T: Texel, E: Entry, const C: usize, J: LayoutJob>(
     let detail = Detail::Modular {
         k,
         words: words_needed,
-        max_exact_area: m.max_exact_area(),
+        max_exact_area: u128::from(m.max_exact_area()),
     };
     Ok(job.run(&m, &detail))
 }
