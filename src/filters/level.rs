@@ -33,6 +33,7 @@
 /// squaring of a value that close to 2 is at least 2 again, so it stays at least
 /// `2^(1 - ε_k) > 2 (1 - 2^-13)` to the end. So a final Q1.31 mantissa below `2 (1 - 2^-13)`
 /// proves that no bit disagreed.
+#[inline]
 pub fn log2_fixed(raw: u64, f: u32, out_frac: u32) -> Option<i32> {
     if raw == 0 || out_frac > 16 || f > 63 {
         return None;
@@ -66,6 +67,8 @@ const FALLBACK_FROM: u64 = (1 << 32) - (1 << 19);
 /// The fraction bits of `log2` of the Q1.63 mantissa `m` in `[2^63, 2^64)`: square, truncate to
 /// 63 fraction bits, take the bit at `2^64`, halve (truncating); the square's upper 65 bits come
 /// from three `32 x 32 -> 64` products.
+#[inline(never)]
+#[cold]
 fn frac_q63(mut m: u64, out_frac: u32) -> i32 {
     let mut frac = 0i32;
     for _ in 0..out_frac {

@@ -104,7 +104,7 @@ use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::filters::pyramid::{
     check_dims, count_reads, fill_box_level, footprint, lerp, level_count, level_len,
-    level_position, split_level, split_position, Footprint,
+    level_position, split_level, split_position, tap_index, Footprint,
 };
 use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, Rect};
@@ -288,7 +288,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     /// the mode gives no texel).
     #[inline(always)]
     fn tap(&self, kind: EdgeKind, level: LevelRef<'a, T>, i: i64, j: i64) -> [u64; C] {
-        let px = match (kind.texel_index(i, level.w), kind.texel_index(j, level.h)) {
+        let px = match (tap_index(kind, i, level.w), tap_index(kind, j, level.h)) {
             (Some(x), Some(y)) => self.texel_in(level, x, y),
             _ => None,
         };

@@ -37,6 +37,7 @@
 //! arithmetic: exact whenever the result is below `2^64` (each filter states its bound).
 
 use crate::cost::Counter;
+use crate::edge::EdgeKind;
 use crate::error::Error;
 use crate::filters::level::log2_fixed;
 use crate::rect::{Coord, Rect};
@@ -277,6 +278,18 @@ pub(crate) fn split_position(c: Centre, s: u32, weight_bits: u32) -> Result<(i64
     Ok((i0, a))
 }
 
+/// The texel index the mode `kind` shows at `i` on an axis of `n` texels
+/// ([`EdgeKind::texel_index`]), with the in-range case (the common one) decided here by one
+/// comparison: every mode shows texel `i` for `0 <= i < n`.
+#[inline(always)]
+pub(crate) fn tap_index(kind: EdgeKind, i: i64, n: usize) -> Option<usize> {
+    if (i as u64) < n as u64 {
+        Some(i as usize)
+    } else {
+        kind.texel_index(i, n)
+    }
+}
+
 /// Crow's lerp `b * 2^bits + (c - b) * a` per channel (`a` a weight with `bits` fraction bits,
 /// `a <= 2^bits`): 1 multiply and 2 additive operations per channel; the scale by `2^bits` is a
 /// shift (wiring). In wrapping `u64` arithmetic: the result `b (2^bits - a) + c a` is exact
@@ -418,7 +431,7 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
     #[inline(always)]
     fn fetch<M: EdgeMode, K: Counter>(&self, mode: M, i: i64, j: i64, k: &mut K) -> [u64; C] {
         let kind = mode.kind();
-        let t = match (kind.texel_index(i, self.w), kind.texel_index(j, self.h)) {
+        let t = match (tap_index(kind, i, self.w), tap_index(kind, j, self.h)) {
             (Some(x), Some(y)) => self.texel(x, y),
             _ => None,
         };
