@@ -642,23 +642,23 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     ) -> Result<[i128; C], Error> {
         let w = [1i128, -2, 1];
         let mut n = [0i128; C];
-        for q in 0..3 {
+        for (ayq, &wq) in ay.iter().zip(&w) {
             let mut row = [0i128; C];
-            for p in 0..3 {
+            for (axp, &wp) in ax.iter().zip(&w) {
                 let v = eval1::<C, K>(
-                    &ay[q],
+                    ayq,
                     s,
                     &mut |iyy, k| {
-                        eval1::<C, K>(&ax[p], s, &mut |ixx, k| Ok(self.read(ixx, iyy, k)), k)
+                        eval1::<C, K>(axp, s, &mut |ixx, k| Ok(self.read(ixx, iyy, k)), k)
                     },
                     k,
                 )?;
-                for c in 0..C {
-                    row[c] = ck(row[c].checked_add(ck(v[c].checked_mul(w[p]))?))?;
+                for (r, v) in row.iter_mut().zip(v) {
+                    *r = ck(r.checked_add(ck(v.checked_mul(wp))?))?;
                 }
             }
-            for c in 0..C {
-                n[c] = ck(n[c].checked_add(ck(row[c].checked_mul(w[q]))?))?;
+            for (n, r) in n.iter_mut().zip(row) {
+                *n = ck(n.checked_add(ck(r.checked_mul(wq))?))?;
             }
         }
         k.adds(8 * C as u32);
@@ -752,7 +752,7 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
         }
         // Rows.
         let rlen = (w + 1) * C;
-        for (y, out) in rest.chunks_exact_mut(rlen).take(h).enumerate() {
+        for (y, out) in rest.chunks_exact_mut(rlen.max(1)).take(h).enumerate() {
             let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
             let mut v = [E::ZERO; C];
             let mut acc = [E::ZERO; C];
