@@ -87,7 +87,7 @@
 //!
 //! # Boundary modes
 //!
-//! A tap outside a level uses [`EdgeMode::texel_index`]`(i, n_l)` with that level's size `n_l`;
+//! A tap outside a level uses [`EdgeKind::texel_index`](crate::EdgeKind::texel_index)`(i, n_l)` with that level's size `n_l`;
 //! under [`crate::Border`] it reads zero. For [`crate::Repeat`] and [`crate::MirroredRepeat`]
 //! each level wraps (reflects) at its own size: level `l` repeats with period `n_l 2^l` base
 //! texels, which is `n` only when `2^l` divides `n`. For other (odd, non-power-of-two) sizes the

@@ -3,7 +3,7 @@
 //!
 //! The footprint `[x0, x1) x [y0, y1)` is reduced to its centre
 //! `((x0 + x1) / 2, (y0 + y1) / 2)`; the sample is the texel `(floor(cx), floor(cy))` of the
-//! extended texture (the boundary mode's [`EdgeMode::texel_index`]), read straight from the
+//! extended texture (the boundary mode's [`EdgeKind::texel_index`](crate::EdgeKind::texel_index)), read straight from the
 //! [`Texture`] — no table. The survey: "the pixel nearest the desired sample point is used".
 //!
 //! **Ties.** Texel `i` covers `[i, i + 1)`, so a centre exactly on the boundary between texels
@@ -32,7 +32,7 @@ use crate::width::MAX_FRAC_BITS;
 ///
 /// The centre is `((x0 + x1) / 2, (y0 + y1) / 2)`; the texel is `(floor(cx), floor(cy))`
 /// (a centre on a texel boundary takes the texel to the right / below), mapped through
-/// [`EdgeMode::texel_index`]; outside the texture under [`crate::Border`] the value is 0.
+/// [`EdgeKind::texel_index`](crate::EdgeKind::texel_index); outside the texture under [`crate::Border`] the value is 0.
 /// The result is exact: `values[c] = texel[c] << OUT_FRAC_BITS`.
 ///
 /// A zero-area footprint (a point) is accepted. Errors: [`Error::FracBitsUnsupported`] for

@@ -179,6 +179,7 @@ impl Centre {
 
     /// `floor(c / 2^s) = floor((x0 + x1) / 2^(s + 1))`: the index of the texel of a level that
     /// shrinks by `2^(s - F)` holding the centre (`s >= 0`).
+    #[cfg(any(feature = "filter-mip", test))]
     #[inline(always)]
     pub(crate) fn index(self, s: u32) -> i64 {
         self.mid >> s.min(63)

@@ -33,7 +33,7 @@
 //! A bilinear probe at centre `(cx, cy)` in level `(lx, ly)` interpolates the four level texels
 //! around `(cx / 2^lx - 1/2, cy / 2^ly - 1/2)` (level texel `i` covers base
 //! `[i 2^lx, (i+1) 2^lx)`, so its centre is `(i + 1/2) 2^lx`). Indices outside a level are
-//! resolved by the boundary mode on *that level's* grid (`M::texel_index(i, level_width)`):
+//! resolved by the boundary mode on *that level's* grid (`mode.kind().texel_index(i, level_width)`):
 //! for non-power-of-two textures the coarse levels of `Repeat`/`MirroredRepeat` repeat with the
 //! level's own period (as GPUs do); `Border` reads zero outside.
 //!

@@ -555,9 +555,9 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
                 if let (Some(col), Some(row)) = (cols[p], rows[q]) {
                     k.reads(1, T::BITS * cu);
                     let texels = texture.row(row).ok_or(Error::EmptyTexture)?;
-                    for c in 0..C {
+                    for (c, inner) in inner.iter_mut().enumerate() {
                         let t = texels.get(col * C + c).map_or(0, |t| t.to_u16() as i128);
-                        inner[c] = ck(inner[c].checked_add(ck((t * pb[q]).checked_mul(w[q]))?))?;
+                        *inner = ck(inner.checked_add(ck((t * pb[q]).checked_mul(w[q]))?))?;
                     }
                 }
                 k.muls(cu);
