@@ -399,9 +399,10 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
 mod tests {
     extern crate std;
     use super::*;
+    use crate::cost::NoCount;
     use crate::cost::Tally;
     use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
-    use fixed::types::{I24F8, I40F24};
+    use fixed::types::{I24F8, I40F24, I56F8, I64F0};
     use std::vec;
     use std::vec::Vec;
 
@@ -598,6 +599,148 @@ mod tests {
                         } else {
                             assert!(k.reads <= cost.0);
                         }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The earlier formulation: doubled centre and positions in `i128`, lerps in `i64`.
+    fn sample_i128(
+        map: &DipMap<'_, u16, 1>,
+        r: [i64; 4],
+        f: u32,
+        filter: DipFilter,
+        kind: crate::EdgeKind,
+    ) -> u64 {
+        let (px, py) = (r[0] as i128 + r[2] as i128, r[1] as i128 + r[3] as i128);
+        let split = |side: i64, top: u32| {
+            let l = log2_fixed(side as u64, f, LEVEL_FRAC_BITS)
+                .unwrap_or(0)
+                .clamp(0, (top as i32) << LEVEL_FRAC_BITS) as u32;
+            let lo = l >> LEVEL_FRAC_BITS;
+            (
+                lo,
+                (lo + 1).min(top),
+                (l & ((1 << LEVEL_FRAC_BITS) - 1)) as i64,
+            )
+        };
+        let (lox, hix, fx) = split(r[2] - r[0], map.levels(DipPyramid::Column) as u32 - 1);
+        let (loy, hiy, fy) = split(r[3] - r[1], map.levels(DipPyramid::Row) as u32 - 1);
+        let pos = |p: i128, s: u32| {
+            let t = p - (1i128 << (s - 1));
+            let frac = t & ((1i128 << s) - 1);
+            let a = if s >= WEIGHT_BITS {
+                frac >> (s - WEIGHT_BITS)
+            } else {
+                frac << (WEIGHT_BITS - s)
+            };
+            (t >> s, a as i64)
+        };
+        let lerp = |b: i64, c: i64, a: i64, bits: u32| (b << bits) + (c - b) * a;
+        let probe = |p: DipPyramid, l: u32| -> i64 {
+            let (lw, lh) = map.level_size(p, l as usize).unwrap();
+            let (sx, sy) = if p == DipPyramid::Row { (0, l) } else { (l, 0) };
+            let (i0, ax) = pos(px, f + 1 + sx);
+            let (j0, ay) = pos(py, f + 1 + sy);
+            let t = |i: i128, j: i128| match (
+                kind.texel_index(i as i64, lw),
+                kind.texel_index(j as i64, lh),
+            ) {
+                (Some(x), Some(y)) => map.level_texel(p, l as usize, x, y).unwrap()[0] as i64,
+                _ => 0,
+            };
+            let r0 = lerp(t(i0, j0), t(i0 + 1, j0), ax, WEIGHT_BITS);
+            let r1 = lerp(t(i0, j0 + 1), t(i0 + 1, j0 + 1), ax, WEIGHT_BITS);
+            lerp(r0, r1, ay, WEIGHT_BITS)
+        };
+        let t = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
+        let (a, b, shift) = match filter {
+            DipFilter::Bilinear => (
+                probe(DipPyramid::Column, lox),
+                probe(DipPyramid::Row, loy),
+                t + 1,
+            ),
+            DipFilter::Trilinear => (
+                lerp(
+                    probe(DipPyramid::Column, lox) >> t,
+                    probe(DipPyramid::Column, hix) >> t,
+                    fx,
+                    LEVEL_FRAC_BITS,
+                ),
+                lerp(
+                    probe(DipPyramid::Row, loy) >> t,
+                    probe(DipPyramid::Row, hiy) >> t,
+                    fy,
+                    LEVEL_FRAC_BITS,
+                ),
+                LEVEL_FRAC_BITS + 1,
+            ),
+        };
+        ((a + b).max(0) >> shift) as u64
+    }
+
+    #[test]
+    fn bit_for_bit_with_the_i128_formulation() {
+        let mut seed = 37u64;
+        for (w, h) in [(5usize, 3usize), (1, 6), (9, 1), (13, 7)] {
+            let t = texels(w * h, 65535, (w * 3 + h) as u64);
+            let tex = Texture::<u16>::new(&t, w, h).unwrap();
+            let mut st = vec![0u16; DipMap::<u16, 1>::storage_needed(w, h)];
+            let map = DipMap::build(&tex, &mut st).unwrap();
+            for _ in 0..1500 {
+                let f = [0u32, 8, 24][(lcg(&mut seed) % 3) as usize];
+                let span = (w.max(h) as i64 * 3) << f;
+                let x0 = (lcg(&mut seed) as i64 % span) - span / 3;
+                let y0 = (lcg(&mut seed) as i64 % span) - span / 3;
+                let r = [
+                    x0,
+                    y0,
+                    x0 + (lcg(&mut seed) as i64 % span),
+                    y0 + (lcg(&mut seed) as i64 % span),
+                ];
+                for kind in crate::EdgeKind::ALL {
+                    for filter in [DipFilter::Bilinear, DipFilter::Trilinear] {
+                        let got = match f {
+                            0 => map.sample(
+                                &Rect::new(
+                                    I64F0::from_bits(r[0]),
+                                    I64F0::from_bits(r[1]),
+                                    I64F0::from_bits(r[2]),
+                                    I64F0::from_bits(r[3]),
+                                ),
+                                filter,
+                                kind,
+                                &mut NoCount,
+                            ),
+                            8 => map.sample(
+                                &Rect::new(
+                                    I56F8::from_bits(r[0]),
+                                    I56F8::from_bits(r[1]),
+                                    I56F8::from_bits(r[2]),
+                                    I56F8::from_bits(r[3]),
+                                ),
+                                filter,
+                                kind,
+                                &mut NoCount,
+                            ),
+                            _ => map.sample(
+                                &Rect::new(
+                                    I40F24::from_bits(r[0]),
+                                    I40F24::from_bits(r[1]),
+                                    I40F24::from_bits(r[2]),
+                                    I40F24::from_bits(r[3]),
+                                ),
+                                filter,
+                                kind,
+                                &mut NoCount,
+                            ),
+                        };
+                        assert_eq!(
+                            got.unwrap().values[0],
+                            sample_i128(&map, r, f, filter, kind),
+                            "{w}x{h} {r:?} F={f} {filter:?}"
+                        );
                     }
                 }
             }
