@@ -369,10 +369,14 @@ pub(crate) fn check_build(
     // product can overflow u64.
     let m = (1u64 << texel_bits.min(16)) - 1;
     let area = width as u64 * height as u64;
-    if (2 * m + 1).checked_mul(area).is_none() {
+    let a = 2 * m + 1;
+    if a.checked_mul(area).is_none() {
+        // The exact bits of a * area (< 2^79) from 32-bit halves of area: no 128-bit product.
+        let lo = a * (area & 0xFFFF_FFFF);
+        let hi = a * (area >> 32) + (lo >> 32);
         return Err(Error::TooWide {
             what: Quantity::Entry,
-            bits_needed: bits_of_u64(2 * m + 1) + bits_of_u64(area) - 1,
+            bits_needed: 32 + bits_of_u64(hi),
             bits_available: 64,
         });
     }
@@ -622,6 +626,36 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn build_checks_name_the_exact_bits() {
+        // (2m + 1) w h against 2^64, bits as the u128 product has them.
+        for (bits, w, h) in [
+            (16u32, MAX_DIMENSION, MAX_DIMENSION),
+            (16, 1 << 24, 1 << 23),
+            (8, MAX_DIMENSION, 1 << 20),
+            (1, MAX_DIMENSION, MAX_DIMENSION),
+        ] {
+            let worst = ((2u128 << bits) - 1) * w as u128 * h as u128;
+            let got = check_build(bits, w, h, 0, 0);
+            if worst >> 64 == 0 {
+                assert_eq!(got, Ok(()));
+            } else {
+                assert_eq!(
+                    got,
+                    Err(Error::TooWide {
+                        what: Quantity::Entry,
+                        bits_needed: 128 - worst.leading_zeros(),
+                        bits_available: 64
+                    })
+                );
+            }
+        }
+        assert_eq!(
+            check_build(8, 3, 3, 10, 9),
+            Err(Error::StorageTooSmall { needed: 10, got: 9 })
+        );
     }
 
     #[test]
