@@ -72,7 +72,7 @@ use crate::table::Sat;
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
 use crate::wide::Wide;
-use crate::width::{bits_of, bits_of_u64, check_texel_bits, max_texel};
+use crate::width::{bits_of, bits_of_u64, check_texel_bits, max_texel, max_texel_u64};
 use core::num::NonZeroU64;
 
 /// Exact bits per entry of the squares table: `bits_of((2^b - 1)^2 * w * h)` (saturating at 128).
@@ -83,6 +83,22 @@ pub const fn squares_entry_bits(texel_bits: u32, width: usize, height: usize) ->
             .saturating_mul(width as u128)
             .saturating_mul(height as u128),
     )
+}
+
+/// [`squares_entry_bits`] for what a build sees (`texel_bits <= 16`, sides below `2^31`), in
+/// 64-bit words: `m^2 < 2^32` times `w h < 2^62` from 32-bit halves of `w h` (the product is
+/// below `2^94`; the high half `m^2 floor(w h / 2^32) + carry` stays below `2^64`).
+fn squares_bits_u64(texel_bits: u32, width: usize, height: usize) -> u32 {
+    let m = max_texel_u64(texel_bits.min(16));
+    let a = m * m;
+    let b = (width as u64).saturating_mul(height as u64);
+    let lo = a * (b & 0xFFFF_FFFF);
+    let hi = a * (b >> 32) + (lo >> 32);
+    if hi == 0 {
+        bits_of_u64(lo)
+    } else {
+        32 + bits_of_u64(hi)
+    }
 }
 
 /// A summed-area table of the squared texels (inclusive storage, like [`Sat`]).
@@ -137,7 +153,11 @@ impl<'a, E: Entry, const C: usize> SquaresTable<'a, E, C> {
         }
         let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
         let last = table.get(needed.saturating_sub(C)..).unwrap_or(&[]);
-        let total_bits = last.iter().map(|e| bits_of(e.to_u128())).max().unwrap_or(0);
+        let total_bits = last
+            .iter()
+            .map(|e| bits_of_u64(e.to_u64()))
+            .max()
+            .unwrap_or(0);
         Ok(SquaresTable {
             table,
             width: w,
@@ -151,7 +171,7 @@ impl<'a, E: Entry, const C: usize> SquaresTable<'a, E, C> {
     fn check<T: Texel>(texture: &Texture<'_, T, C>, got: usize) -> Result<(usize, usize), Error> {
         let (w, h) = (texture.width(), texture.height());
         check_texel_bits(T::BITS)?;
-        let bits = squares_entry_bits(T::BITS, w, h);
+        let bits = squares_bits_u64(T::BITS, w, h);
         if bits > E::BITS {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -631,6 +651,21 @@ mod tests {
         );
         vt.variance(&r, Paper, Border, &mut k).unwrap();
         assert_eq!((k.reads, k.muls, k.divs, k.adds), (32, 28, 1, 55));
+    }
+
+    #[test]
+    fn squares_bits_in_u64_match_the_u128_proof() {
+        for bits in [1u32, 7, 8, 12, 16] {
+            for w in (1usize..70).chain([255, 256, 257, 258, 4095, 65536, (1 << 31) - 1]) {
+                for h in [1usize, 2, 3, 255, 256, 257, 1 << 20, (1 << 31) - 1] {
+                    assert_eq!(
+                        squares_bits_u64(bits, w, h),
+                        squares_entry_bits(bits, w, h),
+                        "{bits} {w}x{h}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
