@@ -262,7 +262,9 @@ pub fn trilinear_ref(
 }
 
 /// The documented bound of texsat's trilinear against [`trilinear_ref`] on the same stored
-/// pyramid, in texel units: `m 2^-31 + 2^-17`, `m = 2^bits - 1`.
+/// pyramid, in texel units: `m 2^(1-W) + 2^-17`, `m = 2^bits - 1`, with `W = (64 - 8 - bits) / 2`
+/// weight bits (24 for 8-bit texels, 20 for 16-bit: the most that keeps the trilinear in `u64`).
 pub fn trilinear_bound(texel_bits: u32) -> f64 {
-    ((1u64 << texel_bits) - 1) as f64 * 2f64.powi(-31) + 2f64.powi(-17)
+    let w = (64 - 8 - texel_bits as i32) / 2;
+    ((1u64 << texel_bits) - 1) as f64 * 2f64.powi(1 - w) + 2f64.powi(-17)
 }

@@ -58,7 +58,9 @@
 //!
 //! # Arithmetic and error bound
 //!
-//! Integer, `i64`, as in the ripmap (`filters::rip`): probe weights truncated to [`WEIGHT_BITS`]
+//! Integer, 64 bits (`u64`), as in the ripmap (`filters::rip`), with the same footprint
+//! arithmetic and the same single refusal ([`Error::CoordinateOutOfRange`] for a centre at the
+//! very bottom of `i64` at `F = 0`): probe weights truncated to [`WEIGHT_BITS`]
 //! bits, each probe exact for its truncated weights at `2 * WEIGHT_BITS` fraction bits.
 //! `Bilinear`: `(a + b) >> 17` (floor) to [`OUT_FRAC_BITS`] bits. `Trilinear`: each probe
 //! truncated to 16 fraction bits, the level lerp exact at `16 + LEVEL_FRAC_BITS` bits, then
@@ -166,17 +168,15 @@ pub enum DipFilter {
 }
 
 /// A dipmap over caller storage: the row and the column pyramid (module docs).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct DipMap<'a, T: Texel, const C: usize> {
     data: &'a [T],
     width: usize,
     height: usize,
-    levels_x: usize,
-    levels_y: usize,
-    /// `wcum[l] = sum_{k < l} ceil(w / 2^k)` (column pyramid widths).
-    wcum: [usize; MAX_LEVELS + 1],
-    /// `hcum[l] = sum_{k < l} ceil(h / 2^k)` (row pyramid heights).
-    hcum: [usize; MAX_LEVELS + 1],
+    /// `wcum[l] = sum_{k < l} ceil(w / 2^k)` for `l = 0..=levels_x` (column pyramid widths).
+    wcum: heapless::Vec<usize, { MAX_LEVELS + 1 }>,
+    /// `hcum[l] = sum_{k < l} ceil(h / 2^k)` for `l = 0..=levels_y` (row pyramid heights).
+    hcum: heapless::Vec<usize, { MAX_LEVELS + 1 }>,
 }
 
 impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
@@ -188,7 +188,7 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
             return 0;
         }
         let rows = width.saturating_mul(axis_total(height));
-        let cols = height.saturating_mul(axis_total(width) - width);
+        let cols = height.saturating_mul(axis_total(width).saturating_sub(width));
         rows.saturating_add(cols).saturating_mul(C)
     }
 
@@ -207,14 +207,14 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         check_build(T::BITS, w, h, needed, storage.len())?;
         let mut map = Self::layout(&[], w, h);
         let levels = [
-            (DipPyramid::Row, 0, map.levels_y),
-            (DipPyramid::Column, 1, map.levels_x),
+            (DipPyramid::Row, 0, map.levels(DipPyramid::Row)),
+            (DipPyramid::Column, 1, map.levels(DipPyramid::Column)),
         ];
         for (pyramid, first, count) in levels {
             for l in first..count {
                 let (start, len) = map.level_range(pyramid, l);
                 let out = storage
-                    .get_mut(start..start + len)
+                    .get_mut(start..start.saturating_add(len))
                     .ok_or(Error::StorageTooSmall { needed, got: start })?;
                 let (sx, sy) = match pyramid {
                     DipPyramid::Row => (0, l),
@@ -224,7 +224,7 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
             }
         }
         let data: &'a [T] = storage;
-        map.data = &data[..needed];
+        map.data = data.get(..needed).unwrap_or(&[]);
         Ok(map)
     }
 
@@ -234,20 +234,20 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         check_dims(width, height)?;
         let needed = Self::storage_needed(width, height);
         check_storage(needed, storage.len())?;
-        Ok(Self::layout(&storage[..needed], width, height))
+        Ok(Self::layout(
+            storage.get(..needed).unwrap_or(&[]),
+            width,
+            height,
+        ))
     }
 
     fn layout(data: &'a [T], width: usize, height: usize) -> Self {
-        let (levels_x, wcum) = prefix(width);
-        let (levels_y, hcum) = prefix(height);
         DipMap {
             data,
             width,
             height,
-            levels_x,
-            levels_y,
-            wcum,
-            hcum,
+            wcum: prefix(width),
+            hcum: prefix(height),
         }
     }
 
@@ -259,25 +259,39 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         }
     }
 
-    /// Start and length (elements) of level `l` of `pyramid`; `l` in range. Column level 0 is
-    /// row level 0 (the texture).
+    /// Start and length (elements) of level `l` of `pyramid`. Column level 0 is row level 0 (the
+    /// texture). Within the levels the sums fit (they are below `storage_needed`); saturating
+    /// arithmetic and the `usize::MAX` start of a level past the top only make it empty.
     fn level_range(&self, pyramid: DipPyramid, l: usize) -> (usize, usize) {
         let (lw, lh) = self.size(pyramid, l);
         let start = match pyramid {
             DipPyramid::Column if l > 0 => {
-                let rows = self.width * self.hcum[self.levels_y];
-                C * (rows + self.height * (self.wcum[l] - self.width))
+                let (Some(&rows), Some(&wc)) = (self.hcum.last(), self.wcum.get(l)) else {
+                    return (usize::MAX, 0);
+                };
+                self.width
+                    .saturating_mul(rows)
+                    .saturating_add(self.height.saturating_mul(wc.saturating_sub(self.width)))
+                    .saturating_mul(C)
             }
-            _ => C * self.width * self.hcum[l],
+            _ => {
+                let Some(&hc) = self.hcum.get(l) else {
+                    return (usize::MAX, 0);
+                };
+                self.width.saturating_mul(hc).saturating_mul(C)
+            }
         };
-        (start, C * lw * lh)
+        (start, lw.saturating_mul(lh).saturating_mul(C))
     }
 
     fn view(&self, pyramid: DipPyramid, l: usize) -> LevelView<'a, T, C> {
         let (start, len) = self.level_range(pyramid, l);
         let (w, h) = self.size(pyramid, l);
         LevelView {
-            data: self.data.get(start..start + len).unwrap_or(&[]),
+            data: self
+                .data
+                .get(start..start.saturating_add(len))
+                .unwrap_or(&[]),
             w,
             h,
         }
@@ -297,8 +311,8 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
     /// [`DipPyramid::Column`].
     pub fn levels(&self, pyramid: DipPyramid) -> usize {
         match pyramid {
-            DipPyramid::Row => self.levels_y,
-            DipPyramid::Column => self.levels_x,
+            DipPyramid::Row => self.hcum.len().saturating_sub(1),
+            DipPyramid::Column => self.wcum.len().saturating_sub(1),
         }
     }
 
@@ -343,10 +357,11 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
         let fp = footprint(rect)?;
-        let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, self.levels_x as u32 - 1);
-        let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, self.levels_y as u32 - 1);
+        let top_x = self.levels(DipPyramid::Column).saturating_sub(1) as u32;
+        let top_y = self.levels(DipPyramid::Row).saturating_sub(1) as u32;
+        let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, top_x);
+        let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, top_y);
         let column = |l: u32, k: &mut K| {
             self.view(DipPyramid::Column, l as usize)
                 .bilinear(mode, &fp, l, 0, WEIGHT_BITS, k)
@@ -357,22 +372,26 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         };
         let (a, b, shift) = match filter {
             DipFilter::Bilinear => (
-                column(lox, k),
-                row(loy, k),
+                column(lox, k)?,
+                row(loy, k)?,
                 2 * WEIGHT_BITS - OUT_FRAC_BITS + 1,
             ),
             DipFilter::Trilinear => {
                 let t = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
-                let (c0, c1) = (truncate(column(lox, k), t), truncate(column(hix, k), t));
+                let (c0, c1) = (truncate(column(lox, k)?, t), truncate(column(hix, k)?, t));
                 let a = lerp(c0, c1, fx, LEVEL_FRAC_BITS, k);
-                let (r0, r1) = (truncate(row(loy, k), t), truncate(row(hiy, k), t));
+                let (r0, r1) = (truncate(row(loy, k)?, t), truncate(row(hiy, k)?, t));
                 let b = lerp(r0, r1, fy, LEVEL_FRAC_BITS, k);
                 (a, b, LEVEL_FRAC_BITS + 1)
             }
         };
         // The average (a + b) / 2: one add and a shift.
         k.adds(C as u32);
-        Ok(floor_sample(core::array::from_fn(|c| a[c] + b[c]), shift))
+        // Both below 2^(16 + 32) (bilinear) or 2^(16 + 16 + 12) (trilinear): no wrap.
+        Ok(floor_sample(
+            core::array::from_fn(|c| a[c].wrapping_add(b[c])),
+            shift,
+        ))
     }
 }
 
@@ -380,9 +399,10 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
 mod tests {
     extern crate std;
     use super::*;
+    use crate::cost::NoCount;
     use crate::cost::Tally;
     use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
-    use fixed::types::{I24F8, I40F24};
+    use fixed::types::{I24F8, I40F24, I56F8, I64F0};
     use std::vec;
     use std::vec::Vec;
 
@@ -585,6 +605,148 @@ mod tests {
         }
     }
 
+    /// The earlier formulation: doubled centre and positions in `i128`, lerps in `i64`.
+    fn sample_i128(
+        map: &DipMap<'_, u16, 1>,
+        r: [i64; 4],
+        f: u32,
+        filter: DipFilter,
+        kind: crate::EdgeKind,
+    ) -> u64 {
+        let (px, py) = (r[0] as i128 + r[2] as i128, r[1] as i128 + r[3] as i128);
+        let split = |side: i64, top: u32| {
+            let l = log2_fixed(side as u64, f, LEVEL_FRAC_BITS)
+                .unwrap_or(0)
+                .clamp(0, (top as i32) << LEVEL_FRAC_BITS) as u32;
+            let lo = l >> LEVEL_FRAC_BITS;
+            (
+                lo,
+                (lo + 1).min(top),
+                (l & ((1 << LEVEL_FRAC_BITS) - 1)) as i64,
+            )
+        };
+        let (lox, hix, fx) = split(r[2] - r[0], map.levels(DipPyramid::Column) as u32 - 1);
+        let (loy, hiy, fy) = split(r[3] - r[1], map.levels(DipPyramid::Row) as u32 - 1);
+        let pos = |p: i128, s: u32| {
+            let t = p - (1i128 << (s - 1));
+            let frac = t & ((1i128 << s) - 1);
+            let a = if s >= WEIGHT_BITS {
+                frac >> (s - WEIGHT_BITS)
+            } else {
+                frac << (WEIGHT_BITS - s)
+            };
+            (t >> s, a as i64)
+        };
+        let lerp = |b: i64, c: i64, a: i64, bits: u32| (b << bits) + (c - b) * a;
+        let probe = |p: DipPyramid, l: u32| -> i64 {
+            let (lw, lh) = map.level_size(p, l as usize).unwrap();
+            let (sx, sy) = if p == DipPyramid::Row { (0, l) } else { (l, 0) };
+            let (i0, ax) = pos(px, f + 1 + sx);
+            let (j0, ay) = pos(py, f + 1 + sy);
+            let t = |i: i128, j: i128| match (
+                kind.texel_index(i as i64, lw),
+                kind.texel_index(j as i64, lh),
+            ) {
+                (Some(x), Some(y)) => map.level_texel(p, l as usize, x, y).unwrap()[0] as i64,
+                _ => 0,
+            };
+            let r0 = lerp(t(i0, j0), t(i0 + 1, j0), ax, WEIGHT_BITS);
+            let r1 = lerp(t(i0, j0 + 1), t(i0 + 1, j0 + 1), ax, WEIGHT_BITS);
+            lerp(r0, r1, ay, WEIGHT_BITS)
+        };
+        let t = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
+        let (a, b, shift) = match filter {
+            DipFilter::Bilinear => (
+                probe(DipPyramid::Column, lox),
+                probe(DipPyramid::Row, loy),
+                t + 1,
+            ),
+            DipFilter::Trilinear => (
+                lerp(
+                    probe(DipPyramid::Column, lox) >> t,
+                    probe(DipPyramid::Column, hix) >> t,
+                    fx,
+                    LEVEL_FRAC_BITS,
+                ),
+                lerp(
+                    probe(DipPyramid::Row, loy) >> t,
+                    probe(DipPyramid::Row, hiy) >> t,
+                    fy,
+                    LEVEL_FRAC_BITS,
+                ),
+                LEVEL_FRAC_BITS + 1,
+            ),
+        };
+        ((a + b).max(0) >> shift) as u64
+    }
+
+    #[test]
+    fn bit_for_bit_with_the_i128_formulation() {
+        let mut seed = 37u64;
+        for (w, h) in [(5usize, 3usize), (1, 6), (9, 1), (13, 7)] {
+            let t = texels(w * h, 65535, (w * 3 + h) as u64);
+            let tex = Texture::<u16>::new(&t, w, h).unwrap();
+            let mut st = vec![0u16; DipMap::<u16, 1>::storage_needed(w, h)];
+            let map = DipMap::build(&tex, &mut st).unwrap();
+            for _ in 0..1500 {
+                let f = [0u32, 8, 24][(lcg(&mut seed) % 3) as usize];
+                let span = (w.max(h) as i64 * 3) << f;
+                let x0 = (lcg(&mut seed) as i64 % span) - span / 3;
+                let y0 = (lcg(&mut seed) as i64 % span) - span / 3;
+                let r = [
+                    x0,
+                    y0,
+                    x0 + (lcg(&mut seed) as i64 % span),
+                    y0 + (lcg(&mut seed) as i64 % span),
+                ];
+                for kind in crate::EdgeKind::ALL {
+                    for filter in [DipFilter::Bilinear, DipFilter::Trilinear] {
+                        let got = match f {
+                            0 => map.sample(
+                                &Rect::new(
+                                    I64F0::from_bits(r[0]),
+                                    I64F0::from_bits(r[1]),
+                                    I64F0::from_bits(r[2]),
+                                    I64F0::from_bits(r[3]),
+                                ),
+                                filter,
+                                kind,
+                                &mut NoCount,
+                            ),
+                            8 => map.sample(
+                                &Rect::new(
+                                    I56F8::from_bits(r[0]),
+                                    I56F8::from_bits(r[1]),
+                                    I56F8::from_bits(r[2]),
+                                    I56F8::from_bits(r[3]),
+                                ),
+                                filter,
+                                kind,
+                                &mut NoCount,
+                            ),
+                            _ => map.sample(
+                                &Rect::new(
+                                    I40F24::from_bits(r[0]),
+                                    I40F24::from_bits(r[1]),
+                                    I40F24::from_bits(r[2]),
+                                    I40F24::from_bits(r[3]),
+                                ),
+                                filter,
+                                kind,
+                                &mut NoCount,
+                            ),
+                        };
+                        assert_eq!(
+                            got.unwrap().values[0],
+                            sample_i128(&map, r, f, filter, kind),
+                            "{w}x{h} {r:?} F={f} {filter:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn three_channels_count_arithmetic_per_channel() {
         let t: Vec<u8> = (0..6 * 5 * 3).map(|v| (v * 7 % 256) as u8).collect();
@@ -697,7 +859,12 @@ mod tests {
         type Z = fixed::types::I64F0;
         for r in [
             Rect::new(Z::MIN, Z::MIN, Z::MAX, Z::MAX),
-            Rect::new(Z::MAX, Z::MIN, Z::MAX, Z::MIN),
+            Rect::new(
+                Z::MAX,
+                Z::from_bits(i64::MIN + 1),
+                Z::MAX,
+                Z::from_bits(i64::MIN + 1),
+            ),
         ] {
             for f in [DipFilter::Bilinear, DipFilter::Trilinear] {
                 for v in [
@@ -709,6 +876,15 @@ mod tests {
                     assert!(v.unwrap().values[0] <= 9 << 16);
                 }
             }
+        }
+        // y0 = y1 = i64::MIN at F = 0: the row probe's upper tap is below i64::MIN (before the
+        // 64-bit positions it was folded from an i128 index; now a typed refusal).
+        let r = Rect::new(Z::MAX, Z::MIN, Z::MAX, Z::MIN);
+        for f in [DipFilter::Bilinear, DipFilter::Trilinear] {
+            assert_eq!(
+                map.sample(&r, f, Repeat, &mut Tally::new()),
+                Err(Error::CoordinateOutOfRange)
+            );
         }
         assert!(DipMap::<u8, 1>::from_storage(&st, 3, 2).is_ok());
         assert!(DipMap::<u8, 1>::from_storage(&st[..5], 3, 2).is_err());

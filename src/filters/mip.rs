@@ -58,24 +58,36 @@
 //! scale of `b` by a power of two is a shift (wiring) and not counted; nor is the final rounding
 //! to the output (as in [`crate::BoxSum::mean_rounded`]).
 //!
-//! The position weights are the fractions `a`, `b` truncated to [`WEIGHT_BITS`] = 32 bits
-//! (`alpha = floor(a 2^32)`; exact whenever `F + 1 + l <= 32`); the level weight is the exact
-//! 8-bit `frac(L)`. All products are then exact: row lerps `p 2^32 + (q - p) alpha` in `i64`
-//! (below `2^48`), the column lerp in `i128` (below `2^80`), the level lerp below `2^88`, and the
-//! result, in units of `2^-72`, is rounded to nearest (ties up) to `2^-16`.
+//! The position weights are the fractions `a`, `b` truncated to [`weight_bits`]`(B)` bits:
+//! 24 for `u8` texels, 20 for `u16` (`alpha = floor(a 2^W)`; exact whenever `F + 1 + l <= W`);
+//! the level weight is the exact 8-bit `frac(L)`. `W = (64 - 8 - B) / 2` is the most that keeps
+//! every intermediate of the trilinear below `2^64`: taps are below `2^B`, the row lerps below
+//! `2^(B + W)`, the column lerp below `2^(B + 2W)`, the level lerp below `2^(B + 2W + 8) <= 2^64`.
+//! Each lerp is a convex combination of non-negative values, computed in wrapping `u64`
+//! arithmetic (exact, as the result is below `2^64`; the pyramid module's `lerp`), and the result,
+//! in units of `2^-(2W + 8)`, is rounded to nearest (ties up) to `2^-16`; the rounding add stays
+//! below `2^64` too. No integer wider than 64 bits, no division: one `32 x 32`-bit `log2` loop
+//! for the level, shifts and masks for the positions, 7 multiplies.
+//!
+//! Whenever the weights are exact (`F + 1 + l <= W`: every level of a texture up to `2^15`
+//! texels at `F = 8` for `u8`, `2^11` for `u16`), the result is bit for bit that of the crate's
+//! earlier formulation with 32-bit weights in `i128` (unit test
+//! `bit_for_bit_with_the_i128_formulation`): both are the exact value, rounded once.
 //!
 //! **Bound.** Against the same filter in exact (or `f64`) arithmetic on the same stored pyramid
 //! with the same `L`: a bilinear interpolation is linear in each weight with slope at most
-//! `m = 2^B - 1` (texel values lie in `[0, m]`), so truncating `a` and `b` by less than `2^-32`
-//! each moves it by less than `m 2^-31`; the level lerp is a convex combination and does not
+//! `m = 2^B - 1` (texel values lie in `[0, m]`), so truncating `a` and `b` by less than `2^-W`
+//! each moves it by less than `m 2^(1-W)`; the level lerp is a convex combination and does not
 //! enlarge that; the output rounding adds at most `2^-17`. Hence
-//! `|trilinear / 2^16 - exact| < m 2^-31 + 2^-17` texel units ([`trilinear_error_bound`]), i.e.
-//! below `0.508` output units for `u8` and `2.5` for `u16`. Against the ideal (unrounded) box
-//! pyramid add the storage rounding, 1/2 LSB (convex combinations of texels each within 1/2).
+//! `|trilinear / 2^16 - exact| < m 2^(1-W) + 2^-17` texel units ([`trilinear_error_bound`]):
+//! below `2.5` output units for `u8` (`255 * 2^-23 + 2^-17`) and `8192.5` for `u16`
+//! (`65535 * 2^-19 + 2^-17` texel units, an eighth of a texel step; `2e-6` of the range). Against
+//! the ideal (unrounded) box pyramid add the storage rounding, 1/2 LSB (convex combinations of
+//! texels each within 1/2).
 //!
 //! # Boundary modes
 //!
-//! A tap outside a level uses [`EdgeMode::texel_index`]`(i, n_l)` with that level's size `n_l`;
+//! A tap outside a level uses [`EdgeKind::texel_index`](crate::EdgeKind::texel_index)`(i, n_l)` with that level's size `n_l`;
 //! under [`crate::Border`] it reads zero. For [`crate::Repeat`] and [`crate::MirroredRepeat`]
 //! each level wraps (reflects) at its own size: level `l` repeats with period `n_l 2^l` base
 //! texels, which is `n` only when `2^l` divides `n`. For other (odd, non-power-of-two) sizes the
@@ -88,11 +100,11 @@
 //! evaluates both bilinears, reading the top level twice with `t = 0`: always 8 reads.
 
 use crate::cost::Counter;
-use crate::edge::EdgeMode;
+use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::filters::pyramid::{
     check_dims, count_reads, fill_box_level, footprint, lerp, level_count, level_len,
-    level_position, split_level, split_position, Footprint,
+    level_position, split_level, split_position, tap_index, Footprint,
 };
 use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, Rect};
@@ -100,7 +112,7 @@ use crate::texel::Texel;
 use crate::texture::Texture;
 #[cfg(test)]
 use crate::texture::MAX_DIMENSION;
-use crate::width::bits_of;
+use crate::width::bits_of_u64;
 
 /// Most levels a pyramid can have: sizes up to `2^31 - 1` halve to 1 in 31 steps, plus level 0.
 pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
@@ -108,39 +120,62 @@ pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
 /// Fractional bits of the level of detail `L` ([`MipPyramid::lod`]).
 pub const LOD_FRAC_BITS: u32 = 8;
 
-/// Fractional bits of the bilinear position weights of [`MipPyramid::trilinear`] (truncated).
-pub const WEIGHT_BITS: u32 = 32;
+/// Fractional bits `W` of the bilinear position weights of [`MipPyramid::trilinear`]
+/// (truncated) for texels of `texel_bits` bits: `(64 - LOD_FRAC_BITS - B) / 2`, the most that
+/// keeps the whole trilinear below `2^64` (module docs): 24 for `u8`, 20 for `u16`.
+pub const fn weight_bits(texel_bits: u32) -> u32 {
+    let b = if texel_bits < 1 {
+        1
+    } else if texel_bits > 16 {
+        16
+    } else {
+        texel_bits
+    };
+    (64 - LOD_FRAC_BITS - b) / 2
+}
 
 /// The error bound of [`MipPyramid::trilinear`] in texel units against the same filter computed
-/// exactly on the same stored pyramid with the same level of detail: `m 2^-31 + 2^-17` with
-/// `m = 2^texel_bits - 1` (module docs, "Arithmetic of the trilinear"). The bound is strict for
-/// the weight part; the rounding part `2^-17` is reached.
+/// exactly on the same stored pyramid with the same level of detail: `m 2^(1-W) + 2^-17` with
+/// `m = 2^texel_bits - 1` and `W = ` [`weight_bits`]`(texel_bits)` (module docs, "Arithmetic of
+/// the trilinear"). The bound is strict for the weight part; the rounding part `2^-17` is
+/// reached.
 pub fn trilinear_error_bound(texel_bits: u32) -> f64 {
     let m = ((1u64 << texel_bits.min(16)) - 1) as f64;
-    m / (1u64 << 31) as f64 + 1.0 / (1u64 << 17) as f64
+    let w = weight_bits(texel_bits);
+    m / (1u64 << (w - 1)) as f64 + 1.0 / (1u64 << 17) as f64
 }
 
 /// A box-filtered 2x2 pyramid over a borrowed texture: level 0 is the texture, the coarse levels
 /// live in caller storage (module docs).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct MipPyramid<'a, T: Texel, const C: usize = 1> {
     base: Texture<'a, T, C>,
     coarse: &'a [T],
-    sizes: [(usize, usize); MAX_LEVELS],
-    offsets: [usize; MAX_LEVELS],
-    count: usize,
+    /// `(width, height)` of each level, level 0 first; at least one level.
+    sizes: heapless::Vec<(usize, usize), MAX_LEVELS>,
+    /// Start of each level in `coarse` (elements; level 0, the texture, has 0 and is not there).
+    offsets: heapless::Vec<usize, MAX_LEVELS>,
 }
 
-/// Level sizes `(ceil(w / 2^l), ceil(h / 2^l))` down to `1 x 1`, and their number.
-fn level_sizes(w: usize, h: usize) -> Result<([(usize, usize); MAX_LEVELS], usize), Error> {
+/// Level sizes `(ceil(w / 2^l), ceil(h / 2^l))` down to `1 x 1`.
+fn level_sizes(w: usize, h: usize) -> Result<heapless::Vec<(usize, usize), MAX_LEVELS>, Error> {
     check_dims(w, h)?;
-    // w, h <= 2^31 - 1: at most 31 halvings reach 1, so count <= MAX_LEVELS.
-    let count = level_count(w.max(h)).min(MAX_LEVELS);
-    let mut sizes = [(0, 0); MAX_LEVELS];
-    for (l, s) in sizes[..count].iter_mut().enumerate() {
-        *s = (level_len(w, l), level_len(h, l));
+    // w, h <= 2^31 - 1: at most 31 halvings reach 1, so count <= MAX_LEVELS and every push
+    // fits.
+    let mut sizes = heapless::Vec::new();
+    for l in 0..level_count(w.max(h)).min(MAX_LEVELS) {
+        let _ = sizes.push((level_len(w, l), level_len(h, l)));
     }
-    Ok((sizes, count))
+    Ok(sizes)
+}
+
+/// One level of a pyramid as the sampling loop reads it: its texels (`None` for level 0, the
+/// texture) and size.
+#[derive(Clone, Copy)]
+struct LevelRef<'a, T> {
+    coarse: Option<&'a [T]>,
+    w: usize,
+    h: usize,
 }
 
 impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
@@ -148,9 +183,9 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     /// `sum_l ceil(w / 2^l) ceil(h / 2^l)`. For `2^k x 2^k` this is `(4^(k+1) - 1) / 3`; the
     /// ratio to `w h` is the memory cost of the survey's table (4/3 for square textures).
     pub fn pyramid_texels(width: usize, height: usize) -> Result<usize, Error> {
-        let (sizes, count) = level_sizes(width, height)?;
+        let sizes = level_sizes(width, height)?;
         let mut total = 0usize;
-        for &(w, h) in &sizes[..count] {
+        for &(w, h) in &sizes {
             total = w.checked_mul(h).and_then(|a| total.checked_add(a)).ok_or(
                 Error::TextureTooLarge {
                     dimension: width.max(height),
@@ -168,17 +203,20 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         };
         let total = Self::pyramid_texels(width, height)?;
         // pyramid_texels succeeded, so w h <= total does not overflow.
-        (total - width * height).checked_mul(C).ok_or(too_large)
+        total
+            .saturating_sub(width.saturating_mul(height))
+            .checked_mul(C)
+            .ok_or(too_large)
     }
 
     /// The level sizes `(width, height)`, level 0 (the texture) first, down to `(1, 1)`.
     pub fn levels(&self) -> &[(usize, usize)] {
-        &self.sizes[..self.count]
+        &self.sizes
     }
 
     /// The number of levels (`1 + ceil(log2(max(w, h)))`).
     pub fn level_count(&self) -> usize {
-        self.count
+        self.sizes.len()
     }
 
     /// The storage elements in use (a prefix of the slice given to [`MipPyramid::build`]).
@@ -186,20 +224,40 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         self.coarse.len()
     }
 
+    /// Level `l` for the sampling loop (an empty `1 x 1`-less level past the top: every texel
+    /// read of it is `None`).
+    #[inline(always)]
+    fn level(&self, l: usize) -> LevelRef<'a, T> {
+        let (w, h) = self.sizes.get(l).copied().unwrap_or((0, 0));
+        let coarse = if l == 0 {
+            None
+        } else {
+            let at = self.offsets.get(l).copied().unwrap_or(usize::MAX);
+            Some(self.coarse.get(at..).unwrap_or(&[]))
+        };
+        LevelRef { coarse, w, h }
+    }
+
+    /// Texel `(x, y)` (all channels) of `level`, `x < w`, `y < h`, or `None` if the storage does
+    /// not hold it.
+    #[inline(always)]
+    fn texel_in(&self, level: LevelRef<'a, T>, x: usize, y: usize) -> Option<&'a [T]> {
+        let (at, data) = match level.coarse {
+            // x < w, y < h and w h C fits (storage_needed): no overflow; wrapping all the same.
+            Some(data) => (y.wrapping_mul(level.w).wrapping_add(x), data),
+            None => (x, self.base.row(y)?),
+        };
+        let at = at.wrapping_mul(C);
+        data.get(at..at.wrapping_add(C))
+    }
+
     /// Texel `(x, y)` of level `l` (all channels), or `None` outside the level or past the top.
     pub fn level_texel(&self, l: usize, x: usize, y: usize) -> Option<[T; C]> {
-        let &(w, h) = self.sizes[..self.count].get(l)?;
-        if x >= w || y >= h {
+        let level = self.level(l);
+        if x >= level.w || y >= level.h {
             return None;
         }
-        let px = if l == 0 {
-            self.base.row(y)?.get(x * C..x * C + C)?
-        } else {
-            // x < w, y < h and w h C fits (storage_needed), so no overflow.
-            let at = self.offsets[l] + (y * w + x) * C;
-            self.coarse.get(at..at + C)?
-        };
-        Some(core::array::from_fn(|c| px[c]))
+        self.texel_in(level, x, y)?.try_into().ok()
     }
 
     /// The level of detail of `rect`: `log2(max(W, H))` with [`LOD_FRAC_BITS`] fraction bits from
@@ -212,38 +270,44 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         Ok(self.footprint(rect)?.1)
     }
 
-    /// The validated footprint (doubled centre, sides) and its clamped level of detail.
+    /// The validated footprint (centre, sides) and its clamped level of detail.
+    #[inline(always)]
     fn footprint<X: Coord>(&self, rect: &Rect<X>) -> Result<(Footprint, u32), Error> {
         let fp = footprint(rect)?;
         let lod = level_position(fp.w.max(fp.h), fp.f, LOD_FRAC_BITS, self.top());
         Ok((fp, lod))
     }
 
-    /// The top level's index.
+    /// The top level's index (at most 31).
+    #[inline(always)]
     fn top(&self) -> u32 {
-        (self.count - 1) as u32
+        self.sizes.len().saturating_sub(1) as u32
     }
 
-    /// Texel of level `l` at extended index `(i, j)` under `M`, as `i64` per channel (0 where
+    /// Texel of `level` at extended index `(i, j)` under the mode `kind`, per channel (0 where
     /// the mode gives no texel).
-    fn tap<M: EdgeMode>(&self, mode: M, l: usize, i: i64, j: i64) -> [i64; C] {
-        let (w, h) = self.sizes[l];
-        match (mode.kind().texel_index(i, w), mode.kind().texel_index(j, h)) {
-            (Some(x), Some(y)) => match self.level_texel(l, x, y) {
-                Some(px) => core::array::from_fn(|c| px[c].to_u16() as i64),
-                None => [0; C],
-            },
-            _ => [0; C],
+    #[inline(always)]
+    fn tap(&self, kind: EdgeKind, level: LevelRef<'a, T>, i: i64, j: i64) -> [u64; C] {
+        let px = match (tap_index(kind, i, level.w), tap_index(kind, j, level.h)) {
+            (Some(x), Some(y)) => self.texel_in(level, x, y),
+            _ => None,
+        };
+        let mut out = [0u64; C];
+        if let Some(px) = px {
+            for (o, t) in out.iter_mut().zip(px) {
+                *o = t.to_u16() as u64;
+            }
         }
+        out
     }
 
     /// Dungan's point-sampled pyramid: the nearest texel of level `round(L)` to the footprint's
     /// centre. 1 read, 0 multiplies, 0 additive operations (survey: "point sampled pyramid 1,0").
     ///
     /// Level `l = min((L_q + 128) >> 8, top)` with `L_q` = [`MipPyramid::lod`]; texel index
-    /// `floor(c / 2^l) = (x0 + x1) >> (F + 1 + l)` per axis (a centre on a level-texel boundary
-    /// takes the texel to the right / below), mapped by `M` at the level's size. Exact output:
-    /// `texel << 16`.
+    /// `floor(c / 2^l) = floor((x0 + x1) / 2^(F + 1 + l))` per axis (a centre on a level-texel
+    /// boundary takes the texel to the right / below), mapped by `M` at the level's size. Exact
+    /// output: `texel << 16`. Any `i64` corners are accepted (the centre is exact in `i64`).
     ///
     /// Errors: [`Error::FracBitsUnsupported`] (`F > 24`), [`Error::InvertedBox`].
     pub fn point_sample<X: Coord, M: EdgeMode, K: Counter>(
@@ -252,17 +316,14 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
         let (fp, lod) = self.footprint(rect)?;
         let l = ((lod + (1 << (LOD_FRAC_BITS - 1))) >> LOD_FRAC_BITS).min(self.top());
-        let shift = fp.f + 1 + l;
-        // |x0 + x1| <= 2^64, shifted right by at least 1: in the i64 range.
-        let i = i64::try_from(fp.px >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
-        let j = i64::try_from(fp.py >> shift).map_err(|_| Error::CoordinateOutOfRange)?;
+        let i = fp.cx.index(fp.f + l);
+        let j = fp.cy.index(fp.f + l);
         count_reads::<T, C, K>(1, k);
-        let px = self.tap(mode, l as usize, i, j);
+        let px = self.tap(mode.kind(), self.level(l as usize), i, j);
         Ok(Sample {
-            values: core::array::from_fn(|c| (px[c] as u64) << OUT_FRAC_BITS),
+            values: px.map(|v| v << OUT_FRAC_BITS),
         })
     }
 
@@ -272,6 +333,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     ///
     /// Output: per channel `round(v 2^16)` (ties up) of the fixed-point evaluation, within
     /// [`trilinear_error_bound`] texel units of the same filter in exact arithmetic (module docs).
+    /// All in 64-bit integers.
     ///
     /// Errors: [`Error::FracBitsUnsupported`] (`F > 24`), [`Error::InvertedBox`], and
     /// [`Error::CoordinateOutOfRange`] only for a footprint centred at the very bottom of `i64`
@@ -282,49 +344,50 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
         let (fp, lod) = self.footprint(rect)?;
         // lod <= top 2^8, so at the top t = 0.
         let (l0, l1, t) = split_level(lod, LOD_FRAC_BITS, self.top());
-        let v0 = self.bilinear(mode, l0, &fp, k)?;
-        let v1 = self.bilinear(mode, l1, &fp, k)?;
-        // Level lerp: units 2^-72, |v| < 2^80, so below 2^88.
-        let v = lerp(v0, v1, t as i128, LOD_FRAC_BITS, k);
-        let shift = 2 * WEIGHT_BITS + LOD_FRAC_BITS - OUT_FRAC_BITS;
-        let half = 1i128 << (shift - 1);
-        // v is a convex combination of texels: 0 <= v <= m 2^72.
+        let wb = weight_bits(T::BITS);
+        let v0 = self.bilinear(mode.kind(), l0, &fp, wb, k)?;
+        let v1 = self.bilinear(mode.kind(), l1, &fp, wb, k)?;
+        // Level lerp: units 2^-(2W + 8), below 2^(B + 2W + 8) <= 2^64 (module docs).
+        let v = lerp(v0, v1, t, LOD_FRAC_BITS, k);
+        let shift = 2 * wb + LOD_FRAC_BITS - OUT_FRAC_BITS;
+        let half = 1u64 << (shift - 1);
+        // v <= m 2^(2W + 8), and m 2^(2W + 8) + half < 2^64: no wrap.
         Ok(Sample {
-            values: v.map(|v| ((v + half) >> shift) as u64),
+            values: v.map(|v| v.wrapping_add(half) >> shift),
         })
     }
 
     /// Bilinear interpolation of level `l` at the footprint centre: 4 reads, 3 lerps per channel;
-    /// per channel the value in units of `2^-64`.
-    fn bilinear<M: EdgeMode, K: Counter>(
+    /// per channel the value in units of `2^-2W`, below `2^(B + 2W)`.
+    #[inline(always)]
+    fn bilinear<K: Counter>(
         &self,
-        mode: M,
+        kind: EdgeKind,
         l: u32,
         fp: &Footprint,
+        wb: u32,
         k: &mut K,
-    ) -> Result<[i128; C], Error> {
-        let g = fp.f + 1 + l; // fraction bits of c / 2^l: at most 24 + 1 + 31 = 56
-        let (i, a) = split(fp.px, g)?;
-        let (j, b) = split(fp.py, g)?;
-        // i, j <= 2^63 - 2 (split), so + 1 cannot overflow; checked anyway.
+    ) -> Result<[u64; C], Error> {
+        // Position fraction bits F + 1 + l: at most 24 + 1 + 31 = 56.
+        let (i, a) = split_position(fp.cx, fp.f + l, wb)?;
+        let (j, b) = split_position(fp.cy, fp.f + l, wb)?;
+        // i, j <= 2^63 - 2 (split_position), so + 1 cannot overflow; checked anyway.
         let i1 = i.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         let j1 = j.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
-        let l = l as usize;
+        let level = self.level(l as usize);
         count_reads::<T, C, K>(4, k);
-        let p00 = self.tap(mode, l, i, j);
-        let p10 = self.tap(mode, l, i1, j);
-        let p01 = self.tap(mode, l, i, j1);
-        let p11 = self.tap(mode, l, i1, j1);
-        // Row lerps, units 2^-32: |q - p| < 2^16, a < 2^32, so below 2^48 in i64.
-        let r0 = lerp(p00, p10, a, WEIGHT_BITS, k);
-        let r1 = lerp(p01, p11, a, WEIGHT_BITS, k);
-        // Column lerp, units 2^-64: below 2^80 in i128.
-        let (r0, r1) = (r0.map(i128::from), r1.map(i128::from));
-        Ok(lerp(r0, r1, b as i128, WEIGHT_BITS, k))
+        let p00 = self.tap(kind, level, i, j);
+        let p10 = self.tap(kind, level, i1, j);
+        let p01 = self.tap(kind, level, i, j1);
+        let p11 = self.tap(kind, level, i1, j1);
+        // Row lerps, units 2^-W: below 2^(B + W).
+        let r0 = lerp(p00, p10, a, wb, k);
+        let r1 = lerp(p01, p11, a, wb, k);
+        // Column lerp, units 2^-2W: below 2^(B + 2W).
+        Ok(lerp(r0, r1, b, wb, k))
     }
 
     /// Builds the coarse levels of `texture` into `storage` (the first
@@ -335,13 +398,14 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     /// (`Quantity::Entry`) if `2^(B+1) w h >= 2^64`, where the exact sums could overflow `u64`.
     pub fn build(texture: &Texture<'a, T, C>, storage: &'a mut [T]) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
-        let (sizes, count) = level_sizes(w, h)?;
+        let sizes = level_sizes(w, h)?;
         let needed = Self::storage_needed(w, h)?;
         let got = storage.len();
         let store = storage
             .get_mut(..needed)
             .ok_or(Error::StorageTooSmall { needed, got })?;
-        let bits_needed = bits_of(w as u128 * h as u128) + T::BITS + 1;
+        // w, h < 2^31: w h < 2^62 in u64.
+        let bits_needed = bits_of_u64(w as u64 * h as u64) + T::BITS + 1;
         if bits_needed > 64 {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -349,17 +413,23 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
                 bits_available: 64,
             });
         }
-        let mut offsets = [0usize; MAX_LEVELS];
+        let mut offsets = heapless::Vec::new();
         let mut at = 0usize;
-        for l in 1..count {
-            offsets[l] = at;
-            // Within `needed`, which did not overflow.
-            at += sizes[l].0 * sizes[l].1 * C;
+        for (l, &(lw, lh)) in sizes.iter().enumerate() {
+            // Same length as `sizes`: every push fits.
+            let _ = offsets.push(at);
+            if l > 0 {
+                // Within `needed`, which did not overflow.
+                at = at.saturating_add(lw.saturating_mul(lh).saturating_mul(C));
+            }
         }
-        for l in 1..count {
+        for (l, &at) in offsets.iter().enumerate().skip(1) {
             // Level l averages blocks of 2^l x 2^l base texels; 2 sum + count <= 2^(B+1) w h,
             // below 2^64 (checked above).
-            fill_box_level(texture, &mut store[offsets[l]..], l, l)?;
+            let out = store
+                .get_mut(at..)
+                .ok_or(Error::StorageTooSmall { needed, got })?;
+            fill_box_level(texture, out, l, l)?;
         }
         let coarse: &'a [T] = store;
         Ok(MipPyramid {
@@ -367,20 +437,8 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
             coarse,
             sizes,
             offsets,
-            count,
         })
     }
-}
-
-/// Splits `u = s / 2^g - 1/2` (`s` = doubled centre, raw) into `floor(u)` and the fraction
-/// truncated to [`WEIGHT_BITS`] bits.
-///
-/// `s` lies in `[-2^64, 2^64 - 2]` and `g >= 1`, so `floor(u) <= 2^63 - 2`; it is below
-/// `i64::MIN` only for `s = -2^64`, `g = 1`: [`Error::CoordinateOutOfRange`].
-fn split(s: i128, g: u32) -> Result<(i64, i64), Error> {
-    let (i, w) = split_position(s, g, WEIGHT_BITS);
-    let i = i64::try_from(i).map_err(|_| Error::CoordinateOutOfRange)?;
-    Ok((i, w))
 }
 
 #[cfg(test)]
@@ -389,7 +447,7 @@ mod tests {
     use super::*;
     use crate::cost::{NoCount, Tally};
     use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
-    use fixed::types::{I24F8, I32F32, I40F24, I64F0};
+    use fixed::types::{I16F16, I24F8, I32F32, I40F24, I64F0};
     use std::vec;
     use std::vec::Vec;
 
@@ -444,10 +502,7 @@ mod tests {
 
     #[test]
     fn sizes_and_memory() {
-        let lv = |w: usize, h: usize| {
-            let (s, n) = level_sizes(w, h).unwrap();
-            s[..n].to_vec()
-        };
+        let lv = |w: usize, h: usize| level_sizes(w, h).unwrap().to_vec();
         assert_eq!(lv(1, 1), vec![(1, 1)]);
         assert_eq!(lv(5, 3), vec![(5, 3), (3, 2), (2, 1), (1, 1)]);
         assert_eq!(lv(1, 300).len(), 10);
@@ -731,9 +786,12 @@ mod tests {
     #[test]
     fn trilinear_weight_truncation_approaches_bound_u16() {
         // Level l alternates 0 / 65535 in blocks of 2^l; F = 24 and l = 10 give
-        // F + 1 + l = 35 > 32 fraction bits, 3 of them truncated. Under Border the single row's
+        // F + 1 + l = 35 > 20 fraction bits, 15 of them truncated. Under Border the single row's
         // vertical taps are 0 and the row, so both axes lose weight bits on a difference near m.
         let l = 10u32;
+        let wb = weight_bits(16);
+        assert_eq!(wb, 20);
+        let cut = 24 + 1 + l - wb; // truncated bits
         let (w, h) = (1usize << (l + 2), 1usize);
         let data: Vec<u16> = (0..w)
             .map(|x| if (x >> l).is_multiple_of(2) { 0 } else { 65535 })
@@ -746,11 +804,13 @@ mod tests {
         let mut worst = 0f64;
         let bound = trilinear_error_bound(16);
         for _ in 0..3000 {
-            // x0 = 3 (mod 4), x1 = x0 + 2^(l+24) + 1: x0 + x1 = 7 (mod 8), so the 3 truncated
-            // bits of both weights are ones; the side 2^l + 2^-24 still has lod = l << 8 (t = 0).
+            // x0 = 2^(cut-1) - 1 (mod 2^(cut-1)), x1 = x0 + 2^(l+24) + 1: the low `cut` bits of
+            // x0 + x1 are all ones, so the truncated bits of both weights are; the side
+            // 2^l + 2^-24 still has lod = l << 8 (t = 0).
             let mut rnd = |n: u64| ((lcg(&mut seed) << 31) ^ lcg(&mut seed)) % n;
-            let x0 = rnd((w as u64) << 22) as i64 * 4 + 3;
-            let y0 = rnd(1u64 << (l + 23)) as i64 * 4 - (1i64 << (l + 24)) + 3;
+            let step = 1i64 << (cut - 1);
+            let x0 = rnd(((w as u64) << 24) >> (cut - 1)) as i64 * step + step - 1;
+            let y0 = rnd(1u64 << (l + 25 - cut)) as i64 * step - (1i64 << (l + 24)) + step - 1;
             let side = (1i64 << (l + 24)) + 1;
             let raw = [x0, y0, x0 + side, y0 + side];
             let r = Rect::new(
@@ -769,9 +829,180 @@ mod tests {
             assert!(err <= bound + 1e-9, "{err} > {bound}");
             worst = worst.max(err);
         }
-        // Beyond the rounding part the weight truncation shows, most of the way to the bound
-        // (7/8 of the weight part plus the rounding part is about 0.9 of it).
+        // Beyond the rounding part the weight truncation shows, most of the way to the bound.
         assert!(worst > 0.8 * bound, "{worst} vs {bound}");
+    }
+
+    /// The earlier formulation: 32-bit weights, the column and level lerps in `i128`, the doubled
+    /// centre in `i128`; the reference the 64-bit trilinear must match bit for bit whenever its
+    /// own weights are exact.
+    fn trilinear_i128<T: Texel, const C: usize, M: EdgeMode>(
+        p: &MipPyramid<'_, T, C>,
+        raw: [i64; 4],
+        f: u32,
+        mode: M,
+    ) -> [u64; C] {
+        let lod = level_position(
+            (raw[2] - raw[0]).max(raw[3] - raw[1]) as u64,
+            f,
+            LOD_FRAC_BITS,
+            p.top(),
+        );
+        let (l0, l1, t) = split_level(lod, LOD_FRAC_BITS, p.top());
+        let (px, py) = (
+            raw[0] as i128 + raw[2] as i128,
+            raw[1] as i128 + raw[3] as i128,
+        );
+        let bil = |l: u32| -> [i128; C] {
+            let s = f + 1 + l;
+            let split = |p: i128| {
+                let t = p - (1i128 << (s - 1));
+                let frac = t & ((1i128 << s) - 1);
+                let a = if s >= 32 {
+                    frac >> (s - 32)
+                } else {
+                    frac << (32 - s)
+                };
+                (t >> s, a)
+            };
+            let ((i, a), (j, b)) = (split(px), split(py));
+            let (w, h) = p.levels()[l as usize];
+            let tap = |i: i128, j: i128| -> [i128; C] {
+                let k = mode.kind();
+                match (k.texel_index(i as i64, w), k.texel_index(j as i64, h)) {
+                    (Some(x), Some(y)) => p
+                        .level_texel(l as usize, x, y)
+                        .unwrap()
+                        .map(|v| v.to_u16() as i128),
+                    _ => [0; C],
+                }
+            };
+            let lerp = |x: [i128; C], y: [i128; C], w: i128| -> [i128; C] {
+                core::array::from_fn(|c| (x[c] << 32) + (y[c] - x[c]) * w)
+            };
+            let r0 = lerp(tap(i, j), tap(i + 1, j), a);
+            let r1 = lerp(tap(i, j + 1), tap(i + 1, j + 1), a);
+            lerp(r0, r1, b)
+        };
+        let (v0, v1) = (bil(l0), bil(l1));
+        core::array::from_fn(|c| {
+            let v = (v0[c] << 8) + (v1[c] - v0[c]) * t as i128;
+            ((v + (1i128 << 55)) >> 56) as u64
+        })
+    }
+
+    #[test]
+    fn bit_for_bit_with_the_i128_formulation() {
+        // Every footprint of a grid of corners (F = 8 and F = 16 with exact weights: F + 1 + l is
+        // at most 14 and 20) over odd-sized textures, every mode, u8 and u16.
+        let mut seed = 5;
+        for (w, h) in [(5usize, 3usize), (7, 9), (1, 6)] {
+            let d8: Vec<u8> = (0..w * h * 2).map(|_| lcg(&mut seed) as u8).collect();
+            let t8 = Texture::<u8, 2>::new(&d8, w, h).unwrap();
+            let mut s8 = vec![0u8; MipPyramid::<u8, 2>::storage_needed(w, h).unwrap()];
+            let p8 = MipPyramid::build(&t8, &mut s8).unwrap();
+            let d16: Vec<u16> = (0..w * h).map(|_| lcg(&mut seed) as u16).collect();
+            let t16 = Texture::<u16>::new(&d16, w, h).unwrap();
+            let mut s16 = vec![0u16; MipPyramid::<u16>::storage_needed(w, h).unwrap()];
+            let p16 = MipPyramid::build(&t16, &mut s16).unwrap();
+            let mut n = 0;
+            for x0 in (-40i64..40).step_by(3) {
+                for side in [0i64, 1, 37, 128, 255, 256, 700, 2047, 3000] {
+                    let y0 = (x0 * 7) % 23 - 5;
+                    let raw = [x0 * 37, y0 * 29, x0 * 37 + side, y0 * 29 + side / 3];
+                    let r8 = Rect::new(
+                        I24F8::from_bits(raw[0] as i32),
+                        I24F8::from_bits(raw[1] as i32),
+                        I24F8::from_bits(raw[2] as i32),
+                        I24F8::from_bits(raw[3] as i32),
+                    );
+                    macro_rules! check {
+                        ($mode:expr) => {
+                            assert_eq!(
+                                p8.trilinear(&r8, $mode, &mut NoCount).unwrap().values,
+                                trilinear_i128(&p8, raw, 8, $mode),
+                                "{w}x{h} {raw:?}"
+                            );
+                            assert_eq!(
+                                p16.trilinear(&r8, $mode, &mut NoCount).unwrap().values,
+                                trilinear_i128(&p16, raw, 8, $mode),
+                                "{w}x{h} {raw:?}"
+                            );
+                        };
+                    }
+                    check!(Border);
+                    check!(ClampToEdge);
+                    check!(Repeat);
+                    check!(MirroredRepeat);
+                    check!(crate::EdgeKind::Mirror);
+                    n += 1;
+                }
+            }
+            assert!(n > 200);
+            // F = 16 (I16F16): F + 1 + l <= 20 for these sizes (l <= 3).
+            for x0 in (-3000i64..3000).step_by(211) {
+                let raw = [
+                    x0 * 97,
+                    x0 * 53 + 7,
+                    x0 * 97 + 1 + (x0 & 0x7FFFF).abs() * 13,
+                    x0 * 53 + 70_001,
+                ];
+                let r = Rect::new(
+                    I16F16::from_bits(raw[0] as i32),
+                    I16F16::from_bits(raw[1] as i32),
+                    I16F16::from_bits(raw[2] as i32),
+                    I16F16::from_bits(raw[3] as i32),
+                );
+                assert_eq!(
+                    p16.trilinear(&r, Repeat, &mut NoCount).unwrap().values,
+                    trilinear_i128(&p16, raw, 16, Repeat)
+                );
+                assert_eq!(
+                    p8.trilinear(&r, ClampToEdge, &mut NoCount).unwrap().values,
+                    trilinear_i128(&p8, raw, 16, ClampToEdge)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn point_sample_matches_the_i128_formulation() {
+        let data: Vec<u8> = (0..45).map(|v| (v * 37 % 256) as u8).collect();
+        let t = Texture::<u8>::new(&data, 9, 5).unwrap();
+        let mut st = vec![0u8; MipPyramid::<u8>::storage_needed(9, 5).unwrap()];
+        let p = MipPyramid::build(&t, &mut st).unwrap();
+        let mut seed = 17;
+        for _ in 0..20_000 {
+            let x0 = (lcg(&mut seed) as i64 % 9000) - 3000;
+            let y0 = (lcg(&mut seed) as i64 % 9000) - 3000;
+            let raw = [
+                x0,
+                y0,
+                x0 + (lcg(&mut seed) % 5000) as i64,
+                y0 + (lcg(&mut seed) % 900) as i64,
+            ];
+            let r = Rect::new(
+                I24F8::from_bits(raw[0] as i32),
+                I24F8::from_bits(raw[1] as i32),
+                I24F8::from_bits(raw[2] as i32),
+                I24F8::from_bits(raw[3] as i32),
+            );
+            let lod = p.lod(&r).unwrap();
+            let l = ((lod + 128) >> 8).min(p.top());
+            let shift = 8 + 1 + l;
+            let i = ((raw[0] as i128 + raw[2] as i128) >> shift) as i64;
+            let j = ((raw[1] as i128 + raw[3] as i128) >> shift) as i64;
+            let (w, h) = p.levels()[l as usize];
+            let k = crate::EdgeKind::Repeat;
+            let want = match (k.texel_index(i, w), k.texel_index(j, h)) {
+                (Some(x), Some(y)) => (p.level_texel(l as usize, x, y).unwrap()[0] as u64) << 16,
+                _ => 0,
+            };
+            assert_eq!(
+                p.point_sample(&r, Repeat, &mut NoCount).unwrap().values,
+                [want]
+            );
+        }
     }
 
     #[test]

@@ -20,6 +20,20 @@
 //! reads, multiplies, divides, additive operations; level selection and addressing belong to the
 //! address unit and are not counted (Crow: "the necessary computation appears small next to the
 //! texture intensity calculation").
+//!
+//! ## Widths and panics
+//!
+//! Arithmetic is as wide as each filter's proof needs, no wider. For `u8`/`u16` texels and
+//! `u16`/`u32` tables everything runs in 32- and 64-bit integers: the footprint (an exact `i64`
+//! centre, `u64` sides, whatever the `i64` corners), the level choice (`log2_fixed`, one
+//! `32 x 32 -> 64` multiply per fraction bit), the positions and weights, every lerp (`u64`, with
+//! each filter's bound on the result), and the variance's rounded quotient (`variance`: 64-bit
+//! words up to `2^62` raw area units, [`crate::Error::TooWide`] above). 128-bit arithmetic is
+//! left where the quantities are 128-bit: the order-2 tables of `tent` (their docs say why) and
+//! the variance over `u64` tables, whose box sums are `u128` words. No filter panics on any
+//! input, lent storage included: every index is checked (`get`, iterators) or proven in range,
+//! every division is by a value known non-zero, and a result that cannot be represented is a
+//! typed [`crate::Error`].
 
 #[cfg(any(
     feature = "filter-mip",

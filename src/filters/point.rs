@@ -3,7 +3,7 @@
 //!
 //! The footprint `[x0, x1) x [y0, y1)` is reduced to its centre
 //! `((x0 + x1) / 2, (y0 + y1) / 2)`; the sample is the texel `(floor(cx), floor(cy))` of the
-//! extended texture (the boundary mode's [`EdgeMode::texel_index`]), read straight from the
+//! extended texture (the boundary mode's [`EdgeKind::texel_index`](crate::EdgeKind::texel_index)), read straight from the
 //! [`Texture`] — no table. The survey: "the pixel nearest the desired sample point is used".
 //!
 //! **Ties.** Texel `i` covers `[i, i + 1)`, so a centre exactly on the boundary between texels
@@ -32,19 +32,20 @@ use crate::width::MAX_FRAC_BITS;
 ///
 /// The centre is `((x0 + x1) / 2, (y0 + y1) / 2)`; the texel is `(floor(cx), floor(cy))`
 /// (a centre on a texel boundary takes the texel to the right / below), mapped through
-/// [`EdgeMode::texel_index`]; outside the texture under [`crate::Border`] the value is 0.
+/// [`EdgeKind::texel_index`](crate::EdgeKind::texel_index); outside the texture under [`crate::Border`] the value is 0.
 /// The result is exact: `values[c] = texel[c] << OUT_FRAC_BITS`.
 ///
 /// A zero-area footprint (a point) is accepted. Errors: [`Error::FracBitsUnsupported`] for
-/// `F > 24`, [`Error::InvertedBox`] for `x1 < x0` or `y1 < y0`. No panics: `x0 + x1` is formed in
-/// `i128` and `(x0 + x1) >> (F + 1)` lies in the `i64` range because `x0`, `x1` do.
+/// `F > 24`, [`Error::InvertedBox`] for `x1 < x0` or `y1 < y0`. Any `i64` corners work, in
+/// `i64` arithmetic: `floor((x0 + x1) / 2^(F + 1)) = floor(mid / 2^F)` with
+/// `mid = floor((x0 + x1) / 2) = (x0 >> 1) + (x1 >> 1) + (x0 & x1 & 1)`, which cannot overflow
+/// (the 65-bit sum `x0 + x1` is never formed).
 pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
     texture: &Texture<'_, T, C>,
     rect: &Rect<X>,
     mode: M,
     k: &mut K,
 ) -> Result<Sample<C>, Error> {
-    let _ = mode;
     let f = X::FRAC_BITS;
     if f > MAX_FRAC_BITS {
         return Err(Error::FracBitsUnsupported {
@@ -56,8 +57,8 @@ pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
     if x1 < x0 || y1 < y0 {
         return Err(Error::InvertedBox);
     }
-    let ix = centre_index(x0, x1, f)?;
-    let iy = centre_index(y0, y1, f)?;
+    let ix = centre_index(x0, x1, f);
+    let iy = centre_index(y0, y1, f);
     k.reads(1, T::BITS * C as u32);
     k.words((T::BITS * C as u32).div_ceil(32));
     let mut values = [0u64; C];
@@ -65,7 +66,9 @@ pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
         mode.kind().texel_index(ix, texture.width()),
         mode.kind().texel_index(iy, texture.height()),
     ) {
-        if let Some(px) = texture.row(y).and_then(|r| r.get(x * C..x * C + C)) {
+        // x < width and width * C fits (the texture's own check): no wrap.
+        let at = x.wrapping_mul(C);
+        if let Some(px) = texture.row(y).and_then(|r| r.get(at..at.wrapping_add(C))) {
             for (v, t) in values.iter_mut().zip(px) {
                 *v = (t.to_u16() as u64) << OUT_FRAC_BITS;
             }
@@ -74,10 +77,13 @@ pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
     Ok(Sample { values })
 }
 
-/// `floor((lo + hi) / 2^(f + 1))`: the index of the texel holding the centre of `[lo, hi)`.
-fn centre_index(lo: i64, hi: i64, f: u32) -> Result<i64, Error> {
-    let s = lo as i128 + hi as i128;
-    i64::try_from(s >> (f + 1)).map_err(|_| Error::CoordinateOutOfRange)
+/// `floor((lo + hi) / 2^(f + 1))`: the index of the texel holding the centre of `[lo, hi)`,
+/// as `floor(floor((lo + hi) / 2) / 2^f)` (equal: nested floors of divisions by positive
+/// integers), the inner floor exact in `i64`.
+#[inline(always)]
+fn centre_index(lo: i64, hi: i64, f: u32) -> i64 {
+    let mid = (lo >> 1) + (hi >> 1) + (lo & hi & 1);
+    mid >> f.min(63)
 }
 
 #[cfg(test)]
@@ -143,6 +149,35 @@ mod tests {
             point(&t, &r, MirroredRepeat, &mut NoCount).unwrap().values[0],
             at(1, 1)
         );
+    }
+
+    #[test]
+    fn centre_index_matches_the_i128_formulation() {
+        let old = |lo: i64, hi: i64, f: u32| ((lo as i128 + hi as i128) >> (f + 1)) as i64;
+        for lo in -300i64..300 {
+            for hi in lo..lo + 300 {
+                for f in [0u32, 1, 2, 8] {
+                    assert_eq!(centre_index(lo, hi, f), old(lo, hi, f), "{lo} {hi} {f}");
+                }
+            }
+        }
+        let edge = [i64::MIN, i64::MIN + 1, -1, 0, 1, i64::MAX - 1, i64::MAX];
+        let mut s = 3u64;
+        let mut vals: Vec<i64> = edge.to_vec();
+        for _ in 0..2000 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            vals.push(s as i64 >> (s % 64));
+        }
+        for &a in &vals {
+            for &b in &edge {
+                let (lo, hi) = (a.min(b), a.max(b));
+                for f in 0..=24u32 {
+                    assert_eq!(centre_index(lo, hi, f), old(lo, hi, f), "{lo} {hi} {f}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -11,29 +11,42 @@
 //!   `round(sum / count) = floor((2 sum + count) / (2 count))`. Every stored texel is within
 //!   1/2 LSB of the exact box average; nothing accumulates from level to level
 //!   ([`fill_box_level`]);
-//! * the footprint: validated raw corners, doubled centre and side lengths ([`footprint`]), and
-//!   the level position `L = clamp(log2_fixed(side), 0, top)` split into
-//!   `floor(L)`, `min(floor(L) + 1, top)` and `frac(L)` ([`level_position`], [`split_level`]);
+//! * the footprint: validated raw corners, centre and side lengths ([`footprint`]), and the level
+//!   position `L = clamp(log2_fixed(side), 0, top)` split into `floor(L)`,
+//!   `min(floor(L) + 1, top)` and `frac(L)` ([`level_position`], [`split_level`]);
 //! * the bilinear taps: level texel `i` covers base `[i 2^s, (i+1) 2^s)`, so its centre is
 //!   `(i + 1/2) 2^s` and a probe at centre `c` interpolates the texels around `c / 2^s - 1/2`:
 //!   left tap `floor(c / 2^s - 1/2)`, weight its fraction truncated to a filter's weight bits
 //!   ([`split_position`]);
 //! * Crow's lerp `b + (c - b) alpha` (1 multiply, 2 additive operations per channel, §2.2; a
-//!   bilinear is 3 lerps), in `i64` or `i128` ([`lerp`]), and the read count (all channels of a
-//!   texel together, [`count_reads`]);
+//!   bilinear is 3 lerps) in `u64` ([`lerp`]), and the read count (all channels of a texel
+//!   together, [`count_reads`]);
 //! * for the rip and dip maps, which store every level in caller storage: the storage layout
-//!   helpers, the build checks, and the stored level with its bilinear probe (`LevelView`,
-//!   `resolve`: indices beyond `i64` fold onto the mode's period).
+//!   helpers, the build checks, and the stored level with its bilinear probe (`LevelView`).
+//!
+//! ## Widths (no integer wider than 64 bits)
+//!
+//! Raw corners are `i64` with `F <= 24` fraction bits. The centre is kept as
+//! `floor((x0 + x1) / 2)` and the parity of `x0 + x1` ([`Centre`]), both exact in `i64` for any
+//! corners (`(x0 >> 1) + (x1 >> 1) + (x0 & x1 & 1)` cannot overflow), so the doubled centre
+//! `x0 + x1` (65 bits) is never formed. Sides `x1 - x0` are exact in `u64`. A level position
+//! `c / 2^l - 1/2` with `s = F + 1 + l <= 56` fraction bits splits into a left tap in `i64` and a
+//! fraction below `2^56`; the one tap index that leaves `i64` (the corners `x0 = x1 = i64::MIN`
+//! at `F = 0`, level 0) is [`Error::CoordinateOutOfRange`]. Level texels are below `2^16` and
+//! every lerp is a convex combination of non-negative values, computed in wrapping `u64`
+//! arithmetic: exact whenever the result is below `2^64` (each filter states its bound).
 
 use crate::cost::Counter;
+use crate::edge::EdgeKind;
 use crate::error::Error;
 use crate::filters::level::log2_fixed;
 use crate::rect::{Coord, Rect};
-use crate::texel::{Acc, Texel};
+use crate::texel::Texel;
 use crate::texture::{Texture, MAX_DIMENSION};
 use crate::width::MAX_FRAC_BITS;
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
-use crate::{edge::EdgeMode, error::Quantity, filters::Sample, width::bits_of};
+use crate::{edge::EdgeMode, error::Quantity, filters::Sample, width::bits_of_u64};
+use core::num::NonZeroU64;
 
 /// The most levels an axis can have: sides up to `2^31 - 1` texels halve to 1 in 31 steps, so
 /// they need levels `0..=31`.
@@ -42,20 +55,20 @@ pub(crate) const MAX_LEVELS: usize = 32;
 /// Coarse columns summed together in one pass of the level build (stack accumulators).
 const CHUNK: usize = 16;
 
-/// `ceil(n / 2^l)` for `n >= 1`.
+/// `ceil(n / 2^l)` for `n >= 1` (1 for `n = 0`, which no texture has).
 #[inline(always)]
 pub(crate) fn level_len(n: usize, l: usize) -> usize {
     if l >= usize::BITS as usize {
         1
     } else {
-        ((n - 1) >> l) + 1
+        (n.saturating_sub(1) >> l) + 1
     }
 }
 
 /// Levels of an axis of `n >= 1` texels: `ceil(log2 n) + 1`.
 #[inline(always)]
 pub(crate) fn level_count(n: usize) -> usize {
-    (usize::BITS - (n - 1).leading_zeros()) as usize + 1
+    (usize::BITS - n.saturating_sub(1).leading_zeros()) as usize + 1
 }
 
 /// Refuses dimensions a texture could not have: [`Error::EmptyTexture`] for a zero side,
@@ -80,7 +93,8 @@ pub(crate) fn check_dims(width: usize, height: usize) -> Result<(), Error> {
 ///
 /// The caller proved `2 sum + count < 2^64` for every block (the rip and dip builds: `(2m + 1) w h
 /// < 2^64`; the mip build: `2^(B+1) w h < 2^64`), and `sx, sy <= 31` (levels of a side below
-/// `2^31`).
+/// `2^31`). A block is never empty (`i < ceil(n / 2^s)` gives `i 2^s < n`), so `count >= 1`; the
+/// division is by a [`NonZeroU64`] all the same.
 pub(crate) fn fill_box_level<T: Texel, const C: usize>(
     texture: &Texture<'_, T, C>,
     out: &mut [T],
@@ -89,71 +103,107 @@ pub(crate) fn fill_box_level<T: Texel, const C: usize>(
 ) -> Result<(), Error> {
     let (w, h) = (texture.width(), texture.height());
     let (lw, lh) = (level_len(w, sx), level_len(h, sy));
+    let (sx, sy) = (sx.min(63) as u32, sy.min(63) as u32);
     // Block bounds in base texels: i < ceil(n / 2^s), so i 2^s < n <= 2^31 and (i + 1) 2^s
     // < 2^33 (s <= 31): all in u64, the clipped ends in usize.
-    let span = |i: usize, s: usize, n: usize| -> (usize, usize) {
-        let lo = (i as u64) << s;
-        let hi = (((i as u64) + 1) << s).min(n as u64);
+    let span = |i: usize, s: u32, n: usize| -> (usize, usize) {
+        let lo = (i as u64).checked_shl(s).unwrap_or(u64::MAX).min(n as u64);
+        let hi = (i as u64 + 1)
+            .checked_shl(s)
+            .unwrap_or(u64::MAX)
+            .min(n as u64);
         (lo as usize, hi as usize)
     };
+    let needed = lw.saturating_mul(lh).saturating_mul(C);
+    let got = out.len();
+    let out = out
+        .get_mut(..needed)
+        .ok_or(Error::StorageTooSmall { needed, got })?;
+    let mut dst_rows = out.chunks_exact_mut(lw.saturating_mul(C).max(1));
     for j in 0..lh {
         let (y_lo, y_hi) = span(j, sy, h);
+        let dst_row = dst_rows.next().ok_or(Error::EmptyTexture)?;
         let mut i0 = 0;
-        while i0 < lw {
-            let n = CHUNK.min(lw - i0);
+        for dst in dst_row.chunks_mut(CHUNK * C) {
             let mut acc = [[0u64; C]; CHUNK];
             for y in y_lo..y_hi {
                 // y < h and the block columns lie below w: rows and slices always exist (the
                 // errors are unreachable; they stand in for panics).
                 let row = texture.row(y).ok_or(Error::EmptyTexture)?;
-                for (ci, a) in acc[..n].iter_mut().enumerate() {
+                for (ci, a) in acc.iter_mut().take(dst.len() / C).enumerate() {
                     let (x_lo, x_hi) = span(i0 + ci, sx, w);
                     let px = row.get(x_lo * C..x_hi * C).ok_or(Error::EmptyTexture)?;
                     for texel in px.chunks_exact(C) {
                         for (s, t) in a.iter_mut().zip(texel) {
-                            *s += t.to_u16() as u64;
+                            *s = s.wrapping_add(t.to_u16() as u64);
                         }
                     }
                 }
             }
-            for (ci, a) in acc[..n].iter().enumerate() {
+            for (ci, (a, d)) in acc.iter().zip(dst.chunks_exact_mut(C)).enumerate() {
                 let (x_lo, x_hi) = span(i0 + ci, sx, w);
-                let cnt = ((x_hi - x_lo) * (y_hi - y_lo)) as u64;
-                let at = (j * lw + i0 + ci) * C;
-                let len = out.len();
-                let dst = out.get_mut(at..at + C).ok_or(Error::StorageTooSmall {
-                    needed: at + C,
-                    got: len,
-                })?;
-                for (d, &s) in dst.iter_mut().zip(a.iter()) {
+                let cnt = ((x_hi - x_lo) as u64).wrapping_mul((y_hi - y_lo) as u64);
+                let den = NonZeroU64::new(cnt.wrapping_mul(2)).ok_or(Error::EmptyTexture)?;
+                for (d, &s) in d.iter_mut().zip(a.iter()) {
                     // 2 s + cnt < 2^64 (the caller's proof); the mean is at most m = 2^B - 1.
-                    let mean = (2 * s + cnt) / (2 * cnt);
-                    *d = T::from_u16_clamped(mean as u16);
+                    let mean = s.wrapping_mul(2).wrapping_add(cnt) / den;
+                    *d = T::from_u16_clamped(mean.min(u16::MAX as u64) as u16);
                 }
             }
-            i0 += n;
+            i0 += CHUNK;
         }
     }
     Ok(())
 }
 
+/// A footprint centre along one axis, `(x0 + x1) / 2` in raw units, kept as
+/// `mid = floor((x0 + x1) / 2)` and `odd = (x0 + x1) mod 2`: exact in `i64` for any `i64`
+/// corners, where the sum `x0 + x1` itself needs 65 bits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Centre {
+    /// `floor((x0 + x1) / 2)`.
+    pub(crate) mid: i64,
+    /// `(x0 + x1) mod 2`: 0 or 1.
+    pub(crate) odd: u64,
+}
+
+impl Centre {
+    /// The centre of `[lo, hi)`, without overflow.
+    #[inline(always)]
+    pub(crate) fn of(lo: i64, hi: i64) -> Centre {
+        Centre {
+            mid: (lo >> 1) + (hi >> 1) + (lo & hi & 1),
+            odd: ((lo ^ hi) & 1) as u64,
+        }
+    }
+
+    /// `floor(c / 2^s) = floor((x0 + x1) / 2^(s + 1))`: the index of the texel of a level that
+    /// shrinks by `2^(s - F)` holding the centre (`s >= 0`).
+    #[cfg(any(feature = "filter-mip", test))]
+    #[inline(always)]
+    pub(crate) fn index(self, s: u32) -> i64 {
+        self.mid >> s.min(63)
+    }
+}
+
 /// A validated footprint `[x0, x1) x [y0, y1)`, raw fixed-point values with `f` fraction bits.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Footprint {
-    /// The doubled centre `x0 + x1` (raw), in `[-2^64, 2^64 - 2]`.
-    pub(crate) px: i128,
-    /// The doubled centre `y0 + y1` (raw).
-    pub(crate) py: i128,
-    /// The width `W = x1 - x0` (raw), in `[0, 2^64 - 1]`.
-    pub(crate) w: i128,
+    /// The centre along x.
+    pub(crate) cx: Centre,
+    /// The centre along y.
+    pub(crate) cy: Centre,
+    /// The width `W = x1 - x0` (raw), exact in `u64`.
+    pub(crate) w: u64,
     /// The height `H = y1 - y0` (raw).
-    pub(crate) h: i128,
+    pub(crate) h: u64,
     /// Fraction bits `F` of the corners (at most 24).
     pub(crate) f: u32,
 }
 
 /// Validates a footprint: [`Error::FracBitsUnsupported`] for `F > 24`, [`Error::InvertedBox`]
-/// for `x1 < x0` or `y1 < y0`. Returns its doubled centre and sides.
+/// for `x1 < x0` or `y1 < y0`. Returns its centre and sides (never overflows: [`Centre`]).
+#[inline(always)]
 pub(crate) fn footprint<X: Coord>(rect: &Rect<X>) -> Result<Footprint, Error> {
     let f = X::FRAC_BITS;
     if f > MAX_FRAC_BITS {
@@ -162,71 +212,102 @@ pub(crate) fn footprint<X: Coord>(rect: &Rect<X>) -> Result<Footprint, Error> {
             max: MAX_FRAC_BITS,
         });
     }
-    let (x0, y0, x1, y1) = (
-        rect.x0.raw() as i128,
-        rect.y0.raw() as i128,
-        rect.x1.raw() as i128,
-        rect.y1.raw() as i128,
-    );
+    let (x0, y0, x1, y1) = (rect.x0.raw(), rect.y0.raw(), rect.x1.raw(), rect.y1.raw());
     if x1 < x0 || y1 < y0 {
         return Err(Error::InvertedBox);
     }
     Ok(Footprint {
-        px: x0 + x1,
-        py: y0 + y1,
-        w: x1 - x0,
-        h: y1 - y0,
+        cx: Centre::of(x0, x1),
+        cy: Centre::of(y0, y1),
+        w: (x1 as u64).wrapping_sub(x0 as u64),
+        h: (y1 as u64).wrapping_sub(y0 as u64),
         f,
     })
 }
 
-/// The level position of a side of `side / 2^f` texels (`side` raw, in `[0, 2^64 - 1]`) with
-/// `frac_bits` fraction bits: `log2_fixed` (the exact `floor` or one unit below; exact at powers
-/// of two) clamped to `[0, top 2^frac_bits]`; `0` for a side of 0 (and at most one texel).
-pub(crate) fn level_position(side: i128, f: u32, frac_bits: u32, top: u32) -> u32 {
-    let raw = u64::try_from(side).unwrap_or(u64::MAX);
-    log2_fixed(raw, f, frac_bits)
-        .unwrap_or(0)
-        .clamp(0, (top as i32) << frac_bits) as u32
+/// The level position of a side of `side / 2^f` texels (`side` raw) with `frac_bits` fraction
+/// bits: `log2_fixed` (the exact `floor` or one unit below; exact at powers of two) clamped to
+/// `[0, top 2^frac_bits]`; `0` for a side of 0 (and at most one texel). `top <= 31` and
+/// `frac_bits <= 16`, so the result fits comfortably in 32 bits.
+#[inline(always)]
+pub(crate) fn level_position(side: u64, f: u32, frac_bits: u32, top: u32) -> u32 {
+    let max = (top.min(31) as i32) << frac_bits.min(16);
+    log2_fixed(side, f, frac_bits).unwrap_or(0).clamp(0, max) as u32
 }
 
 /// Splits a level position `L` (`frac_bits` fraction bits, at most `top 2^frac_bits`) into
 /// `(lo, hi, frac)`: `lo = floor(L)`, `hi = min(lo + 1, top)`, `frac = frac(L)` (exact).
-pub(crate) fn split_level(pos: u32, frac_bits: u32, top: u32) -> (u32, u32, i64) {
-    let lo = pos >> frac_bits;
-    let frac = (pos & ((1 << frac_bits) - 1)) as i64;
+#[inline(always)]
+pub(crate) fn split_level(pos: u32, frac_bits: u32, top: u32) -> (u32, u32, u64) {
+    let fb = frac_bits.min(31);
+    let lo = pos >> fb;
+    let frac = (pos & ((1 << fb) - 1)) as u64;
     (lo, (lo + 1).min(top), frac)
 }
 
-/// Splits a level position `u = p / 2^s - 1/2` (`p` a doubled raw centre coordinate `x0 + x1`,
-/// `s = F + 1 + l >= 1`) into the left texel of the bilinear pair, `floor(u)`, and the weight of
-/// the right one, `frac(u)` truncated to `weight_bits` bits (exact when `s <= weight_bits`).
+/// Splits the level position `u = c / 2^s - 1/2` of a centre `c` (raw, [`Centre`]; `s = F + l`
+/// for level `l`, so `u` has `s + 1 <= 56` fraction bits) into the left texel of the bilinear
+/// pair, `floor(u)`, and the weight of the right one, `frac(u)` truncated to `weight_bits` bits
+/// (exact when `s + 1 <= weight_bits`).
+///
+/// With `mid = q 2^s + r` (`0 <= r < 2^s`) the doubled position is
+/// `2 u 2^s = (x0 + x1) - 2^s = q 2^(s+1) + (2r + odd - 2^s)`, so the left tap is `q` or `q - 1`
+/// after one comparison; `q - 1` leaves `i64` only for `mid = i64::MIN` at `s = 0`:
+/// [`Error::CoordinateOutOfRange`].
 #[inline(always)]
-pub(crate) fn split_position(p: i128, s: u32, weight_bits: u32) -> (i128, i64) {
-    let t = p - (1i128 << (s - 1));
-    let i0 = t >> s;
-    let frac = t & ((1i128 << s) - 1); // in [0, 2^s)
-    let a = if s >= weight_bits {
-        frac >> (s - weight_bits)
+pub(crate) fn split_position(c: Centre, s: u32, weight_bits: u32) -> Result<(i64, u64), Error> {
+    let s = s.min(62);
+    let q = c.mid >> s;
+    let r = (c.mid & ((1i64 << s) - 1)) as u64;
+    let twice = 2 * r + c.odd; // < 2^(s+1)
+    let half = 1u64 << s;
+    let (i0, frac) = if twice >= half {
+        (q, twice - half)
     } else {
-        frac << (weight_bits - s)
+        (
+            q.checked_sub(1).ok_or(Error::CoordinateOutOfRange)?,
+            twice + half,
+        )
     };
-    (i0, a as i64)
+    // frac has s + 1 fraction bits.
+    let bits = s + 1;
+    let a = if bits >= weight_bits {
+        frac >> (bits - weight_bits)
+    } else {
+        frac << (weight_bits - bits)
+    };
+    Ok((i0, a))
 }
 
-/// Crow's lerp `b * 2^bits + (c - b) * a` per channel (`a` a weight with `bits` fraction bits):
-/// 1 multiply and 2 additive operations per channel; the scale by `2^bits` is a shift (wiring).
+/// The texel index the mode `kind` shows at `i` on an axis of `n` texels
+/// ([`EdgeKind::texel_index`]), with the in-range case (the common one) decided here by one
+/// comparison: every mode shows texel `i` for `0 <= i < n`.
 #[inline(always)]
-pub(crate) fn lerp<A: Acc, K: Counter, const C: usize>(
-    b: [A; C],
-    c: [A; C],
-    a: A,
+pub(crate) fn tap_index(kind: EdgeKind, i: i64, n: usize) -> Option<usize> {
+    if (i as u64) < n as u64 {
+        Some(i as usize)
+    } else {
+        kind.texel_index(i, n)
+    }
+}
+
+/// Crow's lerp `b * 2^bits + (c - b) * a` per channel (`a` a weight with `bits` fraction bits,
+/// `a <= 2^bits`): 1 multiply and 2 additive operations per channel; the scale by `2^bits` is a
+/// shift (wiring). In wrapping `u64` arithmetic: the result `b (2^bits - a) + c a` is exact
+/// whenever it is below `2^64` (the difference `c - b` may wrap; the sum is right modulo `2^64`
+/// and lies in `[0, 2^64)`), i.e. whenever `max(b, c) 2^bits < 2^64`.
+#[inline(always)]
+pub(crate) fn lerp<K: Counter, const C: usize>(
+    b: [u64; C],
+    c: [u64; C],
+    a: u64,
     bits: u32,
     k: &mut K,
-) -> [A; C] {
+) -> [u64; C] {
     k.muls(C as u32);
     k.adds(2 * C as u32);
-    core::array::from_fn(|i| (b[i] << bits) + (c[i] - b[i]) * a)
+    let bits = bits.min(63);
+    core::array::from_fn(|i| (b[i] << bits).wrapping_add(c[i].wrapping_sub(b[i]).wrapping_mul(a)))
 }
 
 /// Counts `n` texel reads: all channels of a texel together (`T::BITS * C` bits), and the
@@ -238,15 +319,19 @@ pub(crate) fn count_reads<T: Texel, const C: usize, K: Counter>(n: u32, k: &mut 
 }
 
 /// Prefix sums of the level lengths of an axis of `n` texels (`1 <= n <= 2^31 - 1`, so
-/// `levels <= 32` and the total `< 2n + 32` fits `usize`).
+/// `levels <= 32` and the total `< 2n + 32` fits `usize`): `cum[l] = sum_{k < l} ceil(n / 2^k)`
+/// for `l = 0..=levels`, so the number of levels is `cum.len() - 1`.
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
-pub(crate) fn prefix(n: usize) -> (usize, [usize; MAX_LEVELS + 1]) {
-    let levels = level_count(n).min(MAX_LEVELS);
-    let mut cum = [0usize; MAX_LEVELS + 1];
-    for l in 0..levels {
-        cum[l + 1] = cum[l].saturating_add(level_len(n, l));
+pub(crate) fn prefix(n: usize) -> heapless::Vec<usize, { MAX_LEVELS + 1 }> {
+    let mut cum = heapless::Vec::new();
+    let mut total = 0usize;
+    // A full vector only drops levels past 32, which no side below 2^31 has.
+    let _ = cum.push(0);
+    for l in 0..level_count(n).min(MAX_LEVELS) {
+        total = total.saturating_add(level_len(n, l));
+        let _ = cum.push(total);
     }
-    (levels, cum)
+    cum
 }
 
 /// `sum_l ceil(n / 2^l)` over the levels of an axis, saturating.
@@ -280,12 +365,18 @@ pub(crate) fn check_build(
     got: usize,
 ) -> Result<(), Error> {
     check_dims(width, height)?;
-    let m = (1u128 << texel_bits) - 1;
-    let worst = (2 * m + 1) * width as u128 * height as u128;
-    if worst > u64::MAX as u128 {
+    // texel_bits <= 16 and w, h < 2^31: (2m + 1) < 2^17 and w h < 2^62, so only the last
+    // product can overflow u64.
+    let m = (1u64 << texel_bits.min(16)) - 1;
+    let area = width as u64 * height as u64;
+    let a = 2 * m + 1;
+    if a.checked_mul(area).is_none() {
+        // The exact bits of a * area (< 2^79) from 32-bit halves of area: no 128-bit product.
+        let lo = a * (area & 0xFFFF_FFFF);
+        let hi = a * (area >> 32) + (lo >> 32);
         return Err(Error::TooWide {
             what: Quantity::Entry,
-            bits_needed: bits_of(worst),
+            bits_needed: 32 + bits_of_u64(hi),
             bits_available: 64,
         });
     }
@@ -296,44 +387,25 @@ pub(crate) fn check_build(
 /// `(lo, hi, frac)` with `L = clamp(log2_fixed(side), 0, top)`, `lo = floor(L)`,
 /// `hi = min(lo + 1, top)`, `frac` in `frac_bits` bits ([`level_position`], [`split_level`]).
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
-pub(crate) fn level_split(side_raw: i128, f: u32, frac_bits: u32, top: u32) -> (u32, u32, i64) {
+#[inline(always)]
+pub(crate) fn level_split(side_raw: u64, f: u32, frac_bits: u32, top: u32) -> (u32, u32, u64) {
     split_level(level_position(side_raw, f, frac_bits, top), frac_bits, top)
 }
 
 /// Each channel shifted right by `s` (a truncation, floor).
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 #[inline(always)]
-pub(crate) fn truncate<const C: usize>(v: [i64; C], s: u32) -> [i64; C] {
-    v.map(|c| c >> s)
+pub(crate) fn truncate<const C: usize>(v: [u64; C], s: u32) -> [u64; C] {
+    v.map(|c| c >> s.min(63))
 }
 
-/// The output sample `floor(v / 2^shift)` per channel (negative values, which a convex
-/// combination of texels cannot give, read as 0).
-#[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
-pub(crate) fn floor_sample<const C: usize>(v: [i64; C], shift: u32) -> Sample<C> {
-    Sample {
-        values: v.map(|v| (v.max(0) >> shift) as u64),
-    }
-}
-
-/// The index the mode shows at (possibly huge) level index `i`. Indices outside `i64` (only
-/// reachable with 64-bit raw corners near their limits) are first moved by a multiple of `2n`
-/// to `+-(2^61 rounded to a multiple of 2n) + (i mod 2n)`: still far outside on the same side,
-/// and congruent modulo the period of `Repeat` and `MirroredRepeat`, so every mode answers as
-/// for `i`.
+/// The output sample `floor(v / 2^shift)` per channel.
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 #[inline(always)]
-fn resolve<M: EdgeMode>(mode: M, i: i128, n: usize) -> Option<usize> {
-    let idx = match i64::try_from(i) {
-        Ok(v) => v,
-        Err(_) => {
-            let period = 2 * n as i128;
-            let far = ((1i128 << 61) / period) * period;
-            let r = i.rem_euclid(period);
-            (if i > 0 { far + r } else { r - far }) as i64
-        }
-    };
-    mode.kind().texel_index(idx, n).filter(|&v| v < n)
+pub(crate) fn floor_sample<const C: usize>(v: [u64; C], shift: u32) -> Sample<C> {
+    Sample {
+        values: truncate(v, shift),
+    }
 }
 
 /// One stored level of a rip or dip map: `w x h` texels, row-major, `C` channels.
@@ -350,34 +422,36 @@ pub(crate) struct LevelView<'a, T, const C: usize> {
 
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 impl<T: Texel, const C: usize> LevelView<'_, T, C> {
-    /// Stored texel `(i, j)` (all channels), or `None` outside the level.
+    /// Stored texel `(i, j)` (all channels), or `None` outside the level (or the storage).
+    #[inline(always)]
     pub(crate) fn texel(&self, i: usize, j: usize) -> Option<[T; C]> {
         if i >= self.w || j >= self.h {
             return None;
         }
-        let base = (j * self.w + i) * C;
-        self.data.get(base..base + C)?.try_into().ok()
+        let base = j.checked_mul(self.w)?.checked_add(i)?.checked_mul(C)?;
+        self.data.get(base..base.checked_add(C)?)?.try_into().ok()
     }
 
     /// Texel `(i, j)` of the level under mode `M`, or zeros; counts one read if fetched.
     #[inline(always)]
-    fn fetch<M: EdgeMode, K: Counter>(&self, mode: M, i: i128, j: i128, k: &mut K) -> [i64; C] {
-        let mut out = [0i64; C];
-        if let (Some(x), Some(y)) = (resolve(mode, i, self.w), resolve(mode, j, self.h)) {
-            let base = (y * self.w + x) * C;
-            if let Some(texel) = self.data.get(base..base + C) {
+    fn fetch<M: EdgeMode, K: Counter>(&self, mode: M, i: i64, j: i64, k: &mut K) -> [u64; C] {
+        let kind = mode.kind();
+        let t = match (tap_index(kind, i, self.w), tap_index(kind, j, self.h)) {
+            (Some(x), Some(y)) => self.texel(x, y),
+            _ => None,
+        };
+        match t {
+            Some(texel) => {
                 count_reads::<T, C, K>(1, k);
-                for (o, t) in out.iter_mut().zip(texel) {
-                    *o = t.to_u16() as i64;
-                }
+                texel.map(|t| t.to_u16() as u64)
             }
+            None => [0; C],
         }
-        out
     }
 
-    /// The bilinear probe at the footprint's centre `(px, py) / 2^(F+1)` (base texels) in a
-    /// level that shrinks x by `2^sx` and y by `2^sy`: 4 reads, 3 lerps; weights truncated to
-    /// `weight_bits`, the result with `2 * weight_bits` fraction bits.
+    /// The bilinear probe at the footprint's centre (base texels) in a level that shrinks x by
+    /// `2^sx` and y by `2^sy`: 4 reads, 3 lerps; weights truncated to `weight_bits`, the result
+    /// with `2 * weight_bits` fraction bits (below `2^(16 + 2 weight_bits)`).
     #[inline(always)]
     pub(crate) fn bilinear<M: EdgeMode, K: Counter>(
         &self,
@@ -387,16 +461,19 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
         sy: u32,
         weight_bits: u32,
         k: &mut K,
-    ) -> [i64; C] {
-        let (i0, ax) = split_position(fp.px, fp.f + 1 + sx, weight_bits);
-        let (j0, ay) = split_position(fp.py, fp.f + 1 + sy, weight_bits);
+    ) -> Result<[u64; C], Error> {
+        let (i0, ax) = split_position(fp.cx, fp.f + sx, weight_bits)?;
+        let (j0, ay) = split_position(fp.cy, fp.f + sy, weight_bits)?;
+        // i0, j0 <= i64::MAX >> 1 or a left tap of an odd doubled centre: + 1 stays in i64.
+        let i1 = i0.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
+        let j1 = j0.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         let t00 = self.fetch(mode, i0, j0, k);
-        let t10 = self.fetch(mode, i0 + 1, j0, k);
-        let t01 = self.fetch(mode, i0, j0 + 1, k);
-        let t11 = self.fetch(mode, i0 + 1, j0 + 1, k);
+        let t10 = self.fetch(mode, i1, j0, k);
+        let t01 = self.fetch(mode, i0, j1, k);
+        let t11 = self.fetch(mode, i1, j1, k);
         let r0 = lerp(t00, t10, ax, weight_bits, k);
         let r1 = lerp(t01, t11, ax, weight_bits, k);
-        lerp(r0, r1, ay, weight_bits, k)
+        Ok(lerp(r0, r1, ay, weight_bits, k))
     }
 }
 
@@ -405,7 +482,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::cost::Tally;
-    use fixed::types::{I24F8, I32F32};
+    use fixed::types::{I24F8, I32F32, I64F0};
     use std::vec;
     use std::vec::Vec;
 
@@ -421,6 +498,8 @@ mod tests {
         }
         assert_eq!(level_count(MAX_DIMENSION), MAX_LEVELS);
         assert_eq!(level_len(5, 200), 1);
+        // Regression: n = 0 (no texture has it) no longer underflows.
+        assert_eq!((level_len(0, 3), level_count(0)), (1, 1));
         assert_eq!(check_dims(0, 3), Err(Error::EmptyTexture));
         assert_eq!(
             check_dims(3, MAX_DIMENSION + 1),
@@ -474,21 +553,109 @@ mod tests {
         }
     }
 
+    /// The earlier formulation: the doubled centre `p = x0 + x1` in `i128`, `s = F + 1 + l`.
+    fn split_position_i128(p: i128, s: u32, weight_bits: u32) -> (i128, i64) {
+        let t = p - (1i128 << (s - 1));
+        let i0 = t >> s;
+        let frac = t & ((1i128 << s) - 1);
+        let a = if s >= weight_bits {
+            frac >> (s - weight_bits)
+        } else {
+            frac << (weight_bits - s)
+        };
+        (i0, a as i64)
+    }
+
     #[test]
-    fn positions_split_into_floor_and_truncated_fraction() {
-        for p in -300i128..300 {
-            for s in 1..=6u32 {
-                for bits in [2u32, 4, 16] {
-                    let (i0, a) = split_position(p, s, bits);
-                    // u = p / 2^s - 1/2 = (2p - 2^s) / 2^(s+1).
-                    let num = 2 * p - (1i128 << s);
-                    let den = 1i128 << (s + 1);
-                    assert_eq!(i0, num.div_euclid(den));
-                    let frac = num.rem_euclid(den); // fraction * den
-                    assert_eq!(a as i128, (frac << bits) / den);
+    fn centres_and_positions_match_the_i128_formulation() {
+        let edge = [
+            i64::MIN,
+            i64::MIN + 1,
+            i64::MIN + 2,
+            -3,
+            -2,
+            -1,
+            0,
+            1,
+            2,
+            3,
+            i64::MAX - 2,
+            i64::MAX - 1,
+            i64::MAX,
+        ];
+        let mut pairs: Vec<(i64, i64)> = Vec::new();
+        for x0 in -40i64..40 {
+            for x1 in x0..x0 + 40 {
+                pairs.push((x0, x1));
+            }
+        }
+        for &a in &edge {
+            for &b in &edge {
+                if a <= b {
+                    pairs.push((a, b));
                 }
             }
         }
+        let mut s = 5u64;
+        for _ in 0..20_000 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let a = s as i64 >> (s % 64);
+            let b = a.saturating_add((s >> 7) as i64 >> (s % 61));
+            pairs.push((a, b));
+        }
+        for &(x0, x1) in &pairs {
+            let c = Centre::of(x0, x1);
+            let p = x0 as i128 + x1 as i128;
+            assert_eq!(2 * c.mid as i128 + c.odd as i128, p, "{x0} {x1}");
+            for s in 0..=56u32 {
+                assert_eq!(c.index(s) as i128, p >> (s + 1));
+                for bits in [4u32, 16, 20, 24, 32] {
+                    let (i_old, a_old) = split_position_i128(p, s + 1, bits);
+                    match split_position(c, s, bits) {
+                        Ok((i, a)) => {
+                            assert_eq!((i as i128, a), (i_old, a_old as u64), "{x0} {x1} {s}")
+                        }
+                        // The one case outside i64: x0 = x1 = i64::MIN at s = 0.
+                        Err(e) => {
+                            assert_eq!(e, Error::CoordinateOutOfRange);
+                            assert!(i_old < i64::MIN as i128, "{x0} {x1} {s}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn build_checks_name_the_exact_bits() {
+        // (2m + 1) w h against 2^64, bits as the u128 product has them.
+        for (bits, w, h) in [
+            (16u32, MAX_DIMENSION, MAX_DIMENSION),
+            (16, 1 << 24, 1 << 23),
+            (8, MAX_DIMENSION, 1 << 20),
+            (1, MAX_DIMENSION, MAX_DIMENSION),
+        ] {
+            let worst = ((2u128 << bits) - 1) * w as u128 * h as u128;
+            let got = check_build(bits, w, h, 0, 0);
+            if worst >> 64 == 0 {
+                assert_eq!(got, Ok(()));
+            } else {
+                assert_eq!(
+                    got,
+                    Err(Error::TooWide {
+                        what: Quantity::Entry,
+                        bits_needed: 128 - worst.leading_zeros(),
+                        bits_available: 64
+                    })
+                );
+            }
+        }
+        assert_eq!(
+            check_build(8, 3, 3, 10, 9),
+            Err(Error::StorageTooSmall { needed: 10, got: 9 })
+        );
     }
 
     #[test]
@@ -498,6 +665,7 @@ mod tests {
         assert_eq!(level_position(4 << 8, 8, 12, 1), 1 << 12);
         assert_eq!(level_position(0, 8, 12, 5), 0);
         assert_eq!(level_position(1 << 7, 8, 12, 5), 0); // magnification
+        assert_eq!(level_position(u64::MAX, 0, 12, 31), 31 << 12);
         assert_eq!(split_level((2 << 8) + 77, 8, 5), (2, 3, 77));
         assert_eq!(split_level(5 << 8, 8, 5), (5, 5, 0));
     }
@@ -506,7 +674,11 @@ mod tests {
     fn footprints_are_validated() {
         let r = Rect::<I24F8>::from_f64(1.0, 2.0, 3.5, 2.0).unwrap();
         let fp = footprint(&r).unwrap();
-        assert_eq!((fp.px, fp.py, fp.w, fp.h, fp.f), (1152, 1024, 640, 0, 8));
+        assert_eq!(
+            (fp.cx.mid, fp.cx.odd, fp.cy.mid, fp.cy.odd),
+            (576, 0, 512, 0)
+        );
+        assert_eq!((fp.w, fp.h, fp.f), (640, 0, 8));
         let r = Rect::<I24F8>::from_f64(3.0, 0.0, 1.0, 1.0).unwrap();
         assert_eq!(footprint(&r).err(), Some(Error::InvertedBox));
         let r = Rect::<I32F32>::from_f64(0.0, 0.0, 1.0, 1.0).unwrap();
@@ -517,19 +689,53 @@ mod tests {
                 max: 24
             })
         );
+        // The widest corners: exact centre and side, no overflow.
+        let r = Rect::new(I64F0::MIN, I64F0::MIN, I64F0::MAX, I64F0::MIN);
+        let fp = footprint(&r).unwrap();
+        assert_eq!((fp.cx.mid, fp.cx.odd, fp.w), (-1, 1, u64::MAX));
+        assert_eq!((fp.cy.mid, fp.cy.odd, fp.h), (i64::MIN, 0, 0));
     }
 
     #[test]
     fn lerp_is_crows_and_counts_per_channel() {
         let mut k = Tally::new();
-        let v = lerp([10i64, 0, 7], [20, 255, 7], 3, 2, &mut k);
+        let v = lerp([10u64, 0, 7], [20, 255, 7], 3, 2, &mut k);
         // b 4 + (c - b) 3 with weight 3/4.
         assert_eq!(v, [40 + 30, 765, 28]);
         assert_eq!((k.muls, k.adds), (3, 6));
-        let w = lerp([1i128 << 80], [0], 1 << 8, 8, &mut k);
+        // A falling difference wraps and comes back: exact below 2^64.
+        let w = lerp([65535 << 40], [0], 1 << 8, 8, &mut k);
         assert_eq!(w, [0]);
+        let w = lerp([(1u64 << 56) - 1], [3], 1, 8, &mut k);
+        assert_eq!(w, [((1u64 << 56) - 1) * 255 + 3]);
         let mut k = Tally::new();
         count_reads::<u16, 3, _>(4, &mut k);
         assert_eq!((k.reads, k.bits_read, k.words), (4, 4 * 48, 8));
+    }
+
+    #[test]
+    fn lerp_matches_the_signed_formulation() {
+        // Every pair of 8-bit values, every 8-bit weight; and 16-bit values against i128.
+        let mut k = crate::cost::NoCount;
+        for b in 0..=255u64 {
+            for c in 0..=255u64 {
+                for a in 0..=256u64 {
+                    let want = ((b as i64) << 8) + (c as i64 - b as i64) * a as i64;
+                    assert_eq!(lerp([b], [c], a, 8, &mut k), [want as u64]);
+                }
+            }
+        }
+        let mut s = 9u64;
+        for _ in 0..100_000 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let (b, c) = ((s >> 16) & 0xFFFF_FFFF_FFFF, (s >> 8) & 0xFFFF_FFFF_FFFF);
+            for bits in [8u32, 12, 16] {
+                let a = (s >> 3) & ((1 << bits) - 1);
+                let want = ((b as i128) << bits) + (c as i128 - b as i128) * a as i128;
+                assert_eq!(lerp([b], [c], a, bits, &mut k), [want as u64]);
+            }
+        }
     }
 }

@@ -33,13 +33,13 @@
 //! A bilinear probe at centre `(cx, cy)` in level `(lx, ly)` interpolates the four level texels
 //! around `(cx / 2^lx - 1/2, cy / 2^ly - 1/2)` (level texel `i` covers base
 //! `[i 2^lx, (i+1) 2^lx)`, so its centre is `(i + 1/2) 2^lx`). Indices outside a level are
-//! resolved by the boundary mode on *that level's* grid (`M::texel_index(i, level_width)`):
+//! resolved by the boundary mode on *that level's* grid (`mode.kind().texel_index(i, level_width)`):
 //! for non-power-of-two textures the coarse levels of `Repeat`/`MirroredRepeat` repeat with the
 //! level's own period (as GPUs do); `Border` reads zero outside.
 //!
 //! # Arithmetic and error bound
 //!
-//! Integer throughout, `i64`. A probe's position fraction is truncated to [`WEIGHT_BITS`] bits
+//! Integer throughout, 64 bits (`u64`: every value is a non-negative convex combination). A probe's position fraction is truncated to [`WEIGHT_BITS`] bits
 //! (exact when the level position has at most that many bits: `F + 1 + l <= 16`); the three
 //! lerps `b * 2^16 + (c - b) a` are exact, so the probe is exact for the truncated weights, at
 //! `2 * WEIGHT_BITS` fraction bits; it is truncated (a shift, floor) to [`OUT_FRAC_BITS`] bits.
@@ -66,7 +66,10 @@
 //! [`level_selection_error_bound`]).
 //!
 //! Widths: texels `< 2^16`, weights `< 2^16`: a probe is `< 2^48` before and `< 2^32` after the
-//! truncation; the blend is `< 2^(32 + 2 * 12) = 2^56`. All in `i64`, no overflow possible.
+//! truncation; the blend is `< 2^(32 + 2 * 12) = 2^56`. All in `u64`, no overflow possible; the
+//! footprint's centre and sides are exact in `i64`/`u64` for any `i64` corners (the pyramid
+//! module's `Centre`), and the only refusal is [`Error::CoordinateOutOfRange`] for a probe whose
+//! left tap index would be below `i64::MIN` (`F = 0`, `y0 = y1 = i64::MIN`, or the same in x).
 //!
 //! # Cost (counted as the survey and Crow §2.2 count)
 //!
@@ -117,17 +120,15 @@ pub const fn level_selection_error_bound(texel_bits: u32) -> u64 {
 }
 
 /// A ripmap over caller storage: every level `(lx, ly)` of the 4-D pyramid (module docs).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct RipMap<'a, T: Texel, const C: usize> {
     data: &'a [T],
     width: usize,
     height: usize,
-    levels_x: usize,
-    levels_y: usize,
-    /// `wcum[l] = sum_{k < l} ceil(w / 2^k)`; `wcum[levels_x]` is the band width.
-    wcum: [usize; MAX_LEVELS + 1],
-    /// `hcum[l] = sum_{k < l} ceil(h / 2^k)`.
-    hcum: [usize; MAX_LEVELS + 1],
+    /// `wcum[l] = sum_{k < l} ceil(w / 2^k)` for `l = 0..=levels_x`; the last is the band width.
+    wcum: heapless::Vec<usize, { MAX_LEVELS + 1 }>,
+    /// `hcum[l] = sum_{k < l} ceil(h / 2^k)` for `l = 0..=levels_y`.
+    hcum: heapless::Vec<usize, { MAX_LEVELS + 1 }>,
 }
 
 impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
@@ -158,17 +159,17 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
         let needed = Self::storage_needed(w, h);
         check_build(T::BITS, w, h, needed, storage.len())?;
         let mut map = Self::layout(&[], w, h);
-        for ly in 0..map.levels_y {
-            for lx in 0..map.levels_x {
+        for ly in 0..map.levels_y() {
+            for lx in 0..map.levels_x() {
                 let (start, len) = map.level_range(lx, ly);
                 let out = storage
-                    .get_mut(start..start + len)
+                    .get_mut(start..start.saturating_add(len))
                     .ok_or(Error::StorageTooSmall { needed, got: start })?;
                 fill_box_level(texture, out, lx, ly)?;
             }
         }
         let data: &'a [T] = storage;
-        map.data = &data[..needed];
+        map.data = data.get(..needed).unwrap_or(&[]);
         Ok(map)
     }
 
@@ -178,35 +179,50 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
         check_dims(width, height)?;
         let needed = Self::storage_needed(width, height);
         check_storage(needed, storage.len())?;
-        Ok(Self::layout(&storage[..needed], width, height))
+        Ok(Self::layout(
+            storage.get(..needed).unwrap_or(&[]),
+            width,
+            height,
+        ))
     }
 
     fn layout(data: &'a [T], width: usize, height: usize) -> Self {
-        let (levels_x, wcum) = prefix(width);
-        let (levels_y, hcum) = prefix(height);
         RipMap {
             data,
             width,
             height,
-            levels_x,
-            levels_y,
-            wcum,
-            hcum,
+            wcum: prefix(width),
+            hcum: prefix(height),
         }
     }
 
-    /// Start and length (elements) of level `(lx, ly)`; both in range of the map's levels.
+    /// Start and length (elements) of level `(lx, ly)`. Within the map's levels the sums fit
+    /// (they are below `storage_needed`); saturating arithmetic and the `usize::MAX` start of a
+    /// level past the top only make the level empty ([`RipMap::view`]).
     fn level_range(&self, lx: usize, ly: usize) -> (usize, usize) {
-        let band = self.wcum[self.levels_x];
+        let (Some(&band), Some(&hc), Some(&wc)) =
+            (self.wcum.last(), self.hcum.get(ly), self.wcum.get(lx))
+        else {
+            return (usize::MAX, 0);
+        };
         let lh = level_len(self.height, ly);
-        let start = C * (self.hcum[ly] * band + lh * self.wcum[lx]);
-        (start, C * lh * level_len(self.width, lx))
+        let start = hc
+            .saturating_mul(band)
+            .saturating_add(lh.saturating_mul(wc))
+            .saturating_mul(C);
+        let len = lh
+            .saturating_mul(level_len(self.width, lx))
+            .saturating_mul(C);
+        (start, len)
     }
 
     fn view(&self, lx: usize, ly: usize) -> LevelView<'a, T, C> {
         let (start, len) = self.level_range(lx, ly);
         LevelView {
-            data: self.data.get(start..start + len).unwrap_or(&[]),
+            data: self
+                .data
+                .get(start..start.saturating_add(len))
+                .unwrap_or(&[]),
             w: level_len(self.width, lx),
             h: level_len(self.height, ly),
         }
@@ -224,17 +240,17 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
 
     /// Levels along x: `ceil(log2 w) + 1` (level `levels_x() - 1` is 1 texel wide).
     pub fn levels_x(&self) -> usize {
-        self.levels_x
+        self.wcum.len().saturating_sub(1)
     }
 
     /// Levels along y: `ceil(log2 h) + 1`.
     pub fn levels_y(&self) -> usize {
-        self.levels_y
+        self.hcum.len().saturating_sub(1)
     }
 
     /// `(ceil(w / 2^lx), ceil(h / 2^ly))`, or `None` past the levels.
     pub fn level_size(&self, lx: usize, ly: usize) -> Option<(usize, usize)> {
-        (lx < self.levels_x && ly < self.levels_y)
+        (lx < self.levels_x() && ly < self.levels_y())
             .then(|| (level_len(self.width, lx), level_len(self.height, ly)))
     }
 
@@ -264,27 +280,32 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
     /// 30 additive operations per channel.
     ///
     /// Errors: [`Error::InvertedBox`] if `x1 < x0` or `y1 < y0`;
-    /// [`Error::FracBitsUnsupported`] if `X` has more than 24 fractional bits. A zero-area
-    /// footprint is a point sample of level 0 (bilinear), not an error.
+    /// [`Error::FracBitsUnsupported`] if `X` has more than 24 fractional bits;
+    /// [`Error::CoordinateOutOfRange`] only for a centre at the very bottom of `i64` (module
+    /// docs). A zero-area footprint is a point sample of level 0 (bilinear), not an error.
     pub fn sample<X: Coord, M: EdgeMode, K: Counter>(
         &self,
         rect: &Rect<X>,
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
         let fp = footprint(rect)?;
-        let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, self.levels_x as u32 - 1);
-        let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, self.levels_y as u32 - 1);
+        let top_x = self.levels_x().saturating_sub(1) as u32;
+        let top_y = self.levels_y().saturating_sub(1) as u32;
+        let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, top_x);
+        let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, top_y);
         let shift = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
-        let probe = |lx: u32, ly: u32, k: &mut K| {
+        let probe = |lx: u32, ly: u32, k: &mut K| -> Result<[u64; C], Error> {
             let level = self.view(lx as usize, ly as usize);
-            truncate(level.bilinear(mode, &fp, lx, ly, WEIGHT_BITS, k), shift)
+            Ok(truncate(
+                level.bilinear(mode, &fp, lx, ly, WEIGHT_BITS, k)?,
+                shift,
+            ))
         };
-        let v00 = probe(lox, loy, k);
-        let v10 = probe(hix, loy, k);
-        let v01 = probe(lox, hiy, k);
-        let v11 = probe(hix, hiy, k);
+        let v00 = probe(lox, loy, k)?;
+        let v10 = probe(hix, loy, k)?;
+        let v01 = probe(lox, hiy, k)?;
+        let v11 = probe(hix, hiy, k)?;
         let b0 = lerp(v00, v10, fx, LEVEL_FRAC_BITS, k);
         let b1 = lerp(v01, v11, fx, LEVEL_FRAC_BITS, k);
         let out = lerp(b0, b1, fy, LEVEL_FRAC_BITS, k);
@@ -296,9 +317,10 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
 mod tests {
     extern crate std;
     use super::*;
+    use crate::cost::NoCount;
     use crate::cost::Tally;
     use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
-    use fixed::types::{I24F8, I40F24};
+    use fixed::types::{I24F8, I40F24, I48F16, I56F8, I60F4, I64F0};
     use std::vec;
     use std::vec::Vec;
 
@@ -470,6 +492,139 @@ mod tests {
         }
     }
 
+    /// The earlier formulation: doubled centre and positions in `i128`, lerps in `i64`.
+    fn sample_i128(map: &RipMap<'_, u16, 1>, r: [i64; 4], f: u32, kind: crate::EdgeKind) -> u64 {
+        let (px, py) = (r[0] as i128 + r[2] as i128, r[1] as i128 + r[3] as i128);
+        let top_x = map.levels_x() as u32 - 1;
+        let top_y = map.levels_y() as u32 - 1;
+        let split = |side: i64, top: u32| {
+            let l = log2_fixed(side as u64, f, LEVEL_FRAC_BITS)
+                .unwrap_or(0)
+                .clamp(0, (top as i32) << LEVEL_FRAC_BITS) as u32;
+            let lo = l >> LEVEL_FRAC_BITS;
+            (
+                lo,
+                (lo + 1).min(top),
+                (l & ((1 << LEVEL_FRAC_BITS) - 1)) as i64,
+            )
+        };
+        let (lox, hix, fx) = split(r[2] - r[0], top_x);
+        let (loy, hiy, fy) = split(r[3] - r[1], top_y);
+        let pos = |p: i128, s: u32| {
+            let t = p - (1i128 << (s - 1));
+            let frac = t & ((1i128 << s) - 1);
+            let a = if s >= WEIGHT_BITS {
+                frac >> (s - WEIGHT_BITS)
+            } else {
+                frac << (WEIGHT_BITS - s)
+            };
+            (t >> s, a as i64)
+        };
+        let lerp = |b: i64, c: i64, a: i64, bits: u32| (b << bits) + (c - b) * a;
+        let probe = |lx: u32, ly: u32| -> i64 {
+            let (lw, lh) = map.level_size(lx as usize, ly as usize).unwrap();
+            let (i0, ax) = pos(px, f + 1 + lx);
+            let (j0, ay) = pos(py, f + 1 + ly);
+            let t = |i: i128, j: i128| match (
+                kind.texel_index(i as i64, lw),
+                kind.texel_index(j as i64, lh),
+            ) {
+                (Some(x), Some(y)) => {
+                    map.level_texel(lx as usize, ly as usize, x, y).unwrap()[0] as i64
+                }
+                _ => 0,
+            };
+            let r0 = lerp(t(i0, j0), t(i0 + 1, j0), ax, WEIGHT_BITS);
+            let r1 = lerp(t(i0, j0 + 1), t(i0 + 1, j0 + 1), ax, WEIGHT_BITS);
+            lerp(r0, r1, ay, WEIGHT_BITS) >> (2 * WEIGHT_BITS - OUT_FRAC_BITS)
+        };
+        let b0 = lerp(probe(lox, loy), probe(hix, loy), fx, LEVEL_FRAC_BITS);
+        let b1 = lerp(probe(lox, hiy), probe(hix, hiy), fx, LEVEL_FRAC_BITS);
+        (lerp(b0, b1, fy, LEVEL_FRAC_BITS).max(0) >> (2 * LEVEL_FRAC_BITS)) as u64
+    }
+
+    #[test]
+    fn bit_for_bit_with_the_i128_formulation() {
+        let mut seed = 31u64;
+        for (w, h) in [(5usize, 3usize), (1, 6), (9, 1), (13, 7)] {
+            let t = texels(w * h, 65535, (w * 5 + h) as u64);
+            let tex = Texture::<u16>::new(&t, w, h).unwrap();
+            let mut st = vec![0u16; RipMap::<u16, 1>::storage_needed(w, h)];
+            let map = RipMap::build(&tex, &mut st).unwrap();
+            for _ in 0..1500 {
+                let f = [0u32, 4, 8, 16, 24][(lcg(&mut seed) % 5) as usize];
+                let span = (w.max(h) as i64 * 3) << f;
+                let x0 = (lcg(&mut seed) as i64 % span) - span / 3;
+                let y0 = (lcg(&mut seed) as i64 % span) - span / 3;
+                let r = [
+                    x0,
+                    y0,
+                    x0 + (lcg(&mut seed) as i64 % span),
+                    y0 + (lcg(&mut seed) as i64 % span),
+                ];
+                for kind in crate::EdgeKind::ALL {
+                    let got = match f {
+                        0 => map.sample(
+                            &Rect::new(
+                                I64F0::from_bits(r[0]),
+                                I64F0::from_bits(r[1]),
+                                I64F0::from_bits(r[2]),
+                                I64F0::from_bits(r[3]),
+                            ),
+                            kind,
+                            &mut NoCount,
+                        ),
+                        4 => map.sample(
+                            &Rect::new(
+                                I60F4::from_bits(r[0]),
+                                I60F4::from_bits(r[1]),
+                                I60F4::from_bits(r[2]),
+                                I60F4::from_bits(r[3]),
+                            ),
+                            kind,
+                            &mut NoCount,
+                        ),
+                        8 => map.sample(
+                            &Rect::new(
+                                I56F8::from_bits(r[0]),
+                                I56F8::from_bits(r[1]),
+                                I56F8::from_bits(r[2]),
+                                I56F8::from_bits(r[3]),
+                            ),
+                            kind,
+                            &mut NoCount,
+                        ),
+                        16 => map.sample(
+                            &Rect::new(
+                                I48F16::from_bits(r[0]),
+                                I48F16::from_bits(r[1]),
+                                I48F16::from_bits(r[2]),
+                                I48F16::from_bits(r[3]),
+                            ),
+                            kind,
+                            &mut NoCount,
+                        ),
+                        _ => map.sample(
+                            &Rect::new(
+                                I40F24::from_bits(r[0]),
+                                I40F24::from_bits(r[1]),
+                                I40F24::from_bits(r[2]),
+                                I40F24::from_bits(r[3]),
+                            ),
+                            kind,
+                            &mut NoCount,
+                        ),
+                    };
+                    assert_eq!(
+                        got.unwrap().values[0],
+                        sample_i128(&map, r, f, kind),
+                        "{w}x{h} {r:?} F={f}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn three_channels_count_arithmetic_per_channel() {
         let t: Vec<u8> = (0..6 * 5 * 3).map(|v| (v * 7 % 256) as u8).collect();
@@ -554,8 +709,20 @@ mod tests {
         ] {
             assert!(v.unwrap().values[0] <= 9 << 16);
         }
-        let r = Rect::new(Z::MAX, Z::MIN, Z::MAX, Z::MIN);
+        let r = Rect::new(
+            Z::MAX,
+            Z::from_bits(i64::MIN + 1),
+            Z::MAX,
+            Z::from_bits(i64::MIN + 1),
+        );
         assert!(map.sample(&r, Repeat, &mut Tally::new()).is_ok());
+        // y0 = y1 = i64::MIN at F = 0: the probe's upper tap is below i64::MIN (before the
+        // 64-bit positions it was folded from an i128 index; now a typed refusal).
+        let r = Rect::new(Z::MAX, Z::MIN, Z::MAX, Z::MIN);
+        assert_eq!(
+            map.sample(&r, Repeat, &mut Tally::new()),
+            Err(Error::CoordinateOutOfRange)
+        );
         assert!(RipMap::<u8, 1>::from_storage(&st, 3, 2).is_ok());
         assert!(RipMap::<u8, 1>::from_storage(&st[..5], 3, 2).is_err());
         assert_eq!(

@@ -81,6 +81,20 @@
 //! [`Error::TooWide`] (`LookupAccumulator`, or `MeanNumerator` for `a^2 b^2 >= 2^127`), never a
 //! wrapped value.
 //!
+//! The mode's behaviour comes from the crate's one mapping, [`EdgeMode::kind`]: the lookups take
+//! any `M: EdgeMode` and the extension formulas above match on the [`EdgeKind`] (the texel a
+//! position shows is [`EdgeKind::texel_index`]).
+//!
+//! ## Why the lookups are 128-bit
+//!
+//! This is the one filter whose arithmetic stays `i128`, on purpose: its tables are order-2
+//! integrals, `u64` (or `u128`) entries for any texture worth filtering (8-bit 256 x 256 already
+//! needs 41 bits), and a lookup scales them further: by `s^2 = 2^(2G)` (`G = F + 1`) in the paper
+//! form and by `s^4 = 2^(4G)` in the exact form, times second-difference and extension weights.
+//! At `F = 8` a 41-bit entry times `2^36` is 77 bits before any weight, so 64-bit words cannot hold
+//! even one term; every product is checked in `i128` instead. (For the `u32` entries of tiny
+//! tables the same code runs; the width proof does not change with the entry type.)
+//!
 //! ## Widths and memory
 //!
 //! The largest entry is `Q(w+1, h+1) = m w (w + 2) h (h + 2)` for the all-`m` texture (each
@@ -94,7 +108,7 @@
 //! another 8.03x) and reads the texture itself.
 
 use crate::cost::Counter;
-use crate::edge::{Border, ClampToEdge, EdgeMode, MirroredRepeat, Repeat};
+use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::filters::{Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, Rect};
@@ -116,7 +130,8 @@ pub trait TentEntry: Copy + Default + PartialEq + core::fmt::Debug + 'static {
     const ZERO: Self;
     /// A texel.
     fn from_u16(v: u16) -> Self;
-    /// Addition; the build only adds where [`tent_entry_bits`] has proved the sum fits.
+    /// Addition; the build only adds where [`tent_entry_bits`] has proved the sum fits (it
+    /// wraps, so even a wrong proof could not panic).
     fn plus(self, o: Self) -> Self;
     /// The entry as `i128` (lossless below `2^VALUE_BITS`).
     fn to_i128(self) -> i128;
@@ -134,7 +149,7 @@ macro_rules! impl_tent_entry {
             }
             #[inline(always)]
             fn plus(self, o: Self) -> Self {
-                self + o
+                self.wrapping_add(o)
             }
             #[inline(always)]
             fn to_i128(self) -> i128 {
@@ -185,27 +200,12 @@ pub fn paper_error_bound(texel_bits: u32, a: f64, b: f64) -> f64 {
     m / 4.0 * (1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (2.0 * a * a * b * b))
 }
 
-/// Which boundary mode a [`TentMode`] is: the crate's one [`crate::EdgeKind`].
-pub type TentModeKind = crate::EdgeKind;
+/// A boundary mode of the order-2 lookups: every [`EdgeMode`], nothing more. (A name kept for
+/// callers written against it; the lookups take `M: EdgeMode` and the mode's behaviour is
+/// [`EdgeMode::kind`], so there is no second description of a mode here.)
+pub trait TentMode: EdgeMode {}
 
-/// A boundary mode the order-2 lookups support: all four of [`crate::edge`].
-pub trait TentMode: EdgeMode {
-    /// The mode's extension formulas (module docs, "Boundary modes").
-    const KIND: TentModeKind;
-}
-
-impl TentMode for Border {
-    const KIND: TentModeKind = TentModeKind::Border;
-}
-impl TentMode for ClampToEdge {
-    const KIND: TentModeKind = TentModeKind::Clamp;
-}
-impl TentMode for Repeat {
-    const KIND: TentModeKind = TentModeKind::Repeat;
-}
-impl TentMode for MirroredRepeat {
-    const KIND: TentModeKind = TentModeKind::Mirror;
-}
+impl<M: EdgeMode> TentMode for M {}
 
 fn acc_overflow() -> Error {
     Error::TooWide {
@@ -273,8 +273,13 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
                 got: storage.len(),
             });
         }
+        // (w + 1)(h + 1) C fits (storage_needed): none of these products overflow.
         let row_len = (w + 1) * C;
-        let (body, last) = storage[..needed].split_at_mut(h * row_len);
+        let got = storage.len();
+        let (body, last) = storage
+            .get_mut(..needed)
+            .and_then(|t| t.split_at_mut_checked(h * row_len))
+            .ok_or(Error::StorageTooSmall { needed, got })?;
         last.fill(E::ZERO);
         for y in 0..=h {
             let texels = if y < h {
@@ -286,31 +291,37 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             let mut wx = [E::ZERO; C];
             for xi in 0..=w {
                 for c in 0..C {
+                    let idx = xi * C + c;
                     let t = match texels {
-                        Some(r) if xi < w => E::from_u16(r[xi * C + c].to_u16()),
+                        Some(r) if xi < w => {
+                            r.get(idx).map_or(E::ZERO, |t| E::from_u16(t.to_u16()))
+                        }
                         _ => E::ZERO,
                     };
                     wx[c] = wx[c].plus(v[c].plus(v[c])).plus(t);
                     v[c] = v[c].plus(t);
-                    let idx = xi * C + c;
-                    let vy = last[idx];
-                    let above = if y == 0 {
-                        E::ZERO
-                    } else {
-                        body[(y - 1) * row_len + idx]
+                    let above = match y.checked_sub(1) {
+                        Some(ya) => body.get(ya * row_len + idx).copied().unwrap_or(E::ZERO),
+                        None => E::ZERO,
                     };
-                    let q = above.plus(vy.plus(vy)).plus(wx[c]);
+                    let Some(vy) = last.get_mut(idx) else {
+                        continue;
+                    };
+                    let q = above.plus(vy.plus(*vy)).plus(wx[c]);
                     if y < h {
-                        body[y * row_len + idx] = q;
-                        last[idx] = vy.plus(wx[c]);
+                        *vy = vy.plus(wx[c]);
+                        if let Some(b) = body.get_mut(y * row_len + idx) {
+                            *b = q;
+                        }
                     } else {
-                        last[idx] = q;
+                        *vy = q;
                     }
                 }
             }
         }
+        let table: &'a [E] = storage;
         Ok(TentTable {
-            table: &storage[..needed],
+            table: table.get(..needed).unwrap_or(&[]),
             width: w,
             height: h,
             texel_bits: T::BITS,
@@ -352,7 +363,9 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         let mut out = [E::ZERO; C];
         if x != 0 && y != 0 {
             let base = ((y - 1) * (self.width + 1) + (x - 1)) * C;
-            out.copy_from_slice(&self.table[base..base + C]);
+            for (o, &e) in out.iter_mut().zip(self.table.get(base..base + C)?) {
+                *o = e;
+            }
         }
         Some(out)
     }
@@ -363,8 +376,12 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         if x != 0 && y != 0 && x <= self.width + 1 && y <= self.height + 1 {
             k.reads(1, E::BITS * C as u32);
             k.words((E::BITS * C as u32).div_ceil(32));
+            // x <= w + 1, y <= h + 1: inside the (w + 1)(h + 1) C entries, no overflow.
             let base = ((y - 1) * (self.width + 1) + (x - 1)) * C;
-            for (o, e) in out.iter_mut().zip(&self.table[base..base + C]) {
+            for (o, e) in out
+                .iter_mut()
+                .zip(self.table.get(base..base + C).unwrap_or(&[]))
+            {
                 *o = e.to_i128();
             }
         }
@@ -377,7 +394,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     ///
     /// In range: 9 reads, 3 multiplies + 1 divide (the survey's "9,4"), 8 additive operations
     /// per channel. Zero half-widths are [`Error::ZeroArea`].
-    pub fn sample_int<M: TentMode, K: Counter>(
+    pub fn sample_int<M: EdgeMode, K: Counter>(
         &self,
         cx: i32,
         cy: i32,
@@ -386,23 +403,23 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
+        let kind = mode.kind();
         if a == 0 || b == 0 {
             return Err(Error::ZeroArea);
         }
         let (a, b) = (a as i128, b as i128);
-        let Some(cx) = canonical_centre(M::KIND, cx as i128, a, self.width, 0) else {
+        let Some(cx) = canonical_centre(kind, cx as i128, a, self.width, 0) else {
             return Ok(Sample { values: [0; C] });
         };
-        let Some(cy) = canonical_centre(M::KIND, cy as i128, b, self.height, 0) else {
+        let Some(cy) = canonical_centre(kind, cy as i128, b, self.height, 0) else {
             return Ok(Sample { values: [0; C] });
         };
-        let mut ax = [Axis::Zero; 3];
-        let mut ay = [Axis::Zero; 3];
-        for p in 0..3 {
+        let mut ax = [Axis::Zero, Axis::Zero, Axis::Zero];
+        let mut ay = [Axis::Zero, Axis::Zero, Axis::Zero];
+        for (p, (axp, ayp)) in ax.iter_mut().zip(ay.iter_mut()).enumerate() {
             let d = p as i128 - 1;
-            ax[p] = Axis::Terms(s2_terms(M::KIND, cx + d * a, self.width)?);
-            ay[p] = Axis::Terms(s2_terms(M::KIND, cy + d * b, self.height)?);
+            *axp = Axis::Terms(s2_terms(kind, cx + d * a, self.width)?);
+            *ayp = Axis::Terms(s2_terms(kind, cy + d * b, self.height)?);
         }
         let n = self.paper_numerator(&ax, &ay, 1, k)?;
         // value = N / (4 a^2 b^2); output = round(N 2^(16 - 2) / (a^2 b^2)).
@@ -417,14 +434,13 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     ///
     /// Inverted rectangles are [`Error::InvertedBox`], zero-width or zero-height ones
     /// [`Error::ZeroArea`].
-    pub fn sample<X: Coord, M: TentMode, K: Counter>(
+    pub fn sample<X: Coord, M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<X>,
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
-        let Some(fp) = self.footprint::<X, M>(r)? else {
+        let Some(fp) = self.footprint(r, mode.kind())? else {
             return Ok(Sample { values: [0; C] });
         };
         let n = self.paper_numerator(&fp.ax, &fp.ay, fp.s, k)?;
@@ -449,7 +465,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     /// for `F <= 8` and tables up to the `u64` limit; larger combinations may be refused with
     /// [`Error::TooWide`]. A `lines` or `texture` of other dimensions than the table is
     /// [`Error::RowLength`] (expected the table's `width * C`, or `height` for heights).
-    pub fn sample_exact<T: Texel, L: TentEntry, X: Coord, M: TentMode, K: Counter>(
+    pub fn sample_exact<T: Texel, L: TentEntry, X: Coord, M: EdgeMode, K: Counter>(
         &self,
         lines: &TentLines<'_, L, C>,
         texture: &Texture<'_, T, C>,
@@ -457,7 +473,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let _ = mode;
+        let kind = mode.kind();
         for (got, expected) in [
             (lines.width * C, self.width * C),
             (texture.width() * C, self.width * C),
@@ -468,7 +484,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
                 return Err(Error::RowLength { expected, got });
             }
         }
-        let Some(fp) = self.footprint::<X, M>(r)? else {
+        let Some(fp) = self.footprint(r, kind)? else {
             return Ok(Sample { values: [0; C] });
         };
         let s = fp.s;
@@ -489,8 +505,8 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             pb[p] = fb * (s - fb);
         }
         k.muls(6);
-        let cols: [Option<usize>; 3] = core::array::from_fn(|p| texel_at::<M>(ix[p], self.width));
-        let rows: [Option<usize>; 3] = core::array::from_fn(|p| texel_at::<M>(iy[p], self.height));
+        let cols: [Option<usize>; 3] = ix.map(|i| texel_at(kind, i, self.width));
+        let rows: [Option<usize>; 3] = iy.map(|i| texel_at(kind, i, self.height));
         let cu = C as u32;
         // sX = sum_p w_p pa_p sum_q w_q L_y Cy(col_p)(y_q)   (scale s^3)
         let mut sx = [0i128; C];
@@ -539,9 +555,9 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
                 if let (Some(col), Some(row)) = (cols[p], rows[q]) {
                     k.reads(1, T::BITS * cu);
                     let texels = texture.row(row).ok_or(Error::EmptyTexture)?;
-                    for c in 0..C {
-                        let t = texels[col * C + c].to_u16() as i128;
-                        inner[c] = ck(inner[c].checked_add(ck((t * pb[q]).checked_mul(w[q]))?))?;
+                    for (c, inner) in inner.iter_mut().enumerate() {
+                        let t = texels.get(col * C + c).map_or(0, |t| t.to_u16() as i128);
+                        *inner = ck(inner.checked_add(ck((t * pb[q]).checked_mul(w[q]))?))?;
                     }
                 }
                 k.muls(cu);
@@ -566,7 +582,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
 
     /// Validates a fixed-point footprint and places its three x and y positions (`None`: a
     /// Border footprint entirely outside, whose sample is 0).
-    fn footprint<X: Coord, M: TentMode>(&self, r: &Rect<X>) -> Result<Option<Footprint>, Error> {
+    fn footprint<X: Coord>(&self, r: &Rect<X>, kind: EdgeKind) -> Result<Option<Footprint>, Error> {
         let f = X::FRAC_BITS;
         if f > MAX_FRAC_BITS {
             return Err(Error::FracBitsUnsupported {
@@ -589,19 +605,19 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         let g = f + 1;
         let s = 1i128 << g;
         let (a, b) = (x1 - x0, y1 - y0);
-        let Some(cx) = canonical_centre(M::KIND, x0 + x1, a, self.width, g) else {
+        let Some(cx) = canonical_centre(kind, x0 + x1, a, self.width, g) else {
             return Ok(None);
         };
-        let Some(cy) = canonical_centre(M::KIND, y0 + y1, b, self.height, g) else {
+        let Some(cy) = canonical_centre(kind, y0 + y1, b, self.height, g) else {
             return Ok(None);
         };
         let px = [cx - a, cx, cx + a];
         let py = [cy - b, cy, cy + b];
-        let mut ax = [Axis::Zero; 3];
-        let mut ay = [Axis::Zero; 3];
+        let mut ax = [Axis::Zero, Axis::Zero, Axis::Zero];
+        let mut ay = [Axis::Zero, Axis::Zero, Axis::Zero];
         for p in 0..3 {
-            ax[p] = axis_paper(M::KIND, px[p], self.width, g)?;
-            ay[p] = axis_paper(M::KIND, py[p], self.height, g)?;
+            ax[p] = axis_paper(kind, px[p], self.width, g)?;
+            ay[p] = axis_paper(kind, py[p], self.height, g)?;
         }
         Ok(Some(Footprint {
             ax,
@@ -626,23 +642,23 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     ) -> Result<[i128; C], Error> {
         let w = [1i128, -2, 1];
         let mut n = [0i128; C];
-        for q in 0..3 {
+        for (ayq, &wq) in ay.iter().zip(&w) {
             let mut row = [0i128; C];
-            for p in 0..3 {
+            for (axp, &wp) in ax.iter().zip(&w) {
                 let v = eval1::<C, K>(
-                    &ay[q],
+                    ayq,
                     s,
                     &mut |iyy, k| {
-                        eval1::<C, K>(&ax[p], s, &mut |ixx, k| Ok(self.read(ixx, iyy, k)), k)
+                        eval1::<C, K>(axp, s, &mut |ixx, k| Ok(self.read(ixx, iyy, k)), k)
                     },
                     k,
                 )?;
-                for c in 0..C {
-                    row[c] = ck(row[c].checked_add(ck(v[c].checked_mul(w[p]))?))?;
+                for (r, v) in row.iter_mut().zip(v) {
+                    *r = ck(r.checked_add(ck(v.checked_mul(wp))?))?;
                 }
             }
-            for c in 0..C {
-                n[c] = ck(n[c].checked_add(ck(row[c].checked_mul(w[q]))?))?;
+            for (n, r) in n.iter_mut().zip(row) {
+                *n = ck(n.checked_add(ck(r.checked_mul(wq))?))?;
             }
         }
         k.adds(8 * C as u32);
@@ -695,11 +711,18 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
                 got: storage.len(),
             });
         }
+        // w (h + 1) C + (w + 1) h C fits (storage_needed): none of these products overflow.
         let ncols = w * (h + 1) * C;
-        let (cols, rest) = storage[..needed].split_at_mut(ncols);
+        let got = storage.len();
+        let (cols, rest) = storage
+            .get_mut(..needed)
+            .and_then(|t| t.split_at_mut_checked(ncols))
+            .ok_or(Error::StorageTooSmall { needed, got })?;
         // Columns: row Y-1 of `cols` is Y; the last row holds the running sums V until written.
         let row_len = w * C;
-        let (body, last) = cols.split_at_mut(h * row_len);
+        let (body, last) = cols
+            .split_at_mut_checked(h * row_len)
+            .ok_or(Error::StorageTooSmall { needed, got })?;
         last.fill(E::ZERO);
         for y in 0..=h {
             let texels = if y < h {
@@ -707,47 +730,52 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
             } else {
                 None
             };
-            for idx in 0..row_len {
+            for (idx, v) in last.iter_mut().enumerate() {
                 let t = match texels {
-                    Some(r) => E::from_u16(r[idx].to_u16()),
+                    Some(r) => r.get(idx).map_or(E::ZERO, |t| E::from_u16(t.to_u16())),
                     None => E::ZERO,
                 };
-                let v = last[idx];
-                let above = if y == 0 {
-                    E::ZERO
-                } else {
-                    body[(y - 1) * row_len + idx]
+                let above = match y.checked_sub(1) {
+                    Some(ya) => body.get(ya * row_len + idx).copied().unwrap_or(E::ZERO),
+                    None => E::ZERO,
                 };
-                let q = above.plus(v.plus(v)).plus(t);
+                let q = above.plus(v.plus(*v)).plus(t);
                 if y < h {
-                    body[y * row_len + idx] = q;
-                    last[idx] = v.plus(t);
+                    *v = v.plus(t);
+                    if let Some(b) = body.get_mut(y * row_len + idx) {
+                        *b = q;
+                    }
                 } else {
-                    last[idx] = q;
+                    *v = q;
                 }
             }
         }
         // Rows.
         let rlen = (w + 1) * C;
-        for y in 0..h {
+        for (y, out) in rest.chunks_exact_mut(rlen.max(1)).take(h).enumerate() {
             let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
-            let out = &mut rest[y * rlen..(y + 1) * rlen];
             let mut v = [E::ZERO; C];
             let mut acc = [E::ZERO; C];
-            for xi in 0..=w {
-                for c in 0..C {
+            for (xi, o) in out.chunks_exact_mut(C).enumerate() {
+                for (c, o) in o.iter_mut().enumerate() {
                     let t = if xi < w {
-                        E::from_u16(texels[xi * C + c].to_u16())
+                        texels
+                            .get(xi * C + c)
+                            .map_or(E::ZERO, |t| E::from_u16(t.to_u16()))
                     } else {
                         E::ZERO
                     };
                     acc[c] = acc[c].plus(v[c].plus(v[c])).plus(t);
                     v[c] = v[c].plus(t);
-                    out[xi * C + c] = acc[c];
+                    *o = acc[c];
                 }
             }
         }
-        let (cols, rows) = storage[..needed].split_at(ncols);
+        let storage: &'a [E] = storage;
+        let (cols, rows) = storage
+            .get(..needed)
+            .and_then(|t| t.split_at_checked(ncols))
+            .unwrap_or((&[], &[]));
         Ok(TentLines {
             cols,
             rows,
@@ -767,8 +795,12 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
         if y != 0 && y <= self.height + 1 && i < self.width {
             k.reads(1, E::BITS * C as u32);
             k.words((E::BITS * C as u32).div_ceil(32));
+            // i < w, y <= h + 1: inside the table, no overflow.
             let base = ((y - 1) * self.width + i) * C;
-            for (o, e) in out.iter_mut().zip(&self.cols[base..base + C]) {
+            for (o, e) in out
+                .iter_mut()
+                .zip(self.cols.get(base..base + C).unwrap_or(&[]))
+            {
                 *o = e.to_i128();
             }
         }
@@ -781,8 +813,12 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
         if x != 0 && x <= self.width + 1 && j < self.height {
             k.reads(1, E::BITS * C as u32);
             k.words((E::BITS * C as u32).div_ceil(32));
+            // j < h, x <= w + 1: inside the table, no overflow.
             let base = (j * (self.width + 1) + x - 1) * C;
-            for (o, e) in out.iter_mut().zip(&self.rows[base..base + C]) {
+            for (o, e) in out
+                .iter_mut()
+                .zip(self.rows.get(base..base + C).unwrap_or(&[]))
+            {
                 *o = e.to_i128();
             }
         }
@@ -804,17 +840,16 @@ struct Footprint {
 }
 
 /// The texel the extended texture shows at integer position `i` (`None`: zero).
-fn texel_at<M: TentMode>(i: i128, n: usize) -> Option<usize> {
+fn texel_at(kind: EdgeKind, i: i128, n: usize) -> Option<usize> {
     let i = i64::try_from(i).ok()?;
-    M::KIND.texel_index(i, n)
+    kind.texel_index(i, n)
 }
 
 /// Up to 6 `(index, weight)` pairs: `value = sum weight * f(index)`; index 0 (a zero value) and
 /// zero weights are dropped.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 struct Terms {
-    t: [(usize, i128); 6],
-    len: usize,
+    t: heapless::Vec<(usize, i128), 6>,
 }
 
 impl Terms {
@@ -822,19 +857,16 @@ impl Terms {
         if w == 0 || idx == 0 {
             return Ok(());
         }
-        if let Some(e) = self.t[..self.len].iter_mut().find(|e| e.0 == idx) {
+        if let Some(e) = self.t.iter_mut().find(|e| e.0 == idx) {
             e.1 = ck(e.1.checked_add(w))?;
-        } else if self.len < self.t.len() {
-            self.t[self.len] = (idx, w);
-            self.len += 1;
         } else {
-            return Err(acc_overflow());
+            self.t.push((idx, w)).map_err(|_| acc_overflow())?;
         }
         Ok(())
     }
 
     fn add_scaled(&mut self, o: &Terms, s: i128) -> Result<(), Error> {
-        for &(i, w) in &o.t[..o.len] {
+        for &(i, w) in &o.t {
             self.push(i, ck(w.checked_mul(s))?)?;
         }
         Ok(())
@@ -842,7 +874,7 @@ impl Terms {
 }
 
 /// How one axis of one point is evaluated.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 enum Axis {
     /// The value is 0 (Border, left of the texture): no reads.
     Zero,
@@ -864,11 +896,11 @@ fn eval1<const C: usize, K: Counter>(
 ) -> Result<[i128; C], Error> {
     let cu = C as u32;
     let mut out = [0i128; C];
-    match *ax {
+    match ax {
         Axis::Zero => {}
-        Axis::Crow { i, a } => {
+        &Axis::Crow { i, a } => {
             let v0 = f(i, k)?;
-            let v1 = f(i + 1, k)?;
+            let v1 = f(i.wrapping_add(1), k)?;
             k.muls(cu);
             k.adds(2 * cu);
             for c in 0..C {
@@ -878,7 +910,7 @@ fn eval1<const C: usize, K: Counter>(
         }
         Axis::Terms(t) => {
             let mut used = 0u32;
-            for &(idx, w) in &t.t[..t.len] {
+            for &(idx, w) in &t.t {
                 if w == 0 {
                     continue;
                 }
@@ -901,11 +933,15 @@ fn eval1<const C: usize, K: Counter>(
 
 /// `2 S2_ext(X)` at an integer `X` as terms over the padded line values `s(0..=n+1)`
 /// (module docs, "Boundary modes").
-fn s2_terms(kind: TentModeKind, x: i128, n: usize) -> Result<Terms, Error> {
+fn s2_terms(kind: EdgeKind, x: i128, n: usize) -> Result<Terms, Error> {
+    if n == 0 {
+        // No table has an empty axis; an empty line sums to zero.
+        return Ok(Terms::default());
+    }
     let nn = n as i128;
     let mut t = Terms::default();
     match kind {
-        TentModeKind::Border => {
+        EdgeKind::Border => {
             if x <= 0 {
             } else if x <= nn + 1 {
                 t.push(x as usize, 1)?;
@@ -914,7 +950,7 @@ fn s2_terms(kind: TentModeKind, x: i128, n: usize) -> Result<Terms, Error> {
                 t.push(n + 1, x - nn)?;
             }
         }
-        TentModeKind::Clamp => {
+        EdgeKind::Clamp => {
             if x <= 0 {
                 t.push(1, ck(x.checked_mul(x))?)?;
             } else if x <= nn {
@@ -927,22 +963,23 @@ fn s2_terms(kind: TentModeKind, x: i128, n: usize) -> Result<Terms, Error> {
                     n,
                     ck(ck(1i128.checked_sub(d))?.checked_sub(ck(d2.checked_mul(2))?))?,
                 )?;
-                t.push(n - 1, d2)?;
+                t.push(n.saturating_sub(1), d2)?;
             }
         }
-        TentModeKind::Repeat => {
-            let q = x.div_euclid(nn);
-            let r = x.rem_euclid(nn);
+        EdgeKind::Repeat => {
+            // nn >= 1: neither can fail; checked all the same.
+            let q = x.checked_div_euclid(nn).ok_or_else(acc_overflow)?;
+            let r = x.checked_rem_euclid(nn).ok_or_else(acc_overflow)?;
             // q (n (q - 1) + 2 r) is even: n q (q - 1) and 2 q r are.
             let c1 = ck(q.checked_mul(ck(ck(nn.checked_mul(q - 1))?.checked_add(2 * r))?))? / 2;
             t.push(n + 1, c1)?;
             t.push(n, ck(q.checked_sub(c1))?)?;
             t.push(r as usize, 1)?;
         }
-        TentModeKind::Mirror => {
+        EdgeKind::Mirror => {
             let p = 2 * nn;
-            let q = x.div_euclid(p);
-            let r = x.rem_euclid(p);
+            let q = x.checked_div_euclid(p).ok_or_else(acc_overflow)?;
+            let r = x.checked_rem_euclid(p).ok_or_else(acc_overflow)?;
             let mut c = ck(ck(p.checked_mul(q))?.checked_mul(q))?;
             c = ck(c.checked_add(ck((2 * q).checked_mul(r))?))?;
             let idx = if r <= nn {
@@ -961,17 +998,17 @@ fn s2_terms(kind: TentModeKind, x: i128, n: usize) -> Result<Terms, Error> {
 
 /// Moves the centre `c` (units `2^-g`, half-width `a`) to an equivalent position with small
 /// weights (module docs); `None` for a Border footprint entirely outside `[0, n]`.
-fn canonical_centre(kind: TentModeKind, c: i128, a: i128, n: usize, g: u32) -> Option<i128> {
+fn canonical_centre(kind: EdgeKind, c: i128, a: i128, n: usize, g: u32) -> Option<i128> {
     let end = (n as i128) << g;
     match kind {
-        TentModeKind::Border => {
+        EdgeKind::Border => {
             if c + a <= 0 || c - a >= end {
                 None
             } else {
                 Some(c)
             }
         }
-        TentModeKind::Clamp => {
+        EdgeKind::Clamp => {
             if c + a <= 0 {
                 Some(c + (((-(c + a)) >> g) << g))
             } else if c - a >= end {
@@ -980,19 +1017,20 @@ fn canonical_centre(kind: TentModeKind, c: i128, a: i128, n: usize, g: u32) -> O
                 Some(c)
             }
         }
-        TentModeKind::Repeat => Some(c.rem_euclid(end)),
-        TentModeKind::Mirror => Some(c.rem_euclid(2 * end)),
+        // end = 0 only on an empty axis (no table has one): a zero sample.
+        EdgeKind::Repeat => c.checked_rem_euclid(end),
+        EdgeKind::Mirror => c.checked_rem_euclid(2 * end),
     }
 }
 
 /// The paper (bilinear) evaluation of one axis at `x` (units `2^-g`).
-fn axis_paper(kind: TentModeKind, x: i128, n: usize, g: u32) -> Result<Axis, Error> {
+fn axis_paper(kind: EdgeKind, x: i128, n: usize, g: u32) -> Result<Axis, Error> {
     let s = 1i128 << g;
     let i = x >> g;
     let a = x - (i << g);
     let nn = n as i128;
     Ok(match kind {
-        TentModeKind::Border => {
+        EdgeKind::Border => {
             if i < 0 {
                 Axis::Zero
             } else if i > nn {
@@ -1009,7 +1047,10 @@ fn axis_paper(kind: TentModeKind, x: i128, n: usize, g: u32) -> Result<Axis, Err
             if (0..nn).contains(&i) {
                 Axis::Crow { i: i as usize, a }
             } else if i == nn && a == 0 {
-                Axis::Crow { i: n - 1, a: s }
+                Axis::Crow {
+                    i: n.saturating_sub(1),
+                    a: s,
+                }
             } else {
                 let mut t = Terms::default();
                 t.add_scaled(&s2_terms(kind, i, n)?, s - a)?;
@@ -1041,9 +1082,9 @@ fn finish<const C: usize, K: Counter>(
         .filter(|&d| d < 1u128 << 127)
         .ok_or(wide)?;
     let mut out = [0u64; C];
-    for c in 0..C {
+    for (o, &n) in out.iter_mut().zip(n) {
         k.divs(1);
-        out[c] = div_round_shift(n[c].max(0) as u128, shift, d)?;
+        *o = div_round_shift(n.max(0) as u128, shift, d)?;
     }
     Ok(Sample { values: out })
 }
@@ -1056,8 +1097,12 @@ pub(crate) fn div_round_shift(num: u128, shift: u32, den: u128) -> Result<u64, E
         bits_needed: 65,
         bits_available: 64,
     };
+    let Some(den) = core::num::NonZeroU128::new(den) else {
+        return Err(Error::ZeroArea);
+    };
     let mut q = num / den;
     let mut r = num % den;
+    let den = den.get();
     for _ in 0..shift {
         q = q.checked_mul(2).ok_or_else(wide)?;
         r <<= 1;
@@ -1076,6 +1121,7 @@ pub(crate) fn div_round_shift(num: u128, shift: u32, den: u128) -> Result<u64, E
 mod tests {
     extern crate std;
     use super::*;
+    use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
     use crate::{NoCount, Tally};
     use fixed::types::{I16F16, I24F8, I28F4};
     use std::vec;
@@ -1103,7 +1149,7 @@ mod tests {
 
     /// Direct convolution: `N = sum_ij t_ext(i, j) WX_i WY_j` with per-texel weights scaled by
     /// `2 s^2` each; the exact output is `round(N 2^14 / (a^2 b^2))`.
-    fn direct<M: TentMode>(
+    fn direct<M: EdgeMode>(
         mode: M,
         tex: &[u8],
         w: usize,
@@ -1166,7 +1212,7 @@ mod tests {
         }
     }
 
-    fn every_int<M: TentMode>(mode: M) {
+    fn every_int<M: EdgeMode>(mode: M) {
         for (w, h) in [(1, 1), (1, 4), (4, 1), (3, 5), (5, 3)] {
             let t = tex(w, h, (w * 10 + h) as u64);
             let texture = Texture::<u8>::new(&t, w, h).unwrap();
@@ -1205,9 +1251,33 @@ mod tests {
         every_int(ClampToEdge);
         every_int(Repeat);
         every_int(MirroredRepeat);
+        // The run-time mode is the same lookup (one description of a mode: EdgeMode::kind).
+        for kind in EdgeKind::ALL {
+            every_int(kind);
+        }
     }
 
-    fn exact_random<M: TentMode>(mode: M) {
+    /// Any `EdgeMode` is a `TentMode` (the name is kept for callers written against it).
+    fn takes_tent_mode<M: TentMode>(m: M) -> EdgeKind {
+        m.kind()
+    }
+
+    #[test]
+    fn tent_mode_is_every_edge_mode() {
+        assert_eq!(takes_tent_mode(Border), EdgeKind::Border);
+        assert_eq!(takes_tent_mode(EdgeKind::Mirror), EdgeKind::Mirror);
+    }
+
+    #[test]
+    fn div_round_shift_refuses_a_zero_divisor() {
+        // Regression: a zero divisor was a division panic path; now a typed error.
+        assert_eq!(div_round_shift(5, 3, 0), Err(Error::ZeroArea));
+        assert_eq!(div_round_shift(5, 1, 2), Ok(5));
+        assert_eq!(s2_terms(EdgeKind::Repeat, 7, 0).map(|t| t.t.len()), Ok(0));
+        assert_eq!(canonical_centre(EdgeKind::Mirror, 7, 1, 0, 3), None);
+    }
+
+    fn exact_random<M: EdgeMode>(mode: M) {
         let mut seed = 99u64;
         for (w, h) in [(1, 1), (1, 6), (6, 1), (5, 4), (9, 7)] {
             let t = tex(w, h, (w * 3 + h) as u64);

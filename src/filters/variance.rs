@@ -17,13 +17,34 @@
 //!
 //! `σ^2 = Q/n - (S/n)^2 = (n Q - S^2) / n^2`,
 //!
-//! computed in `u128` integers: `n Q - S^2 >= 0` exactly (Cauchy–Schwarz for the integrals of a
-//! piecewise-constant function), one division at the end, rounded to nearest with ties up, with
-//! [`OUT_FRAC_BITS`] fraction bits. The result is the variance of the extended piecewise-constant
-//! texture over the box, exact before that rounding (so within `2^-17`). The numerator `n Q`
-//! must fit `u128` and `n^2` must be below `2^127`, else [`Error::TooWide`]
-//! (`MeanNumerator`): for 8-bit texels and `F = 8` that allows boxes up to about `2^24` texels
-//! per side.
+//! computed exactly: `n Q - S^2 >= 0` (Cauchy–Schwarz for the integrals of a piecewise-constant
+//! function), rounded to nearest with ties up, with [`OUT_FRAC_BITS`] fraction bits. The result
+//! is the variance of the extended piecewise-constant texture over the box, exact before that
+//! rounding (so within `2^-17`).
+//!
+//! **`u16` and `u32` tables: 64-bit words only.** Their box sums are `u64`. `n Q` and `S^2` need
+//! up to 128 bits, so they are never formed; instead, with `S = a n + r` (`0 <= r < n`):
+//!
+//! * `Q' = Q - a (S + r) = sum A_i (t_i - a)^2` (the second moment about `a = floor(mean)`,
+//!   `A_i` the texels' areas in the box) is `0 <= Q' <= Q < 2^64`, and
+//!   `n Q - S^2 = n Q' - r^2` (variance does not move with the mean);
+//! * `Q' = b n + t`, `r^2 = e n + f` (`r^2 / n` by shift-and-add when `r >= 2^32`: no
+//!   `64 x 64 -> 128` product), so `σ^2 = b + (t - e) / n - f / n^2`, normalised to
+//!   `B + (h + φ / n) / n` with `0 <= h, φ < n`;
+//! * `round(2^16 σ^2) = 2^16 B + floor((2^17 h + floor(2^17 φ / n) + n) / (2n))` (the dropped
+//!   `frac(2^17 φ / n) < 1` cannot carry an integer numerator past a multiple of `2n`), each
+//!   quotient by one `u64` division or by 17 steps of restoring division.
+//!
+//! Every intermediate is below `2^64` when `n < 2^62` (the doubled remainders are below `4n`):
+//! boxes of up to `2^62` raw area units, i.e. `2^46` texels² at `F = 8` (`2^23 x 2^23`), `2^14`
+//! at `F = 24`. Larger boxes are [`Error::TooWide`] (`MeanNumerator`, 62 bits available, the
+//! bits of `n` needed). The result is bit for bit the `u128` formulation's (unit tests: an
+//! exhaustive sweep of small `n`, `S`, `Q` and random large ones).
+//!
+//! **`u64` tables: 128 bits, because the sums are.** Their box sums are `u128` words
+//! ([`crate::BoxSum`] of a `u64` table: sums scaled by `2^2F` exceed 64 bits), so `S`, `Q` and
+//! `n Q` are computed in `u128`: the numerator `n Q` must fit `u128` and `n^2` must be below
+//! `2^127`, else [`Error::TooWide`] (`MeanNumerator`).
 //!
 //! ## Costs
 //!
@@ -51,7 +72,8 @@ use crate::table::Sat;
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
 use crate::wide::Wide;
-use crate::width::{bits_of, check_texel_bits, max_texel};
+use crate::width::{bits_of, bits_of_u64, check_texel_bits, max_texel, max_texel_u64};
+use core::num::NonZeroU64;
 
 /// Exact bits per entry of the squares table: `bits_of((2^b - 1)^2 * w * h)` (saturating at 128).
 pub const fn squares_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
@@ -61,6 +83,22 @@ pub const fn squares_entry_bits(texel_bits: u32, width: usize, height: usize) ->
             .saturating_mul(width as u128)
             .saturating_mul(height as u128),
     )
+}
+
+/// [`squares_entry_bits`] for what a build sees (`texel_bits <= 16`, sides below `2^31`), in
+/// 64-bit words: `m^2 < 2^32` times `w h < 2^62` from 32-bit halves of `w h` (the product is
+/// below `2^94`; the high half `m^2 floor(w h / 2^32) + carry` stays below `2^64`).
+fn squares_bits_u64(texel_bits: u32, width: usize, height: usize) -> u32 {
+    let m = max_texel_u64(texel_bits.min(16));
+    let a = m * m;
+    let b = (width as u64).saturating_mul(height as u64);
+    let lo = a * (b & 0xFFFF_FFFF);
+    let hi = a * (b >> 32) + (lo >> 32);
+    if hi == 0 {
+        bits_of_u64(lo)
+    } else {
+        32 + bits_of_u64(hi)
+    }
 }
 
 /// A summed-area table of the squared texels (inclusive storage, like [`Sat`]).
@@ -82,35 +120,44 @@ impl<'a, E: Entry, const C: usize> SquaresTable<'a, E, C> {
         storage: &'a mut [E],
     ) -> Result<Self, Error> {
         let (w, h) = Self::check::<T>(texture, storage.len())?;
-        let row_len = w * C;
-        let needed = row_len * h;
-        let table = &mut storage[..needed];
+        // check() proved w h C fits and the storage holds it.
+        let row_len = w.saturating_mul(C);
+        let needed = row_len.saturating_mul(h);
+        let got = storage.len();
+        let table = storage
+            .get_mut(..needed)
+            .ok_or(Error::StorageTooSmall { needed, got })?;
+        let mut rows = table.chunks_exact_mut(row_len.max(1));
+        let mut above: Option<&[E]> = None;
         for y in 0..h {
             let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
-            let (done, rest) = table.split_at_mut(y * row_len);
-            let above = if y == 0 {
-                None
-            } else {
-                Some(&done[(y - 1) * row_len..])
-            };
-            let out = &mut rest[..row_len];
+            let out = rows.next().ok_or(Error::StorageTooSmall { needed, got })?;
             let mut run = [E::ZERO; C];
-            for (xi, px) in texels.chunks_exact(C).enumerate() {
-                for c in 0..C {
-                    let t = px[c].to_u16() as u64;
-                    // t^2 <= m^2 <= the worst-case total, which fits E.
-                    run[c] = run[c] + E::from_u64_truncating(t * t);
-                    let i = xi * C + c;
-                    out[i] = match above {
-                        Some(a) => run[c] + a[i],
-                        None => run[c],
-                    };
+            for (xi, (px, o)) in texels
+                .chunks_exact(C)
+                .zip(out.chunks_exact_mut(C))
+                .enumerate()
+            {
+                for (c, ((r, t), o)) in run.iter_mut().zip(px).zip(o.iter_mut()).enumerate() {
+                    let t = t.to_u16() as u64;
+                    // t^2 <= m^2 <= the worst-case total, which fits E (check()): no wrap.
+                    *r = r.wrapping_add(E::from_u64_truncating(t * t));
+                    let up = above
+                        .and_then(|a| a.get(xi * C + c))
+                        .copied()
+                        .unwrap_or(E::ZERO);
+                    *o = r.wrapping_add(up);
                 }
             }
+            above = Some(out);
         }
-        let table: &'a [E] = &storage[..needed];
-        let last = &table[needed - C..];
-        let total_bits = last.iter().map(|e| bits_of(e.to_u128())).max().unwrap_or(0);
+        let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
+        let last = table.get(needed.saturating_sub(C)..).unwrap_or(&[]);
+        let total_bits = last
+            .iter()
+            .map(|e| bits_of_u64(e.to_u64()))
+            .max()
+            .unwrap_or(0);
         Ok(SquaresTable {
             table,
             width: w,
@@ -124,7 +171,7 @@ impl<'a, E: Entry, const C: usize> SquaresTable<'a, E, C> {
     fn check<T: Texel>(texture: &Texture<'_, T, C>, got: usize) -> Result<(usize, usize), Error> {
         let (w, h) = (texture.width(), texture.height());
         check_texel_bits(T::BITS)?;
-        let bits = squares_entry_bits(T::BITS, w, h);
+        let bits = squares_bits_u64(T::BITS, w, h);
         if bits > E::BITS {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -178,8 +225,13 @@ impl<E: Entry, const C: usize> Layout<C> for SquaresTable<'_, E, C> {
         if x != 0 && y != 0 && x <= self.width && y <= self.height {
             k.reads(1, E::BITS * C as u32);
             k.words((E::BITS * C as u32).div_ceil(32));
-            let base = ((y - 1) * self.width + (x - 1)) * C;
-            out.copy_from_slice(&self.table[base..base + C]);
+            // x <= w, y <= h and w h C fits (the build's check): no wrap.
+            let base = ((y - 1).wrapping_mul(self.width).wrapping_add(x - 1)).wrapping_mul(C);
+            if let Some(src) = self.table.get(base..base.wrapping_add(C)) {
+                for (o, &e) in out.iter_mut().zip(src) {
+                    *o = e;
+                }
+            }
         }
         out
     }
@@ -269,61 +321,197 @@ impl<'a, E: Entry, const C: usize> VarianceTables<'a, E, C> {
     }
 }
 
-/// `(n Q - S^2) / n^2` per channel, rounded (module docs), with its operations counted.
-fn finish<W1: Wide, W2: Wide, const C: usize, K: Counter>(
-    s: &BoxSum<W1, C>,
-    q: &BoxSum<W2, C>,
+/// `(n Q - S^2) / n^2` per channel, rounded (module docs), with its operations counted: in
+/// 64-bit words for `u64` sums ([`variance_u64`]), in `u128` for the `u128` sums of `u64`
+/// tables ([`variance_u128`]).
+fn finish<W: Wide, const C: usize, K: Counter>(
+    s: &BoxSum<W, C>,
+    q: &BoxSum<W, C>,
     k: &mut K,
 ) -> Result<Sample<C>, Error> {
     let (wr, hr) = s.sides_raw();
-    let (wr, hr) = (u128::from(wr), u128::from(hr));
-    let wide = |needed: u32, available: u32| Error::TooWide {
-        what: Quantity::MeanNumerator,
-        bits_needed: needed,
-        bits_available: available,
-    };
     k.muls(2);
-    let n = wr
-        .checked_mul(hr)
-        .ok_or(wide(bits_of(wr) + bits_of(hr), 128))?;
-    if n == 0 {
+    if wr == 0 || hr == 0 {
         return Err(Error::ZeroArea);
     }
-    let nn = n
-        .checked_mul(n)
-        .filter(|&v| v < 1u128 << 127)
-        .ok_or(wide(2 * bits_of(n), 127))?;
     let mut out = [0u64; C];
     for (c, o) in out.iter_mut().enumerate() {
-        let (sc, qc): (u128, u128) = (s.scaled_sum(c).into(), q.scaled_sum(c).into());
         k.muls(2);
         k.adds(1);
         k.divs(1);
-        let nq = n
-            .checked_mul(qc)
-            .ok_or(wide(bits_of(n) + bits_of(qc), 128))?;
-        let ss = sc.checked_mul(sc).ok_or(wide(2 * bits_of(sc), 128))?;
-        // n Q >= S^2 for any tables built from a texture (Cauchy–Schwarz); a table that
-        // violates it was not.
-        let num = nq.checked_sub(ss).ok_or(Error::InvalidTable {
-            x: 0,
-            y: 0,
-            channel: c,
-        })?;
-        *o = div_round_shift(num, OUT_FRAC_BITS, nn)?;
+        let (sc, qc) = (s.scaled_sum(c), q.scaled_sum(c));
+        *o = if W::BITS <= 64 {
+            // `Wide` hands its value out only as `u128`; for `u64` words the round trip is a
+            // zero extension and back, folded away (no 128-bit operation is emitted).
+            let (sc, qc) = (low_u64(sc), low_u64(qc));
+            variance_u64(sc, qc, wr, hr, c)?
+        } else {
+            variance_u128(sc.into(), qc.into(), wr, hr, c)?
+        };
     }
     Ok(Sample { values: out })
 }
 
+/// A `u64` word's value (`W::BITS <= 64`).
+#[inline(always)]
+fn low_u64<W: Wide>(v: W) -> u64 {
+    let v: u128 = v.into();
+    v as u64
+}
+
+fn mean_too_wide(needed: u32, available: u32) -> Error {
+    Error::TooWide {
+        what: Quantity::MeanNumerator,
+        bits_needed: needed,
+        bits_available: available,
+    }
+}
+
+/// Largest raw area `n` [`variance_u64`] takes: below `2^62`, so `4n < 2^64`.
+const AREA_LIMIT_BITS: u32 = 62;
+
+/// `round(2^16 (n Q - S^2) / n^2)`, ties up, with `n = wr hr` (`wr, hr >= 1`), in 64-bit words
+/// (module docs, "Exact arithmetic"). [`Error::TooWide`] for `n >= 2^62`;
+/// [`Error::InvalidTable`] (channel `c`) where `n Q < S^2`, which tables of a texture never give.
+fn variance_u64(s: u64, q: u64, wr: u64, hr: u64, c: usize) -> Result<u64, Error> {
+    let invalid = Error::InvalidTable {
+        x: 0,
+        y: 0,
+        channel: c,
+    };
+    let n = wr.checked_mul(hr).ok_or(mean_too_wide(
+        bits_of_u64(wr) + bits_of_u64(hr) - 1,
+        AREA_LIMIT_BITS,
+    ))?;
+    if bits_of_u64(n) > AREA_LIMIT_BITS {
+        return Err(mean_too_wide(bits_of_u64(n), AREA_LIMIT_BITS));
+    }
+    let nz = NonZeroU64::new(n).ok_or(Error::ZeroArea)?;
+    let (a, r) = (s / nz, s % nz);
+    // Q' = Q - a (S + r) >= 0 for a table of a texture; a (S + r) past u64 is past Q.
+    let qp = s
+        .checked_add(r)
+        .and_then(|v| v.checked_mul(a))
+        .and_then(|v| q.checked_sub(v))
+        .ok_or(invalid)?;
+    let (b, t) = (qp / nz, qp % nz);
+    let (e, f) = square_div_rem(r, nz);
+    // σ^2 = b + (g n - f) / n^2 with g = t - e in (-n, n): as B + (h + φ / n) / n.
+    let (g_neg, g_abs) = if t >= e {
+        (false, t - e)
+    } else {
+        (true, e - t)
+    };
+    let (h0_neg, h0_abs, phi) = match (f == 0, g_neg) {
+        (true, _) => (g_neg, g_abs, 0),
+        // g - 1 for g >= 1; -1 for g = 0; -(|g| + 1) for g < 0.
+        (false, false) if g_abs >= 1 => (false, g_abs - 1, n - f),
+        (false, _) => (true, g_abs + 1, n - f),
+    };
+    let (big_b, h) = if h0_neg && h0_abs > 0 {
+        // h0 in [-n, 0): borrow one from b.
+        (b.checked_sub(1).ok_or(invalid)?, n - h0_abs)
+    } else {
+        (b, h0_abs)
+    };
+    // round(2^16 (h + φ/n) / n) = floor((2^17 h + floor(2^17 φ / n) + n) / (2n)).
+    let (phi2, _) = shl_div_rem(phi, 17, nz);
+    let d = NonZeroU64::new(2 * n).ok_or(Error::ZeroArea)?;
+    let (mut quot, rem) = shl_div_rem(h, 17, d);
+    // rem < 2n, phi2 < 2^17, n < 2^62: the sum is below 2^64.
+    quot += (rem + phi2 + n) / d;
+    big_b
+        .checked_mul(1 << OUT_FRAC_BITS)
+        .and_then(|v| v.checked_add(quot))
+        .ok_or(mean_too_wide(65, 64))
+}
+
+/// `(floor(x 2^k / d), x 2^k mod d)` for `x < d < 2^62`: one `u64` division when `x 2^k` fits
+/// 64 bits, else `k` steps of restoring division (the remainder stays below `d`, its double
+/// below `2^63`).
+#[inline]
+fn shl_div_rem(x: u64, k: u32, d: NonZeroU64) -> (u64, u64) {
+    if x.leading_zeros() >= k {
+        let v = x << k;
+        return (v / d, v % d);
+    }
+    let d = d.get();
+    let (mut q, mut rem) = (0u64, x);
+    for _ in 0..k {
+        rem <<= 1;
+        q <<= 1;
+        if rem >= d {
+            rem -= d;
+            q |= 1;
+        }
+    }
+    (q, rem)
+}
+
+/// `(floor(r^2 / n), r^2 mod n)` for `r < n < 2^62`: one `u64` division when `r < 2^32`, else
+/// shift-and-add over the bits of `r` keeping `r^2 = q n + rem` with `rem < n` (every
+/// intermediate below `2n < 2^63`; `q <= r`).
+#[inline]
+fn square_div_rem(r: u64, n: NonZeroU64) -> (u64, u64) {
+    if r >> 32 == 0 {
+        let v = r * r;
+        return (v / n, v % n);
+    }
+    let n = n.get();
+    let (mut q, mut rem) = (0u64, 0u64);
+    for i in (0..64 - r.leading_zeros()).rev() {
+        q <<= 1;
+        rem <<= 1;
+        if rem >= n {
+            rem -= n;
+            q += 1;
+        }
+        if (r >> i) & 1 == 1 {
+            rem += r;
+            if rem >= n {
+                rem -= n;
+                q += 1;
+            }
+        }
+    }
+    (q, rem)
+}
+
+/// The `u128` formulation, for the `u128` sums of `u64` tables: `round((n Q - S^2) 2^16 / n^2)`
+/// with `n Q` in `u128` and `n^2 < 2^127` (module docs: those sums are 128-bit words already).
+fn variance_u128(sc: u128, qc: u128, wr: u64, hr: u64, c: usize) -> Result<u64, Error> {
+    let (wr, hr) = (u128::from(wr), u128::from(hr));
+    // wr, hr < 2^64: the product fits u128.
+    let n = wr.wrapping_mul(hr);
+    let nn = n
+        .checked_mul(n)
+        .filter(|&v| v < 1u128 << 127)
+        .ok_or(mean_too_wide(2 * bits_of(n), 127))?;
+    let nq = n
+        .checked_mul(qc)
+        .ok_or(mean_too_wide(bits_of(n) + bits_of(qc), 128))?;
+    let ss = sc
+        .checked_mul(sc)
+        .ok_or(mean_too_wide(2 * bits_of(sc), 128))?;
+    // n Q >= S^2 for any tables built from a texture (Cauchy–Schwarz); a table that violates it
+    // was not.
+    let num = nq.checked_sub(ss).ok_or(Error::InvalidTable {
+        x: 0,
+        y: 0,
+        channel: c,
+    })?;
+    div_round_shift(num, OUT_FRAC_BITS, nn)
+}
+
 /// `round(num * 2^shift / den)`, ties up, for `0 < den < 2^127`, by restoring division.
 fn div_round_shift(num: u128, shift: u32, den: u128) -> Result<u64, Error> {
-    let wide = || Error::TooWide {
-        what: Quantity::MeanNumerator,
-        bits_needed: 65,
-        bits_available: 64,
+    let wide = || mean_too_wide(65, 64);
+    let Some(den) = core::num::NonZeroU128::new(den) else {
+        return Err(Error::ZeroArea);
     };
     let mut q = num / den;
     let mut r = num % den;
+    let den = den.get();
     for _ in 0..shift {
         q = q.checked_mul(2).ok_or_else(wide)?;
         r <<= 1;
@@ -466,6 +654,21 @@ mod tests {
     }
 
     #[test]
+    fn squares_bits_in_u64_match_the_u128_proof() {
+        for bits in [1u32, 7, 8, 12, 16] {
+            for w in (1usize..70).chain([255, 256, 257, 258, 4095, 65536, (1 << 31) - 1]) {
+                for h in [1usize, 2, 3, 255, 256, 257, 1 << 20, (1 << 31) - 1] {
+                    assert_eq!(
+                        squares_bits_u64(bits, w, h),
+                        squares_entry_bits(bits, w, h),
+                        "{bits} {w}x{h}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn widths_and_refusals() {
         assert_eq!(squares_entry_bits(8, 256, 256), 32);
         // Largest square in u32 at 8 bits: 257 x 257 (255^2 * 257^2 < 2^32); 258 is refused.
@@ -510,6 +713,102 @@ mod tests {
             vt.variance_int(&Rect::new(1, 1, 1, 3), Border, &mut NoCount),
             Err(Error::ZeroArea)
         );
+    }
+
+    #[test]
+    fn u64_formulation_matches_u128_exhaustive_small() {
+        // Every area 1..=40 (as w x h), every sum S <= 3n + 2 and square sum Q <= 9n + 5,
+        // valid or not: the same value, or both InvalidTable.
+        for wr in 1..=8u64 {
+            for hr in 1..=5u64 {
+                let n = wr * hr;
+                for sv in 0..=3 * n + 2 {
+                    for qv in 0..=9 * n + 5 {
+                        let old = variance_u128(sv as u128, qv as u128, wr, hr, 0);
+                        let new = variance_u64(sv, qv, wr, hr, 0);
+                        assert_eq!(new, old, "S={sv} Q={qv} n={wr}x{hr}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn u64_formulation_matches_u128_random_large() {
+        let mut s = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let mut paths = [0u32; 3];
+        for i in 0..200_000 {
+            let wr = (next() >> (next() % 64)).max(1);
+            let hr = (next() >> (next() % 64)).max(1);
+            let (wr, hr) = if i % 3 == 0 {
+                (wr >> 33, hr >> 33)
+            } else {
+                (wr, hr)
+            };
+            let (wr, hr) = (wr.max(1), hr.max(1));
+            let n = wr as u128 * hr as u128;
+            // Valid sums: mean in [0, m], second moment between mean^2 and m^2.
+            let m = (next() % 65536) as u128;
+            let cap = u64::MAX as u128;
+            let sv = (next() as u128 * (m.saturating_mul(n).min(cap) + 1)) >> 64;
+            let lo = (sv * sv).div_ceil(n);
+            let hi = (m * m).saturating_mul(n).min(cap);
+            let qv = if hi > lo {
+                lo + ((next() as u128 * (hi - lo)) >> 64)
+            } else {
+                lo
+            };
+            let qv = match i % 7 {
+                0 => lo,
+                1 if lo > 0 => lo - 1, // just invalid
+                _ => qv,
+            };
+            let (Ok(sv), Ok(qv)) = (u64::try_from(sv), u64::try_from(qv)) else {
+                continue;
+            };
+            let old = variance_u128(sv as u128, qv as u128, wr, hr, 0);
+            let new = variance_u64(sv, qv, wr, hr, 0);
+            if n >= 1 << 62 {
+                assert!(matches!(
+                    new,
+                    Err(Error::TooWide {
+                        bits_available: 62,
+                        ..
+                    })
+                ));
+                paths[0] += 1;
+            } else {
+                assert_eq!(new, old, "S={sv} Q={qv} n={wr}x{hr}");
+                paths[if n >> 32 == 0 { 1 } else { 2 }] += 1;
+            }
+        }
+        assert!(paths.iter().all(|&p| p > 1000), "{paths:?}");
+        // Ties round up on both paths, and the largest areas.
+        assert_eq!(variance_u64(1, 1, 2, 1, 0), Ok(1 << 14)); // var of {0, 1} = 1/4
+        let n = (1u64 << 62) - 1;
+        assert_eq!(
+            variance_u64(n, n, n, 1, 0),
+            variance_u128(n as u128, n as u128, n, 1, 0)
+        );
+        assert_eq!(
+            variance_u64(3 * (n / 2), 9 * (n / 4), n, 1, 0),
+            variance_u128(3 * (n / 2) as u128, 9 * (n / 4) as u128, n, 1, 0)
+        );
+        assert_eq!(
+            variance_u64(1, 1, 1 << 31, 1 << 31, 0),
+            Err(Error::TooWide {
+                what: Quantity::MeanNumerator,
+                bits_needed: 63,
+                bits_available: 62
+            })
+        );
+        assert!(variance_u64(u64::MAX, u64::MAX, u64::MAX, u64::MAX, 0).is_err());
     }
 
     #[test]
