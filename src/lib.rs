@@ -54,7 +54,6 @@ pub mod cost;
 pub mod edge;
 mod error;
 pub mod filters;
-pub mod footprint;
 pub mod layouts;
 pub mod lookup;
 mod rect;

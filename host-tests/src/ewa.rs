@@ -54,8 +54,8 @@
 //! core) instead of a fraction of a second. [`ewa_gaussian_capped`] takes the cap as a
 //! parameter.
 
+use crate::footprint::Footprint;
 use crate::{RefMode, RefTexture};
-use texsat::footprint::Footprint;
 
 /// The Gaussian's exponent factor: weight `exp(-EWA_ALPHA r^2)` for `r^2 = Q / F < 1`.
 pub const EWA_ALPHA: f64 = 2.0;

@@ -813,5 +813,6 @@ pub mod ewa;
 pub mod filter_ref_mip;
 pub mod filter_ref_ripdip;
 pub mod filter_ref_tentvar;
+pub mod footprint;
 pub mod scenes;
 pub mod stability;

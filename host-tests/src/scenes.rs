@@ -14,7 +14,7 @@
 //! pixel square `[px, px + 1) x [py, py + 1)`. That is the box-filtered pixel, the quantity
 //! every prefilter in the report approximates.
 //!
-//! * **Planar mappings** ([`texsat::footprint::Perspective`], affine included): a homography
+//! * **Planar mappings** ([`crate::footprint::Perspective`], affine included): a homography
 //!   maps lines to lines, so the pre-image of the pixel square is exactly the quadrilateral of
 //!   its four mapped corners, and it is convex (the square does not cross the horizon line
 //!   `W = 0` when `W > 0` at all four corners). The mean over it is computed **exactly** (up to
@@ -44,10 +44,10 @@
 //! gets there).
 
 use crate::ewa::EwaEllipse;
+use crate::footprint::{Footprint, Perspective};
 use crate::{RefMode, RefTexture, Rng};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
-use texsat::footprint::{Footprint, Perspective};
 
 /// A screen-to-texture mapping.
 pub trait Mapping: Send + Sync {

@@ -1,8 +1,8 @@
 //! Tests of the report's scenes (host-tests/src/scenes.rs) and the EWA reference
 //! (host-tests/src/ewa.rs).
 
-use texsat::footprint::{Footprint, Perspective};
 use texsat_host_tests::ewa::{ewa_gaussian, ewa_gaussian_capped, EwaEllipse};
+use texsat_host_tests::footprint::{Footprint, Perspective};
 use texsat_host_tests::scenes::*;
 use texsat_host_tests::{RefMode, RefTexture, Rng, RngExt, TestRng};
 

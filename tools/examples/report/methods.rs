@@ -9,7 +9,6 @@ use texsat::filters::point::point;
 use texsat::filters::rip::RipMap;
 use texsat::filters::tent::{TentLines, TentMode, TentTable};
 use texsat::filters::Sample;
-use texsat::footprint::Footprint;
 use texsat::layouts::{Modular, Tiled, TiledSpec};
 use texsat::{
     BoxLookup, BoxSum, Counter, Error, Layout, NoCount, Paper, Rect, Sat, Stable, Texture, Wide,
@@ -17,6 +16,7 @@ use texsat::{
 use texsat_host_tests::filter_ref_mip::{self as rmip, RefImage};
 use texsat_host_tests::filter_ref_ripdip::{self as rrd, DipVariant, LevelSel, RefDip, RefRip};
 use texsat_host_tests::filter_ref_tentvar::{footprint, round_ratio, triangle_weights};
+use texsat_host_tests::footprint::Footprint;
 use texsat_host_tests::scenes::Scene;
 use texsat_host_tests::{axis_weights, ewa::ewa_gaussian, RefMode, RefTexture};
 

@@ -10,9 +10,11 @@
 //! width `max(|du/dx|, |du/dy|)` and height `max(|dv/dx|, |dv/dy|)`. The bounding box of the
 //! pixel's parallelogram (`|du/dx| + |du/dy|` by `|dv/dx| + |dv/dy|`) is offered beside it.
 //!
-//! This is `f64` arithmetic (available in `no_std`; soft-float on a Cortex-M4): the mapping is
-//! the address unit's job, not the texture datapath's, and the lookups take its output converted
-//! to fixed point by [`crate::Rect::from_f64`], which refuses NaN and infinities.
+//! This is host-side `f64` arithmetic, the reference the scenes and the report use (it lived in
+//! the core until the firmware-grade-core issue moved it here: soft double precision has no place
+//! in a Cortex-M4 firmware). The mapping is the address unit's job, not the texture datapath's;
+//! the lookups take its output converted to fixed point by [`texsat::Rect::from_f64`], which
+//! refuses NaN and infinities.
 
 /// A 3 x 3 homogeneous mapping from screen `(x, y)` to texture `(u, v)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
