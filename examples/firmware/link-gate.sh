@@ -135,7 +135,9 @@ echo "ok: a panic-free firmware links; one with [0u8; 4][black_box(9)] fails wit
 # linking firmware must hold no i128 anywhere except in the helpers whose *signature* is 128-bit
 # (gate_width_u128: width::bits_of(u128) and friends, host/compile-time analysis), the fixed
 # crate's float conversion behind Rect::from_f64/from_f32 (host conveniences), and the firmware's
-# own main, which passes gate_width_u128 its u128 argument. (On 32-bit ARM a 128-bit division is
+# own main, which passes gate_width_u128 its u128 argument, and the tent filter, whose order-2
+# tables are u64/u128 by design (quadratic quantities scaled by 2^2G, 77 bits at F = 8; see
+# src/filters/tent.rs and docs/design.md). (On 32-bit ARM a 128-bit division is
 # inlined, so symbol names cannot show it: the IR is the proof.)
 ir_check() {
   local features=$1 name=$2 ll
@@ -149,9 +151,10 @@ ir_check() {
   awk '/^define/{fn=$0; seen=0} /^}/{fn=""} fn != "" && !/^define/ && /^[^;!#]/ && !/#dbg/ && /[ (<{\[]i128[ ,)>}\]*]/ {if(!seen){print fn; seen=1}}' "$ll" \
     | grep -oE '@[^(]+' | sed 's/^@//' >"$OUT/$name/i128-functions.txt"
   local bad
-  bad=$(grep -vE 'gate_width_u128|from_f(64|32)|__cortex_m_rt_main|^main$' "$OUT/$name/i128-functions.txt" || true)
+  local allow='gate_width_u128|from_f(64|32)|__cortex_m_rt_main|^main$|7filters4tent|10tent_gates'
+  bad=$(grep -vE "$allow" "$OUT/$name/i128-functions.txt" || true)
   local allowed
-  allowed=$(grep -cE 'gate_width_u128|from_f(64|32)|__cortex_m_rt_main|^main$' "$OUT/$name/i128-functions.txt" || true)
+  allowed=$(grep -cE "$allow" "$OUT/$name/i128-functions.txt" || true)
   if [ -n "$bad" ]; then
     echo "!!! IR CHECK FAILED for '$name': 128-bit integer operations in the optimized IR of:"
     echo "$bad" | sed 's/^/!!!   /'

@@ -25,7 +25,7 @@ use reference::{
     footprint, paper_bound, tent_f64, tent_rounded, tent_table, variance_f64, variance_rounded,
 };
 use texsat::filters::tent::{
-    paper_error_bound, tent_entry_bits, tent_line_bits, TentEntry, TentLines, TentMode, TentTable,
+    paper_error_bound, tent_entry_bits, tent_line_bits, TentEntry, TentLines, TentTable,
 };
 use texsat::filters::variance::{squares_entry_bits, VarianceTables};
 use texsat::filters::OUT_FRAC_BITS;
@@ -92,7 +92,7 @@ impl<T: RefTexel, E: TentEntry> Tent<T, E> {
     }
 
     /// (integer sample, tally)
-    fn int<const C: usize, M: TentMode>(
+    fn int<const C: usize, M: EdgeMode>(
         &mut self,
         c: (i32, i32),
         ab: (u32, u32),
@@ -107,7 +107,7 @@ impl<T: RefTexel, E: TentEntry> Tent<T, E> {
 
     /// (paper, exact) samples and the exact variant's tally.
     #[allow(clippy::type_complexity)]
-    fn fixed<const C: usize, X: Coord + fixed::traits::Fixed, M: TentMode>(
+    fn fixed<const C: usize, X: Coord + fixed::traits::Fixed, M: EdgeMode>(
         &mut self,
         b: [i64; 4],
         mode: M,

@@ -200,12 +200,6 @@ pub fn paper_error_bound(texel_bits: u32, a: f64, b: f64) -> f64 {
     m / 4.0 * (1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (2.0 * a * a * b * b))
 }
 
-/// A boundary mode of the order-2 lookups: every [`EdgeMode`], nothing more. (A name kept for
-/// callers written against it; the lookups take `M: EdgeMode` and the mode's behaviour is
-/// [`EdgeMode::kind`], so there is no second description of a mode here.)
-pub trait TentMode: EdgeMode {}
-
-impl<M: EdgeMode> TentMode for M {}
 
 fn acc_overflow() -> Error {
     Error::TooWide {
@@ -1255,17 +1249,6 @@ mod tests {
         for kind in EdgeKind::ALL {
             every_int(kind);
         }
-    }
-
-    /// Any `EdgeMode` is a `TentMode` (the name is kept for callers written against it).
-    fn takes_tent_mode<M: TentMode>(m: M) -> EdgeKind {
-        m.kind()
-    }
-
-    #[test]
-    fn tent_mode_is_every_edge_mode() {
-        assert_eq!(takes_tent_mode(Border), EdgeKind::Border);
-        assert_eq!(takes_tent_mode(EdgeKind::Mirror), EdgeKind::Mirror);
     }
 
     #[test]

@@ -72,17 +72,15 @@ use crate::table::Sat;
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
 use crate::wide::Wide;
-use crate::width::{bits_of, bits_of_u64, check_texel_bits, max_texel, max_texel_u64};
+use crate::width::{bits_of, bits_of_u64, check_texel_bits, max_texel_u64};
 use core::num::NonZeroU64;
 
-/// Exact bits per entry of the squares table: `bits_of((2^b - 1)^2 * w * h)` (saturating at 128).
+/// Exact bits per entry of the squares table: `bits_of((2^b - 1)^2 * w * h)` (texel widths
+/// above 32 bits saturate `(2^b - 1)^2` at `2^64 - 1`), without 128-bit arithmetic
+/// ([`crate::width::bits_of_product`]).
 pub const fn squares_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
-    let m = max_texel(texel_bits);
-    bits_of(
-        m.saturating_mul(m)
-            .saturating_mul(width as u128)
-            .saturating_mul(height as u128),
-    )
+    let m = max_texel_u64(texel_bits);
+    crate::width::bits_of_product(m.saturating_mul(m), width as u64, height as u64)
 }
 
 /// [`squares_entry_bits`] for what a build sees (`texel_bits <= 16`, sides below `2^31`), in

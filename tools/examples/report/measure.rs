@@ -6,7 +6,7 @@ use indicatif::ProgressBar;
 use std::collections::HashMap;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use texsat::filters::tent::TentMode;
+use texsat::EdgeMode;
 use texsat::{Border, ClampToEdge, MirroredRepeat, NoCount, Repeat, Tally};
 use texsat_host_tests::scenes::{ideal_image, Scene};
 use texsat_host_tests::RefMode;
@@ -252,7 +252,7 @@ macro_rules! with_const_method {
     };
 }
 
-fn measure_mode<M: TentMode + Copy>(
+fn measure_mode<M: EdgeMode>(
     scene: &Scene,
     methods: &[Method],
     settings: Settings,
@@ -379,7 +379,7 @@ fn failed(method: Method, inputs: &[Input], pixels: usize, note: String) -> Meth
 }
 
 #[allow(clippy::too_many_arguments)]
-fn measure_method<M: TentMode + Copy>(
+fn measure_method<M: EdgeMode>(
     scene: &Scene,
     s: &Structures<'_>,
     refs: &Refs,
