@@ -92,7 +92,7 @@ impl<T: RefTexel, E: TentEntry> Tent<T, E> {
     }
 
     /// (integer sample, tally)
-    fn int<const C: usize, M: EdgeMode>(
+    fn int<const C: usize, M: texsat::EdgeMode>(
         &mut self,
         c: (i32, i32),
         ab: (u32, u32),
@@ -107,7 +107,7 @@ impl<T: RefTexel, E: TentEntry> Tent<T, E> {
 
     /// (paper, exact) samples and the exact variant's tally.
     #[allow(clippy::type_complexity)]
-    fn fixed<const C: usize, X: Coord + fixed::traits::Fixed, M: EdgeMode>(
+    fn fixed<const C: usize, X: Coord + fixed::traits::Fixed, M: texsat::EdgeMode>(
         &mut self,
         b: [i64; 4],
         mode: M,

@@ -200,7 +200,6 @@ pub fn paper_error_bound(texel_bits: u32, a: f64, b: f64) -> f64 {
     m / 4.0 * (1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (2.0 * a * a * b * b))
 }
 
-
 fn acc_overflow() -> Error {
     Error::TooWide {
         what: Quantity::LookupAccumulator,

@@ -445,7 +445,7 @@ impl Storage {
 /// number of cells a footprint overlaps)`, `k0 + 2F` (the headroom of boxes straddling an edge
 /// under a wrapping mode) and 64 for which no input is refused. Returns `(k, refused at k, k0,
 /// refused at k0)`.
-pub fn choose_modular_k<M: EdgeMode>(
+pub fn choose_modular_k<M: texsat::EdgeMode>(
     tex: &Texture<'_, u8>,
     inputs: &[Input],
     mode: M,
@@ -502,7 +502,7 @@ fn get<T>(o: &Option<T>) -> Result<&T, SampleError> {
 
 /// One sample of `method` at `inp`, in texel units, counting to `k`.
 #[inline(always)]
-pub fn eval<M: EdgeMode, K: Counter>(
+pub fn eval<M: texsat::EdgeMode, K: Counter>(
     s: &Structures<'_>,
     scene: &Scene,
     method: Method,
