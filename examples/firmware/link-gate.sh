@@ -142,6 +142,7 @@ echo "ok: a panic-free firmware links; one with [0u8; 4][black_box(9)] fails wit
 ir_check() {
   local features=$1 name=$2 ll
   rm -f "$TARGET_DIR/$TARGET/release/deps/"*.ll
+  touch "$HERE/src/main.rs" # cargo would skip a build it thinks fresh, and emit no IR
   if ! CARGO_TARGET_DIR=$TARGET_DIR cargo rustc --release --locked --target "$TARGET" --bin "$BIN" --no-default-features ${features:+--features "$features"} -- --emit=llvm-ir >"$OUT/$name/ir.log" 2>&1; then
     echo "!!! IR CHECK: the --emit=llvm-ir build failed (log: $OUT/$name/ir.log)"
     return 1
