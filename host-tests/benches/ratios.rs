@@ -16,14 +16,14 @@ use texsat::layouts::{modulus_bits_for, Modular, Tiled, TiledSpec};
 use texsat::{Border, BoxLookup, ClampToEdge, NoCount, Rect, Repeat, Sat, Stable, Tally, Texture};
 use texsat_host_tests::{rng, RngExt};
 
-const N: usize = 1024;
 const F: u32 = 8;
 
 // ---------------------------------------------------------------------------------------------
 // Hand-written baselines: what a firmware engineer writes for one fixed configuration.
 
 /// 4-read box sum, Border: clip, then `S(x1,y1) - S(x1,y0) - (S(x0,y1) - S(x0,y0))`.
-#[inline(never)]
+/// (`#[inline]` like texsat's lookups: both are inlined into the measuring loop.)
+#[inline]
 fn hand_int4(t: &[u32], w: usize, h: usize, r: [i32; 4]) -> u64 {
     let cl = |v: i32, n: usize| v.clamp(0, n as i32) as usize;
     let (x0, x1, y0, y1) = (cl(r[0], w), cl(r[2], w), cl(r[1], h), cl(r[3], h));
@@ -38,8 +38,8 @@ fn hand_int4(t: &[u32], w: usize, h: usize, r: [i32; 4]) -> u64 {
 }
 
 /// 16-read box sum at `F` fractional bits, Border, scaled by `2^2F`: bilinear interpolation of
-/// the table at each corner (exact: S is bilinear in each cell), in `i64`.
-#[inline(never)]
+/// the table at each corner (exact: S is bilinear in each cell), in `i64`, 4 reads per corner.
+#[inline]
 fn hand_16(t: &[u32], w: usize, h: usize, r: [i64; 4]) -> i64 {
     let one = 1i64 << F;
     let cl = |v: i64, n: usize| v.clamp(0, (n as i64) << F);
@@ -61,8 +61,9 @@ fn hand_16(t: &[u32], w: usize, h: usize, r: [i64; 4]) -> i64 {
             j = h - 1;
             b = one;
         }
-        let r0 = s(i, j) * one + (s(i + 1, j) - s(i, j)) * a;
-        let r1 = s(i, j + 1) * one + (s(i + 1, j + 1) - s(i, j + 1)) * a;
+        let (s00, s10, s01, s11) = (s(i, j), s(i + 1, j), s(i, j + 1), s(i + 1, j + 1));
+        let r0 = s00 * one + (s10 - s00) * a;
+        let r1 = s01 * one + (s11 - s01) * a;
         r0 * one + (r1 - r0) * b
     };
     let (x0, x1, y0, y1) = (cl(r[0], w), cl(r[2], w), cl(r[1], h), cl(r[3], h));
@@ -112,7 +113,7 @@ impl HandMip {
 
     /// Trilinear at the footprint `[x0, x1) x [y0, y1)` (raw, F = 8): level from the larger
     /// side, 8 fraction bits of LOD.
-    #[inline(never)]
+    #[inline]
     fn trilinear(&self, r: [i64; 4]) -> i64 {
         let side = (r[2] - r[0]).max(r[3] - r[1]).max(1) as f32 / 256.0;
         let lod = side.log2().max(0.0);
@@ -153,12 +154,18 @@ fn time_pair(
 }
 
 fn main() {
+    // RATIOS_N=256 gives a table that fits the L2 cache (compute-bound ratios); the default,
+    // 1024, is the memory-bound case.
+    let n_side: usize = std::env::var("RATIOS_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1024);
     let quick = std::env::args().any(|a| a == "--quick");
     let (rounds, nbox) = if quick { (3, 2_000) } else { (31, 50_000) };
     let mut rng = rng(0x007E_55A7);
-    let tex: Vec<u8> = (0..N * N).map(|_| rng.random::<u8>()).collect();
-    let texture = Texture::<u8>::new(&tex, N, N).unwrap();
-    let mut st = vec![0u32; N * N];
+    let tex: Vec<u8> = (0..n_side * n_side).map(|_| rng.random::<u8>()).collect();
+    let texture = Texture::<u8>::new(&tex, n_side, n_side).unwrap();
+    let mut st = vec![0u32; n_side * n_side];
     let sat = Sat::build(&texture, &mut st).unwrap();
     let table = sat.entries();
 
@@ -166,8 +173,8 @@ fn main() {
         .map(|_| {
             let (sw, sh) = (rng.random_range(1..65), rng.random_range(1..65));
             let (x, y) = (
-                rng.random_range(0..N as i64 - sw),
-                rng.random_range(0..N as i64 - sh),
+                rng.random_range(0..n_side as i64 - sw),
+                rng.random_range(0..n_side as i64 - sh),
             );
             [x as i32, y as i32, (x + sw) as i32, (y + sh) as i32]
         })
@@ -179,8 +186,8 @@ fn main() {
                 rng.random_range(256..64 << 8),
             );
             let (x, y) = (
-                rng.random_range(0..(N as i64 - 65) << 8),
-                rng.random_range(0..(N as i64 - 65) << 8),
+                rng.random_range(0..(n_side as i64 - 65) << 8),
+                rng.random_range(0..(n_side as i64 - 65) << 8),
             );
             [x, y, x + sw, y + sh]
         })
@@ -191,9 +198,9 @@ fn main() {
         .enumerate()
         .map(|(n, b)| {
             let (sw, sh) = (b[2] - b[0], b[3] - b[1]);
-            let x = ((N as i64) << 8) - sw / 2;
+            let x = ((n_side as i64) << 8) - sw / 2;
             let y = if n % 4 == 0 {
-                ((N as i64) << 8) - sh / 2
+                ((n_side as i64) << 8) - sh / 2
             } else {
                 b[1]
             };
@@ -214,13 +221,13 @@ fn main() {
     // Correctness first: the baselines agree with texsat.
     for (b, r) in frac_boxes.iter().zip(&frects).take(1000) {
         let s: u64 = sat.box_sum(r, Stable, Border, &mut NoCount).unwrap().sum();
-        assert_eq!(s as i64, hand_16(table, N, N, *b));
+        assert_eq!(s as i64, hand_16(table, n_side, n_side, *b));
     }
     for b in int_boxes.iter().take(1000) {
         let r = Rect::new(b[0], b[1], b[2], b[3]);
         assert_eq!(
             sat.box_sum_int(&r, Border, &mut NoCount).unwrap().sum(),
-            hand_int4(table, N, N, *b)
+            hand_int4(table, n_side, n_side, *b)
         );
     }
 
@@ -242,7 +249,7 @@ fn main() {
         || {
             int_boxes
                 .iter()
-                .map(|b| hand_int4(table, N, N, *b))
+                .map(|b| hand_int4(table, n_side, n_side, *b))
                 .fold(0, u64::wrapping_add)
         },
         n,
@@ -270,7 +277,7 @@ fn main() {
         || {
             frac_boxes
                 .iter()
-                .map(|b| hand_16(table, N, N, *b) as u64)
+                .map(|b| hand_16(table, n_side, n_side, *b) as u64)
                 .fold(0, u64::wrapping_add)
         },
         n,
@@ -296,7 +303,7 @@ fn main() {
         || {
             frac_boxes
                 .iter()
-                .map(|b| hand_16(table, N, N, *b) as u64)
+                .map(|b| hand_16(table, n_side, n_side, *b) as u64)
                 .fold(0, u64::wrapping_add)
         },
         n,
@@ -310,9 +317,9 @@ fn main() {
     ));
 
     // 3. Trilinear.
-    let mut mip_st = vec![0u8; MipPyramid::<u8>::storage_needed(N, N).unwrap()];
+    let mut mip_st = vec![0u8; MipPyramid::<u8>::storage_needed(n_side, n_side).unwrap()];
     let mip = MipPyramid::<u8>::build(&texture, &mut mip_st).unwrap();
-    let hmip = HandMip::build(&tex, N, N);
+    let hmip = HandMip::build(&tex, n_side, n_side);
     let (ts, th) = time_pair(
         rounds,
         || {
@@ -373,8 +380,8 @@ fn main() {
 
     // 5. Tiled (8 x 8 tiles) vs flat, per table value read.
     let spec = TiledSpec::tiles(8, 8).unwrap();
-    let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, N, N, 8).unwrap()];
-    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, N).unwrap()];
+    let mut words = vec![0u32; Tiled::<u32>::words_needed(spec, n_side, n_side, 8).unwrap()];
+    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, n_side).unwrap()];
     let tiled = Tiled::<u32>::build(&texture, spec, &mut words, &mut scratch).unwrap();
     let reads = |l: &dyn Fn(&Rect<I24F8>, &mut Tally)| {
         let mut k = Tally::new();
@@ -422,8 +429,8 @@ fn main() {
 
     // 6. Modular (k for boxes up to 65 x 65 cells) vs flat.
     let k = modulus_bits_for(8, 65 * 65);
-    let mut mwords = vec![0u32; Modular::<u32>::words_needed(N, N, k).unwrap()];
-    let mut mrow = vec![0u32; N];
+    let mut mwords = vec![0u32; Modular::<u32>::words_needed(n_side, n_side, k).unwrap()];
+    let mut mrow = vec![0u32; n_side];
     let modular = Modular::<u32>::build(&texture, k, &mut mwords, &mut mrow).unwrap();
     let (tm, tf) = time_pair(
         rounds,
@@ -456,7 +463,7 @@ fn main() {
         "<= 1.3".into(),
     ));
 
-    println!("| lookup (1024^2, u8 texels, u32 table; {nbox} boxes, {rounds} rounds, medians) | texsat ns | baseline ns | ratio | target |");
+    println!("| lookup ({n_side}^2, u8 texels, u32 table; {nbox} boxes, {rounds} rounds, medians) | texsat ns | baseline ns | ratio | target |");
     println!("|---|---|---|---|---|");
     for (name, a, b, r, t) in rows {
         println!("| {name} | {a:.2} | {b:.2} | {r:.2} | {t} |");
