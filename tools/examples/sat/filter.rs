@@ -51,9 +51,7 @@ use fixed::types::extra::{
 use fixed::FixedI64;
 use serde_json::{json, Map, Value};
 use texsat::filters::{Sample, OUT_FRAC_BITS};
-use texsat::{
-    Border, ClampToEdge, Error, MirroredRepeat, Paper, Rect, Repeat, Stable, Tally, Texel, Texture,
-};
+use texsat::{Error, Rect, Tally, Texel, Texture};
 
 #[cfg(feature = "filter-dip")]
 use texsat::filters::dip::{DipFilter, DipMap, DipPyramid};
@@ -207,30 +205,6 @@ pub struct FilterQuery {
     pub entry: Option<EntryArg>,
 }
 
-/// Runs `$body` with `$m` bound to the boundary mode's zero-sized value.
-macro_rules! by_mode {
-    ($edge:expr, $m:ident => $body:expr) => {
-        match $edge {
-            EdgeArg::Border => {
-                let $m = Border;
-                $body
-            }
-            EdgeArg::Clamp => {
-                let $m = ClampToEdge;
-                $body
-            }
-            EdgeArg::Repeat => {
-                let $m = Repeat;
-                $body
-            }
-            EdgeArg::Mirror => {
-                let $m = MirroredRepeat;
-                $body
-            }
-        }
-    };
-}
-
 /// Runs `$body` with `$r` bound to the box `$raw` (raw units, `$f` fraction bits) as a
 /// `Rect<FixedI64<U$f>>`: the filters take the corner type's `F` at compile time.
 macro_rules! by_frac {
@@ -321,7 +295,7 @@ pub fn query<T: ImageTexel, const C: usize>(
     match q.filter {
         #[cfg(feature = "filter-point")]
         FilterArg::Point => run_lines(q, |raw, k| {
-            by_frac!(q.frac_bits, raw, r => by_mode!(q.edge, m => point::point(texture, &r, m, k)))
+            by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); point::point(texture, &r, m, k) })
                 .map(|s| (s, None))
         }),
         #[cfg(feature = "filter-mip")]
@@ -334,11 +308,11 @@ pub fn query<T: ImageTexel, const C: usize>(
                 .map_err(|e| build_error(q.filter, "mip pyramid", e))?;
             let tri = q.filter == FilterArg::Trilinear;
             run_lines(q, |raw, k| {
-                by_frac!(q.frac_bits, raw, r => by_mode!(q.edge, m => if tri {
+                by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); if tri {
                     pyramid.trilinear(&r, m, k)
                 } else {
                     pyramid.point_sample(&r, m, k)
-                }))
+                } })
                 .map(|s| (s, None))
             })
         }
@@ -349,7 +323,7 @@ pub fn query<T: ImageTexel, const C: usize>(
             let map =
                 RipMap::build(texture, &mut st).map_err(|e| build_error(q.filter, "ripmap", e))?;
             run_lines(q, |raw, k| {
-                by_frac!(q.frac_bits, raw, r => by_mode!(q.edge, m => map.sample(&r, m, k)))
+                by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); map.sample(&r, m, k) })
                     .map(|s| (s, None))
             })
         }
@@ -365,7 +339,7 @@ pub fn query<T: ImageTexel, const C: usize>(
                 DipFilter::Trilinear
             };
             run_lines(q, |raw, k| {
-                by_frac!(q.frac_bits, raw, r => by_mode!(q.edge, m => map.sample(&r, variant, m, k)))
+                by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); map.sample(&r, variant, m, k) })
                     .map(|s| (s, None))
             })
         }
@@ -417,10 +391,13 @@ fn tent_query<T: ImageTexel, E: TentEntry, const C: usize>(
     let f = q.frac_bits;
     run_lines(q, |raw, k| {
         if let Some((cx, cy, a, b)) = tent_int_box(raw, f) {
-            let s = by_mode!(q.edge, m => table.sample_int(cx, cy, a, b, m, k))?;
+            let s = {
+                let m = q.edge.kind();
+                table.sample_int(cx, cy, a, b, m, k)
+            }?;
             return Ok((s, Some("int")));
         }
-        let s = by_frac!(f, raw, r => by_mode!(q.edge, m => table.sample(&r, m, k)))?;
+        let s = by_frac!(f, raw, r => { let m = q.edge.kind(); table.sample(&r, m, k) })?;
         Ok((s, Some("paper")))
     })
 }
@@ -459,7 +436,7 @@ fn tent_exact_query<T: ImageTexel, E: TentEntry, L: TentEntry, const C: usize>(
     let mut st = storage(needed, L::ZERO, q.filter)?;
     let lines = TentLines::<L, C>::build(texture, &mut st).map_err(err)?;
     run_lines(q, |raw, k| {
-        by_frac!(q.frac_bits, raw, r => by_mode!(q.edge, m => table.sample_exact(&lines, texture, &r, m, k)))
+        by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); table.sample_exact(&lines, texture, &r, m, k) })
             .map(|s| (s, None))
     })
 }
@@ -496,15 +473,15 @@ fn variance_query<T: ImageTexel, E: texsat::Entry, const C: usize>(
             let c = raw.map(|v| i32::try_from(v >> f));
             if let [Ok(x0), Ok(y0), Ok(x1), Ok(y1)] = c {
                 let r = Rect::new(x0, y0, x1, y1);
-                let s = by_mode!(q.edge, m => tables.variance_int(&r, m, k))?;
+                let s = {
+                    let m = q.edge.kind();
+                    tables.variance_int(&r, m, k)
+                }?;
                 return Ok((s, Some("int")));
             }
             return Err(Error::CoordinateOutOfRange);
         }
-        let s = by_frac!(f, raw, r => match q.form {
-            FormArg::Paper => by_mode!(q.edge, m => tables.variance(&r, Paper, m, k)),
-            FormArg::Stable => by_mode!(q.edge, m => tables.variance(&r, Stable, m, k)),
-        })?;
+        let s = by_frac!(f, raw, r => tables.variance(&r, q.form.kind(), q.edge.kind(), k))?;
         let form = match q.form {
             FormArg::Paper => "paper",
             FormArg::Stable => "stable",
