@@ -206,6 +206,33 @@ impl Wide for u128 {
     }
 }
 
+/// `round(num * 2^shift / den)`, ties up, for `0 < den < 2^127`, by restoring division (no
+/// intermediate wider than `2 den`); a quotient above `u64` is [`Error::TooWide`], a zero `den`
+/// [`Error::ZeroArea`]. The one 128-bit rounded division of the crate, for the quantities that
+/// are 128-bit by nature (the tent filter's order-2 sums, the variance of `u64` tables).
+#[allow(dead_code)] // used only by some filter features
+pub(crate) fn div_round_shift_u128(num: u128, shift: u32, den: u128) -> Result<u64, Error> {
+    let wide = || too_wide(65, 64);
+    let Some(den) = core::num::NonZeroU128::new(den) else {
+        return Err(Error::ZeroArea);
+    };
+    let mut q = num / den;
+    let mut r = num % den;
+    let den = den.get();
+    for _ in 0..shift {
+        q = q.checked_mul(2).ok_or_else(wide)?;
+        r <<= 1;
+        if r >= den {
+            r -= den;
+            q += 1;
+        }
+    }
+    if r >= den - r {
+        q += 1;
+    }
+    u64::try_from(q).map_err(|_| wide())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -71,18 +71,11 @@ pub(crate) fn level_count(n: usize) -> usize {
     (usize::BITS - n.saturating_sub(1).leading_zeros()) as usize + 1
 }
 
-/// Refuses dimensions a texture could not have: [`Error::EmptyTexture`] for a zero side,
-/// [`Error::TextureTooLarge`] past `2^31 - 1`.
+/// Refuses dimensions a texture could not have: the crate's one size check
+/// ([`crate::texture`]'s `check_dimensions`, one channel).
+#[inline]
 pub(crate) fn check_dims(width: usize, height: usize) -> Result<(), Error> {
-    if width == 0 || height == 0 {
-        return Err(Error::EmptyTexture);
-    }
-    if width > MAX_DIMENSION || height > MAX_DIMENSION {
-        return Err(Error::TextureTooLarge {
-            dimension: width.max(height),
-        });
-    }
-    Ok(())
+    crate::texture::check_dimensions(width, height, 1)
 }
 
 /// Fills `out` (`lw * lh * C` elements, row-major, `lw = ceil(w / 2^sx)`, `lh = ceil(h / 2^sy)`)

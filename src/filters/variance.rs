@@ -501,28 +501,8 @@ fn variance_u128(sc: u128, qc: u128, wr: u64, hr: u64, c: usize) -> Result<u64, 
     div_round_shift(num, OUT_FRAC_BITS, nn)
 }
 
-/// `round(num * 2^shift / den)`, ties up, for `0 < den < 2^127`, by restoring division.
-fn div_round_shift(num: u128, shift: u32, den: u128) -> Result<u64, Error> {
-    let wide = || mean_too_wide(65, 64);
-    let Some(den) = core::num::NonZeroU128::new(den) else {
-        return Err(Error::ZeroArea);
-    };
-    let mut q = num / den;
-    let mut r = num % den;
-    let den = den.get();
-    for _ in 0..shift {
-        q = q.checked_mul(2).ok_or_else(wide)?;
-        r <<= 1;
-        if r >= den {
-            r -= den;
-            q += 1;
-        }
-    }
-    if r >= den - r {
-        q += 1;
-    }
-    u64::try_from(q).map_err(|_| wide())
-}
+/// The crate's one 128-bit rounded division ([`crate::wide`]).
+pub(crate) use crate::wide::div_round_shift_u128 as div_round_shift;
 
 #[cfg(test)]
 mod tests {

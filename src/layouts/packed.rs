@@ -12,7 +12,6 @@
 //! are refused.
 
 use crate::error::Error;
-use crate::texture::MAX_DIMENSION;
 
 /// Bits per storage word.
 pub const WORD_BITS: u32 = 32;
@@ -61,23 +60,7 @@ pub(crate) const fn words_of_bits(bits: u64, max_words: u64) -> Option<usize> {
     }
 }
 
-/// The size check every layout shares (the `const` twin of the texture's): both sides in
-/// `1..=2^31 - 1` and at least one channel.
-pub(crate) const fn check_dimensions(
-    width: usize,
-    height: usize,
-    channels: usize,
-) -> Result<(), Error> {
-    if width == 0 || height == 0 || channels == 0 {
-        return Err(Error::EmptyTexture);
-    }
-    if width > MAX_DIMENSION || height > MAX_DIMENSION {
-        return Err(Error::TextureTooLarge {
-            dimension: if width > height { width } else { height },
-        });
-    }
-    Ok(())
-}
+pub(crate) use crate::texture::check_dimensions;
 
 /// `bits_of(a * b)`: the position of the highest set bit of the exact 128-bit product (`0` for
 /// `0`), without a 128-bit multiply (32-bit limbs, as a 32-bit core would do it).
