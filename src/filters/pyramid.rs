@@ -42,7 +42,7 @@ use crate::error::Error;
 use crate::filters::level::log2_fixed;
 use crate::rect::{Coord, Rect};
 use crate::texel::Texel;
-use crate::texture::{Texture, MAX_DIMENSION};
+use crate::texture::Texture;
 use crate::width::MAX_FRAC_BITS;
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 use crate::{edge::EdgeMode, error::Quantity, filters::Sample, width::bits_of_u64};
@@ -475,6 +475,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::cost::Tally;
+    use crate::texture::MAX_DIMENSION;
     use fixed::types::{I24F8, I32F32, I64F0};
     use std::vec;
     use std::vec::Vec;
