@@ -243,8 +243,32 @@ fn periods(x: i64, p: i64) -> Option<(i64, i64)> {
     } else if x >= p && x - p < p {
         Some((1, x - p))
     } else {
-        Some((x.checked_div_euclid(p)?, x.checked_rem_euclid(p)?))
+        Some(div_euclid_narrow(x, p)?)
     }
+}
+
+/// `(floor(x / p), x mod p)` for `p > 0` with one division, in 32 bits when `|x|` and `p` fit
+/// (a hardware `udiv` on the Cortex-M4, against a software 64-bit division of several hundred
+/// instructions), else one 64-bit division. `None` only for `p <= 0`.
+#[inline(always)]
+fn div_euclid_narrow(x: i64, p: i64) -> Option<(i64, i64)> {
+    if p <= 0 {
+        return None;
+    }
+    if let (Ok(a), Ok(d)) = (u32::try_from(x.unsigned_abs()), u32::try_from(p)) {
+        let d = core::num::NonZeroU32::new(d)?;
+        let (q0, r0) = (i64::from(a / d), i64::from(a % d));
+        return Some(if x >= 0 {
+            (q0, r0)
+        } else if r0 == 0 {
+            (-q0, 0)
+        } else {
+            (-q0 - 1, p - r0)
+        });
+    }
+    // `q p` cannot overflow: `|q p| <= |x| + p`.
+    let q = x.checked_div_euclid(p)?;
+    Some((q, x.wrapping_sub(q.wrapping_mul(p))))
 }
 
 /// Places `[lo, hi)` (raw, `hi >= lo`) against an axis of `n >= 1` texels at `F = f`
@@ -402,6 +426,47 @@ mod tests {
         assert_eq!(EdgeKind::Mirror.texel_index(i64::MIN, 3), Some(1));
         assert_eq!(EdgeKind::Repeat.texel_index(i64::MAX, 3), Some(1));
         assert_eq!(EdgeKind::Clamp.texel_index(i64::MIN, 3), Some(0));
+    }
+
+    #[test]
+    fn narrow_division_matches_div_euclid() {
+        for p in [
+            1i64,
+            2,
+            3,
+            7,
+            255,
+            1 << 20,
+            u32::MAX as i64,
+            u32::MAX as i64 + 1,
+            1 << 40,
+        ] {
+            for x in [
+                0i64,
+                1,
+                -1,
+                5,
+                -5,
+                p,
+                -p,
+                p + 1,
+                -p - 1,
+                u32::MAX as i64,
+                -(u32::MAX as i64),
+                u32::MAX as i64 + 1,
+                -(u32::MAX as i64) - 1,
+                i64::MAX,
+                i64::MIN,
+                i64::MIN + 1,
+            ] {
+                assert_eq!(
+                    div_euclid_narrow(x, p),
+                    Some((x.div_euclid(p), x.rem_euclid(p))),
+                    "{x} {p}"
+                );
+            }
+        }
+        assert_eq!(div_euclid_narrow(5, 0), None);
     }
 
     #[test]

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Executed instructions per call, from a QEMU exec log of the `texsat-count` firmware.
+
+    count_insns.py ELF LOG --llvm-bin DIR [--reps 11] [--texels 4096] [--mip]
+
+The log comes from `qemu-system-arm -singlestep -d exec,nochain`: one TB per instruction, one
+`Trace` line per executed TB, whose second bracketed field is the PC. The firmware (src/count.rs)
+calls per entry point: a mark, the call once, a mark, the call REPS times, a mark. So the regions
+between consecutive marks come in triples (setup since the last mark, 1 call, REPS calls) and
+(count(REPS) - count(1)) / (REPS - 1) is the per-call count without the setup; the baseline
+entry (an empty wrapper of the same shape) is subtracted from the others.
+"""
+import argparse
+import re
+import subprocess
+import sys
+
+ENTRIES = [
+    ("baseline", "harness overhead per call (empty wrapper: loop, `bl`, `bx lr`, `black_box` of the arguments)"),
+    ("int_border", "1. `Sat::box_sum_int` Border, interior box (4 reads)"),
+    ("stable_border", "2. `Sat::box_sum` Stable Border, interior box"),
+    ("stable_repeat_in", "3. `Sat::box_sum` Stable Repeat, inside one period (not the first)"),
+    ("stable_repeat_cross", "4. `Sat::box_sum` Stable Repeat, crossing the right edge"),
+    ("mean_rounded", "`BoxSum::mean_rounded(0, 8, ..)` alone"),
+    ("stable_border_mean", "5. 2 + `BoxSum::mean_rounded(0, 8, ..)`"),
+    ("sat_build", "6. `Sat::build`"),
+    ("tiled_int_border", "7a. `Tiled` 8x8 tiles `box_sum_int` Border (4 corners)"),
+    ("tiled_stable_border", "7b. `Tiled` 8x8 tiles `box_sum` Stable Border"),
+]
+MIP_ENTRIES = [
+    ("mip_trilinear", "8a. `MipPyramid::trilinear` Border (20.25 x 15.25 box)"),
+    ("mip_trilinear_repeat", "8b. `MipPyramid::trilinear` Repeat (same box, 2nd period)"),
+]
+
+TRACE = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
+
+
+def symbol_addr(llvm_bin, elf, name):
+    out = subprocess.run([f"{llvm_bin}/llvm-nm", elf], capture_output=True, text=True, check=True)
+    for line in out.stdout.splitlines():
+        parts = line.split()
+        if len(parts) == 3 and parts[2] == name:
+            return int(parts[0], 16) & ~1
+    sys.exit(f"count_insns: symbol {name} not found in {elf}")
+
+
+def symbols(llvm_bin, elf):
+    out = subprocess.run(
+        [f"{llvm_bin}/llvm-nm", "-C", "--defined-only", "--numeric-sort", elf],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    syms = []
+    for line in out.stdout.splitlines():
+        parts = line.split(None, 2)
+        if len(parts) == 3 and parts[1] in "tTwW":
+            syms.append((int(parts[0], 16) & ~1, parts[2]))
+    return syms
+
+
+def profile(a, entries, pcs):
+    """Instructions per call in each function, from the REPS region of each entry point."""
+    import bisect
+    from collections import Counter
+
+    syms = symbols(a.llvm_bin, a.elf)
+    addrs = [s[0] for s in syms]
+    pcs.insert(0, [])
+    for i, (key, label) in enumerate(entries):
+        c = Counter()
+        for pc in pcs[3 * i + 2]:
+            j = bisect.bisect_right(addrs, pc) - 1
+            c[syms[j][1] if j >= 0 else "?"] += 1
+        print(f"profile {key} ({a.reps} calls, instructions per call by function):", file=sys.stderr)
+        for name, n in c.most_common():
+            name = re.sub(r"::<.*", "::<..>", name) if len(name) > 110 else name
+            print(f"  {n / a.reps:10.1f}  {name}", file=sys.stderr)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("elf")
+    ap.add_argument("log")
+    ap.add_argument("--llvm-bin", required=True)
+    ap.add_argument("--reps", type=int, default=11)
+    ap.add_argument("--texels", type=int, default=64 * 64)
+    ap.add_argument("--mip", action="store_true")
+    ap.add_argument("--raw", action="store_true", help="also print the raw region counts")
+    ap.add_argument(
+        "--profile",
+        action="store_true",
+        help="also print, per entry point, the instructions per call in each function (symbol)",
+    )
+    a = ap.parse_args()
+
+    mark = symbol_addr(a.llvm_bin, a.elf, "texsat_count_mark")
+    regions = []  # instruction counts between consecutive mark entries
+    pcs = []  # per region: the PCs executed (only with --profile)
+    cur = None
+    with open(a.log, errors="replace") as f:
+        for line in f:
+            m = TRACE.match(line)
+            if not m:
+                continue
+            pc = int(m.group(1), 16)
+            if pc == mark:
+                if cur is not None:
+                    regions.append(cur)
+                cur = 0
+                if a.profile:
+                    pcs.append([])
+            elif cur is not None:
+                cur += 1
+                if a.profile:
+                    pcs[-1].append(pc)
+    entries = ENTRIES + (MIP_ENTRIES if a.mip else [])
+    regions.insert(0, 0)  # the first setup region precedes the first mark
+    if len(regions) != 3 * len(entries):
+        sys.exit(
+            f"count_insns: expected {3 * len(entries)} regions between marks, found {len(regions)} "
+            "(did the firmware run to the end? is the log complete?)"
+        )
+    per_call = {}
+    for i, (key, _) in enumerate(entries):
+        c1, cr = regions[3 * i + 1], regions[3 * i + 2]
+        d = cr - c1
+        if d % (a.reps - 1):
+            print(f"warning: {key}: {cr} - {c1} not divisible by {a.reps - 1}", file=sys.stderr)
+        per_call[key] = d / (a.reps - 1)
+        if a.raw:
+            print(f"raw {key}: 1 call region {c1}, {a.reps} calls region {cr}", file=sys.stderr)
+    if a.profile:
+        profile(a, entries, pcs)
+    base = per_call["baseline"]
+    print("| entry point | instructions per call |")
+    print("|---|---:|")
+    for key, label in entries:
+        v = per_call[key]
+        if key == "baseline":
+            print(f"| {label} | {v:g} (subtracted from the rows below) |")
+        elif key == "sat_build":
+            net = v - base
+            print(f"| {label}, 64x64 u32 table: per build / **per entry** | {net:g} / **{net / a.texels:.2f}** |")
+        else:
+            print(f"| {label} | {v - base:g} |")
+
+
+if __name__ == "__main__":
+    main()

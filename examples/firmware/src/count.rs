@@ -1,0 +1,256 @@
+//! Instruction counter harness (feature `count`, bin `texsat-count`; run by `count-insns.sh`).
+//!
+//! Calls each measured texsat entry point from its own `#[inline(never)] fn m_<name>`, first once
+//! and then `REPS` times, with `texsat_count_mark` called between the runs. Under QEMU with
+//! `-singlestep -d exec,nochain` every executed instruction is one logged TB, so the number of
+//! TBs between two marks is the number of instructions executed there; `count-insns.sh` takes
+//! `(count(REPS) - count(1)) / (REPS - 1)`, which removes the setup, and subtracts the same
+//! figure for `m_baseline` (an empty wrapper of the same shape: loop, call, return, `black_box`).
+//! Then it exits QEMU through semihosting `SYS_EXIT`.
+//!
+//! Same types as the link gate: 8-bit texels, `u32` entries, one channel, `I24F8` corners,
+//! `NoCount`; a 64 x 64 pseudo-random texture. Same panic handler as the gate too: this binary
+//! links only if no panic path remains.
+#![no_std]
+#![no_main]
+
+use core::arch::asm;
+use core::hint::black_box;
+
+use cortex_m_rt::entry;
+use texsat::layouts::{Tiled, TiledSpec};
+use texsat::{Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, Sat, Stable, Texture};
+
+type Tx = u8;
+type En = u32;
+type Co = DefaultCoord;
+
+const W: usize = 64;
+const H: usize = 64;
+/// Extra runs: the per-call figure is (count(1 + REPS) .. ) see module docs.
+const REPS: u32 = 11;
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    extern "C" {
+        fn texsat_link_gate_a_panic_path_remains() -> !;
+    }
+    // SAFETY: never runs: a reachable handler makes the link fail (see main.rs).
+    unsafe { texsat_link_gate_a_panic_path_remains() }
+}
+
+/// The marker between measured regions (its address is found with `llvm-nm`).
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn texsat_count_mark() {
+    // SAFETY: a `nop`, no effect beyond keeping this function distinct.
+    unsafe { asm!("nop", options(nomem, nostack, preserves_flags)) }
+}
+
+/// Semihosting SYS_EXIT (ADP_Stopped_ApplicationExit): QEMU (`-semihosting`) exits with 0.
+fn exit() -> ! {
+    loop {
+        // SAFETY: semihosting call; r0 = SYS_EXIT (0x18), r1 = ADP_Stopped_ApplicationExit.
+        unsafe { asm!("bkpt 0xab", in("r0") 0x18u32, in("r1") 0x20026u32, options(nostack)) }
+    }
+}
+
+#[inline(always)]
+fn keep<T>(v: T) {
+    let _ = black_box(v);
+}
+
+fn rect_fix(x0: i32, y0: i32, x1: i32, y1: i32) -> Rect<Co> {
+    black_box(Rect::new(
+        Co::from_bits(black_box(x0)),
+        Co::from_bits(black_box(y0)),
+        Co::from_bits(black_box(x1)),
+        Co::from_bits(black_box(y1)),
+    ))
+}
+
+/// Three regions: whatever ran since the last mark (setup, ignored), a mark, the call once, a
+/// mark, the call `REPS` times, a mark.
+macro_rules! measure {
+    ($call:expr) => {{
+        texsat_count_mark();
+        for _ in 0..black_box(1u32) {
+            keep($call);
+        }
+        texsat_count_mark();
+        for _ in 0..black_box(REPS) {
+            keep($call);
+        }
+        texsat_count_mark();
+    }};
+}
+
+// --- the measured wrappers -------------------------------------------------------------------
+
+#[inline(never)]
+fn m_baseline(sat: &Sat<'_, En>, r: &Rect<Co>) {
+    keep((sat, r));
+}
+
+#[inline(never)]
+fn m_box_sum_int_border(sat: &Sat<'_, En>, r: &Rect<i32>) {
+    keep(sat.box_sum_int(r, Border, &mut NoCount));
+}
+
+#[inline(never)]
+fn m_box_sum_stable_border(sat: &Sat<'_, En>, r: &Rect<Co>) {
+    keep(sat.box_sum(r, Stable, Border, &mut NoCount));
+}
+
+#[inline(never)]
+fn m_box_sum_stable_repeat(sat: &Sat<'_, En>, r: &Rect<Co>) {
+    keep(sat.box_sum(r, Stable, Repeat, &mut NoCount));
+}
+
+#[inline(never)]
+fn m_mean_rounded(sum: &BoxSum<u64, 1>) {
+    keep(sum.mean_rounded(black_box(0), black_box(8), &mut NoCount));
+}
+
+#[inline(never)]
+fn m_box_sum_stable_border_mean(sat: &Sat<'_, En>, r: &Rect<Co>) {
+    if let Ok(s) = sat.box_sum(r, Stable, Border, &mut NoCount) {
+        keep(s.mean_rounded(black_box(0), black_box(8), &mut NoCount));
+    }
+}
+
+#[inline(never)]
+fn m_sat_build<'a>(t: &Texture<'_, Tx>, storage: &'a mut [En]) {
+    keep(Sat::build(t, storage));
+}
+
+#[inline(never)]
+fn m_tiled_box_sum_int_border(l: &Tiled<'_, En>, r: &Rect<i32>) {
+    keep(texsat::BoxLookup::box_sum_int(l, r, Border, &mut NoCount));
+}
+
+#[inline(never)]
+fn m_tiled_box_sum_stable_border(l: &Tiled<'_, En>, r: &Rect<Co>) {
+    keep(texsat::BoxLookup::box_sum(
+        l,
+        r,
+        Stable,
+        Border,
+        &mut NoCount,
+    ));
+}
+
+#[cfg(feature = "filter-mip")]
+#[inline(never)]
+fn m_mip_trilinear(p: &texsat::filters::mip::MipPyramid<'_, Tx>, r: &Rect<Co>) {
+    keep(p.trilinear(r, Border, &mut NoCount));
+}
+
+#[cfg(feature = "filter-mip")]
+#[inline(never)]
+fn m_mip_trilinear_repeat(p: &texsat::filters::mip::MipPyramid<'_, Tx>, r: &Rect<Co>) {
+    keep(p.trilinear(r, Repeat, &mut NoCount));
+}
+
+// --- main ------------------------------------------------------------------------------------
+
+static mut TEXELS: [Tx; W * H] = [0; W * H];
+static mut TABLE: [En; W * H] = [0; W * H];
+static mut TABLE2: [En; W * H] = [0; W * H];
+static mut WORDS: [u32; 4 * W * H] = [0; 4 * W * H];
+static mut SCRATCH: [En; 16 * (W + 1)] = [0; 16 * (W + 1)];
+#[cfg(feature = "filter-mip")]
+static mut MIP: [Tx; W * H] = [0; W * H];
+
+#[entry]
+fn main() -> ! {
+    // SAFETY: single-threaded, no interrupts: `main` is the only user of these statics, each
+    // borrowed once.
+    let (texels, table, table2, words, scratch) = unsafe {
+        (
+            &mut *core::ptr::addr_of_mut!(TEXELS),
+            &mut *core::ptr::addr_of_mut!(TABLE),
+            &mut *core::ptr::addr_of_mut!(TABLE2),
+            &mut *core::ptr::addr_of_mut!(WORDS),
+            &mut *core::ptr::addr_of_mut!(SCRATCH),
+        )
+    };
+    // A pseudo-random texture (xorshift32).
+    let mut s = 0x1234_5678u32;
+    for t in texels.iter_mut() {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        *t = (s >> 24) as u8;
+    }
+    let texels: &[Tx] = black_box(&texels[..]);
+    let Ok(tex) = Texture::<Tx>::new(texels, black_box(W), black_box(H)) else {
+        exit()
+    };
+    let tex = black_box(tex);
+    let Ok(sat) = Sat::build(&tex, black_box(&mut table[..])) else {
+        exit()
+    };
+    let sat = black_box(sat);
+
+    let f = |v: f32| (v * 256.0) as i32;
+    // Interior boxes.
+    let ri: Rect<i32> = black_box(Rect::new(
+        black_box(10),
+        black_box(12),
+        black_box(30),
+        black_box(27),
+    ));
+    let rf = rect_fix(f(10.5), f(12.25), f(30.75), f(27.5));
+    // Repeat: inside one period, not the first (x in the 2nd period, y in the 3rd).
+    let rr_in = rect_fix(
+        f(64.0 + 10.5),
+        f(128.0 + 12.25),
+        f(64.0 + 30.75),
+        f(128.0 + 27.5),
+    );
+    // Repeat: crossing the right edge (x from 50.5 to 70.75).
+    let rr_cross = rect_fix(f(50.5), f(12.25), f(70.75), f(27.5));
+    let Ok(sum) = sat.box_sum(&rf, Stable, Border, &mut NoCount) else {
+        exit()
+    };
+    let sum = black_box(sum);
+
+    // Region order (count-insns.sh relies on it): each measure! gives two regions.
+    measure!(m_baseline(&sat, &rf));
+    measure!(m_box_sum_int_border(&sat, &ri));
+    measure!(m_box_sum_stable_border(&sat, &rf));
+    measure!(m_box_sum_stable_repeat(&sat, &rr_in));
+    measure!(m_box_sum_stable_repeat(&sat, &rr_cross));
+    measure!(m_mean_rounded(&sum));
+    measure!(m_box_sum_stable_border_mean(&sat, &rf));
+    // Sat::build of the whole W x H table (per entry: divided by W * H in count-insns.sh).
+    measure!(m_sat_build(&tex, black_box(&mut table2[..])));
+    // Tiled, 8 x 8 tiles.
+    let tiled = TiledSpec::tiles(black_box(8), black_box(8))
+        .ok()
+        .and_then(|spec| Tiled::build(&tex, spec, &mut words[..], &mut scratch[..]).ok());
+    match black_box(tiled) {
+        Some(l) => {
+            measure!(m_tiled_box_sum_int_border(&l, &ri));
+            measure!(m_tiled_box_sum_stable_border(&l, &rf));
+        }
+        None => exit(),
+    }
+    #[cfg(feature = "filter-mip")]
+    {
+        // SAFETY: as above.
+        let mip = unsafe { &mut *core::ptr::addr_of_mut!(MIP) };
+        let p = texsat::filters::mip::MipPyramid::build(&tex, &mut mip[..]).ok();
+        match black_box(p) {
+            Some(p) => {
+                // A 20.25 x 15.25 footprint (between levels 3 and 4), and the same in Repeat
+                // in the second period.
+                measure!(m_mip_trilinear(&p, &rf));
+                measure!(m_mip_trilinear_repeat(&p, &rr_in));
+            }
+            None => exit(),
+        }
+    }
+    exit()
+}
