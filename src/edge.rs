@@ -110,14 +110,20 @@ impl EdgeKind {
                 if inside {
                     i
                 } else {
-                    i.rem_euclid(n)
+                    match rem_euclid_narrow(i, n) {
+                        Some(r) => r,
+                        None => return None,
+                    }
                 }
             }
             EdgeKind::Mirror => {
                 let r = if i >= 0 && i < 2 * n {
                     i
                 } else {
-                    i.rem_euclid(2 * n)
+                    match rem_euclid_narrow(i, 2 * n) {
+                        Some(r) => r,
+                        None => return None,
+                    }
                 };
                 if r < n {
                     r
@@ -128,6 +134,23 @@ impl EdgeKind {
         };
         Some(k as usize)
     }
+}
+
+/// `x mod p` (in `[0, p)`) for `p > 0`, in 32 bits when `|x|` and `p` fit (one hardware `udiv` on
+/// the Cortex-M4 instead of a software 64-bit division), else in 64. `None` for `p <= 0`.
+const fn rem_euclid_narrow(x: i64, p: i64) -> Option<i64> {
+    if p <= 0 {
+        return None;
+    }
+    let a = x.unsigned_abs();
+    if a <= u32::MAX as u64 && p <= u32::MAX as i64 {
+        let r = match (a as u32).checked_rem(p as u32) {
+            Some(r) => r as i64,
+            None => return None,
+        };
+        return Some(if x >= 0 || r == 0 { r } else { p - r });
+    }
+    x.checked_rem_euclid(p)
 }
 
 mod sealed {
@@ -193,38 +216,84 @@ pub(crate) struct AxisPiece {
     pub unit: bool,
 }
 
-/// At most three pieces.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(crate) struct AxisPieces {
-    pieces: [AxisPiece; 3],
-    len: usize,
+impl AxisPiece {
+    /// The piece `[lo, hi)` counted `mult` times, or the absent piece (`mult = 0`) when it is
+    /// empty.
+    #[inline(always)]
+    fn new(lo: i64, hi: i64, mult: u64, unit: bool) -> AxisPiece {
+        if hi <= lo {
+            AxisPiece::default()
+        } else {
+            AxisPiece { lo, hi, mult, unit }
+        }
+    }
 }
+
+/// At most three pieces; absent ones have `mult = 0`. Built as one array literal (no pushes,
+/// no length), so the split path makes it in place.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct AxisPieces([AxisPiece; 3]);
 
 impl AxisPieces {
-    fn push(&mut self, lo: i64, hi: i64, mult: u64, unit: bool) {
-        if hi <= lo || mult == 0 {
-            return;
-        }
-        if let Some(p) = self.pieces.get_mut(self.len) {
-            *p = AxisPiece { lo, hi, mult, unit };
-            self.len += 1;
-        }
+    /// One piece `[lo, hi)` of multiplicity 1.
+    #[inline(always)]
+    pub(crate) fn one(lo: i64, hi: i64) -> AxisPieces {
+        AxisPieces([
+            AxisPiece::new(lo, hi, 1, false),
+            AxisPiece::default(),
+            AxisPiece::default(),
+        ])
     }
 
-    pub fn as_slice(&self) -> &[AxisPiece] {
-        self.pieces.get(..self.len).unwrap_or(&[])
+    /// The pieces present.
+    #[inline(always)]
+    pub(crate) fn iter(&self) -> impl Iterator<Item = &AxisPiece> {
+        self.0.iter().filter(|p| p.mult != 0)
     }
 }
 
-/// Where one axis of a box lands.
+/// Where one axis of a box lands. Small (no pieces inside): the common in-range case moves
+/// three words, and the pieces of a split axis are made only on the split path
+/// ([`AxisSplit::pieces`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum AxisPlan {
     /// An equivalent interval inside `[0, n 2^F]`.
     InRange(i64, i64),
     /// The interval sums to zero (clipped away by [`Border`]).
     Empty,
-    /// Pieces, each in range (see the module docs).
-    Split(AxisPieces),
+    /// Crosses the edge: pieces, each in range (see the module docs).
+    Split(AxisSplit),
+}
+
+/// A split axis, as the few numbers its pieces follow from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum AxisSplit {
+    /// [`ClampToEdge`]: the raw interval `[lo, hi)` reaching past `[0, p)`.
+    Clamp { lo: i64, hi: i64 },
+    /// [`Repeat`] / [`MirroredRepeat`]: starts at `r0` in its period (reflected when `odd`) and
+    /// runs `rest` raw units past that period's end.
+    Periodic {
+        mirror: bool,
+        odd: bool,
+        r0: i64,
+        rest: u64,
+    },
+}
+
+impl AxisSplit {
+    /// The in-range pieces on an axis of raw length `p = n 2^F`, `F = f`.
+    #[inline(always)]
+    pub(crate) fn pieces(self, p: i64, f: u32) -> AxisPieces {
+        match self {
+            AxisSplit::Clamp { lo, hi } => split_clamp(lo, hi, p, f),
+            AxisSplit::Periodic {
+                mirror,
+                odd,
+                r0,
+                rest,
+            } => split_periodic(mirror, odd, r0, rest, p),
+        }
+    }
 }
 
 /// The width `hi - lo` of an interval with `hi >= lo`, exact in `u64`.
@@ -271,6 +340,18 @@ fn div_euclid_narrow(x: i64, p: i64) -> Option<(i64, i64)> {
     Some((q, x.wrapping_sub(q.wrapping_mul(p))))
 }
 
+/// `(x / d, x % d)` in 32 bits when both fit (one hardware `udiv`), else in 64; `None` for
+/// `d = 0`.
+#[inline(always)]
+fn div_rem_narrow(x: u64, d: u64) -> Option<(u64, u64)> {
+    if let (Ok(a), Ok(d)) = (u32::try_from(x), u32::try_from(d)) {
+        let d = core::num::NonZeroU32::new(d)?;
+        return Some((u64::from(a / d), u64::from(a % d)));
+    }
+    let d = core::num::NonZeroU64::new(d)?;
+    Some((x / d, x % d))
+}
+
 /// Places `[lo, hi)` (raw, `hi >= lo`) against an axis of `n >= 1` texels at `F = f`
 /// (`n 2^F <= 2^55`, guaranteed by the layouts' size check and `F <= 24`).
 #[inline(always)]
@@ -287,67 +368,82 @@ pub(crate) fn place_axis(
     }
     match kind {
         EdgeKind::Border => {
-            let (lo, hi) = (lo.clamp(0, p), hi.clamp(0, p));
+            // `max` then `min`, not `clamp`: no panic path for `p < 0` (ruled out by the size
+            // check, but not visible to the compiler for a run-time `F`).
+            let (lo, hi) = (lo.max(0).min(p), hi.max(0).min(p));
             Ok(if lo >= hi {
                 AxisPlan::Empty
             } else {
                 AxisPlan::InRange(lo, hi)
             })
         }
-        EdgeKind::Clamp => Ok(split_clamp(lo, hi, p, f)),
+        EdgeKind::Clamp => Ok(AxisPlan::Split(AxisSplit::Clamp { lo, hi })),
         EdgeKind::Repeat | EdgeKind::Mirror => place_periodic(kind == EdgeKind::Mirror, lo, hi, p),
     }
 }
 
-#[inline(never)]
-fn split_clamp(lo: i64, hi: i64, p: i64, f: u32) -> AxisPlan {
-    let one = 1i64 << f;
-    let mut s = AxisPieces::default();
-    if lo < 0 {
-        s.push(0, one, width_u64(lo, hi.min(0)), true);
-    }
-    s.push(lo.max(0), hi.min(p), 1, false);
-    if hi > p {
-        s.push(p - one, p, width_u64(lo.max(p), hi), true);
-    }
-    AxisPlan::Split(s)
-}
-
-/// `Repeat` (period `p`) or `MirroredRepeat` (half-period `p`, odd halves reflected).
+/// Places a periodic axis: in range when `[lo, hi)` lies within one period (half-period for
+/// `MirroredRepeat`), else the numbers its split follows from.
 #[inline(always)]
 fn place_periodic(mirror: bool, lo: i64, hi: i64, p: i64) -> Result<AxisPlan, Error> {
     let (q0, r0) = periods(lo, p).ok_or(Error::CoordinateOutOfRange)?;
     let odd = mirror && q0 & 1 != 0;
-    // Reflection of [a, b) inside an odd half: [p - b, p - a).
-    let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
     let d = width_u64(lo, hi);
     let end = (r0 as u64)
         .checked_add(d)
         .ok_or(Error::CoordinateOutOfRange)?;
     if end <= p as u64 {
-        let (a, b) = map(r0, end as i64, odd);
+        // Reflection of [a, b) inside an odd half: [p - b, p - a).
+        let (a, b) = if odd {
+            (p - end as i64, p - r0)
+        } else {
+            (r0, end as i64)
+        };
         return Ok(AxisPlan::InRange(a, b));
     }
-    Ok(split_periodic(mirror, odd, r0, end - p as u64, p))
+    Ok(AxisPlan::Split(AxisSplit::Periodic {
+        mirror,
+        odd,
+        r0,
+        rest: end - p as u64,
+    }))
 }
 
-#[inline(never)]
-fn split_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> AxisPlan {
+/// The part left of the texture (its first texel, once per raw unit), the part inside, the
+/// part right of it (its last texel).
+#[inline(always)]
+fn split_clamp(lo: i64, hi: i64, p: i64, f: u32) -> AxisPieces {
+    let one = 1i64 << f;
+    let left = if lo < 0 {
+        AxisPiece::new(0, one, width_u64(lo, hi.min(0)), true)
+    } else {
+        AxisPiece::default()
+    };
+    let right = if hi > p {
+        AxisPiece::new(p - one, p, width_u64(lo.max(p), hi), true)
+    } else {
+        AxisPiece::default()
+    };
+    AxisPieces([left, AxisPiece::new(lo.max(0), hi.min(p), 1, false), right])
+}
+
+/// The head of the first period, `whole` whole periods and the tail (see the module docs).
+#[inline(always)]
+fn split_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> AxisPieces {
     let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
-    let mut s = AxisPieces::default();
-    let (a, b) = map(r0, p, odd);
-    s.push(a, b, 1, false);
-    let pu = p as u64;
-    let (whole, tail) = match core::num::NonZeroU64::new(pu) {
-        Some(d) if rest > pu => (rest / d, rest % d),
+    let (a0, b0) = map(r0, p, odd);
+    let (whole, tail) = match div_rem_narrow(rest, p as u64) {
+        Some(qr) if rest > p as u64 => qr,
         _ => (0, rest),
     };
-    s.push(0, p, whole, false);
     // The tail lies in the half (period) after the head and the whole ones.
     let tail_odd = mirror && (odd ^ (whole & 1 == 0));
-    let (a, b) = map(0, tail as i64, tail_odd);
-    s.push(a, b, 1, false);
-    AxisPlan::Split(s)
+    let (a2, b2) = map(0, tail as i64, tail_odd);
+    AxisPieces([
+        AxisPiece::new(a0, b0, 1, false),
+        AxisPiece::new(0, p, whole, false),
+        AxisPiece::new(a2, b2, 1, false),
+    ])
 }
 
 #[cfg(test)]
@@ -371,7 +467,7 @@ mod tests {
             AxisPlan::Empty => 0,
             AxisPlan::InRange(a, b) => seg(a, b),
             AxisPlan::Split(s) => s
-                .as_slice()
+                .pieces(t.len() as i64, 0)
                 .iter()
                 .map(|pc| seg(pc.lo, pc.hi) * pc.mult)
                 .sum(),
@@ -406,8 +502,8 @@ mod tests {
                 (5, 9),
             ] {
                 if let Ok(AxisPlan::Split(s)) = place_axis(kind, lo, hi, 4, 0) {
-                    assert!(s.as_slice().len() <= 3);
-                    for p in s.as_slice() {
+                    let s = s.pieces(4, 0);
+                    for p in s.iter() {
                         assert!(0 <= p.lo && p.lo < p.hi && p.hi <= 4, "{kind:?} {p:?}");
                     }
                 }

@@ -26,9 +26,11 @@ pub enum Quantity {
 pub enum Error {
     /// Width or height is zero.
     EmptyTexture,
-    /// Width or height exceeds `2^31 - 1` texels (coordinates must fit `i32`-like arithmetic).
+    /// Too large to handle: a side above `2^31 - 1` texels (coordinates must fit `i32`-like
+    /// arithmetic), or a size derived from the sides (entries, storage words or bits, scratch)
+    /// that overflows `u64` or this target's `usize`.
     TextureTooLarge {
-        /// the offending dimension
+        /// the offending side (for a derived size, the side it was computed from)
         dimension: usize,
     },
     /// The row stride (in elements) is shorter than `width * channels`.
@@ -140,7 +142,11 @@ impl fmt::Display for Error {
         match *self {
             Error::EmptyTexture => write!(f, "texture has zero width or height"),
             Error::TextureTooLarge { dimension } => {
-                write!(f, "texture dimension {dimension} exceeds 2^31 - 1")
+                write!(
+                    f,
+                    "texture too large at dimension {dimension}: a side above 2^31 - 1, or a \
+                     storage size that overflows this target's address space"
+                )
             }
             Error::StrideTooSmall { stride, needed } => write!(
                 f,

@@ -112,11 +112,11 @@ use crate::error::Error;
 #[cfg(test)]
 use crate::filters::level::log2_fixed;
 use crate::filters::pyramid::{
-    axis_total, check_build, check_dims, check_storage, fill_box_level, floor_sample, footprint,
-    lerp, level_len, level_split, prefix, truncate, LevelView,
+    axis_total, check_build, check_dims, check_storage, fill_box_level, floor_sample,
+    footprint_raw, lerp, level_len, level_split, prefix, truncate, LevelView,
 };
 use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
-use crate::rect::{Coord, Rect};
+use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
 
@@ -357,7 +357,20 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let fp = footprint(rect)?;
+        self.sample_raw(&rect.to_raw(), FracBits::of::<X>()?, filter, mode, k)
+    }
+
+    /// [`DipMap::sample`] with raw corners (`value * 2^F`) and `F` as a value, checked once by
+    /// [`FracBits::new`]: one compiled sampler serves every `F`.
+    pub fn sample_raw<M: EdgeMode, K: Counter>(
+        &self,
+        rect: &Rect<i64>,
+        frac_bits: FracBits,
+        filter: DipFilter,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let fp = footprint_raw(rect, frac_bits)?;
         let top_x = self.levels(DipPyramid::Column).saturating_sub(1) as u32;
         let top_y = self.levels(DipPyramid::Row).saturating_sub(1) as u32;
         let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, top_x);

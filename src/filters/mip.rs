@@ -103,11 +103,11 @@ use crate::cost::Counter;
 use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::filters::pyramid::{
-    check_dims, count_reads, fill_box_level, footprint, lerp, level_count, level_len,
+    check_dims, count_reads, fill_box_level, footprint_raw, lerp, level_count, level_len,
     level_position, split_level, split_position, tap_index, Footprint,
 };
 use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
-use crate::rect::{Coord, Rect};
+use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
 #[cfg(test)]
@@ -267,13 +267,18 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     ///
     /// Errors: [`Error::FracBitsUnsupported`] for `F > 24`, [`Error::InvertedBox`].
     pub fn lod<X: Coord>(&self, rect: &Rect<X>) -> Result<u32, Error> {
-        Ok(self.footprint(rect)?.1)
+        self.lod_raw(&rect.to_raw(), FracBits::of::<X>()?)
+    }
+
+    /// [`MipPyramid::lod`] with raw corners (`value * 2^F`) and `F` as a value.
+    pub fn lod_raw(&self, rect: &Rect<i64>, frac_bits: FracBits) -> Result<u32, Error> {
+        Ok(self.footprint(rect, frac_bits)?.1)
     }
 
     /// The validated footprint (centre, sides) and its clamped level of detail.
     #[inline(always)]
-    fn footprint<X: Coord>(&self, rect: &Rect<X>) -> Result<(Footprint, u32), Error> {
-        let fp = footprint(rect)?;
+    fn footprint(&self, rect: &Rect<i64>, frac_bits: FracBits) -> Result<(Footprint, u32), Error> {
+        let fp = footprint_raw(rect, frac_bits)?;
         let lod = level_position(fp.w.max(fp.h), fp.f, LOD_FRAC_BITS, self.top());
         Ok((fp, lod))
     }
@@ -316,7 +321,19 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let (fp, lod) = self.footprint(rect)?;
+        self.point_sample_raw(&rect.to_raw(), FracBits::of::<X>()?, mode, k)
+    }
+
+    /// [`MipPyramid::point_sample`] with raw corners (`value * 2^F`) and `F` as a value, checked
+    /// once by [`FracBits::new`]: one compiled sampler serves every `F`.
+    pub fn point_sample_raw<M: EdgeMode, K: Counter>(
+        &self,
+        rect: &Rect<i64>,
+        frac_bits: FracBits,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let (fp, lod) = self.footprint(rect, frac_bits)?;
         let l = ((lod + (1 << (LOD_FRAC_BITS - 1))) >> LOD_FRAC_BITS).min(self.top());
         let i = fp.cx.index(fp.f + l);
         let j = fp.cy.index(fp.f + l);
@@ -344,7 +361,19 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let (fp, lod) = self.footprint(rect)?;
+        self.trilinear_raw(&rect.to_raw(), FracBits::of::<X>()?, mode, k)
+    }
+
+    /// [`MipPyramid::trilinear`] with raw corners (`value * 2^F`) and `F` as a value, checked
+    /// once by [`FracBits::new`]: one compiled sampler serves every `F`.
+    pub fn trilinear_raw<M: EdgeMode, K: Counter>(
+        &self,
+        rect: &Rect<i64>,
+        frac_bits: FracBits,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let (fp, lod) = self.footprint(rect, frac_bits)?;
         // lod <= top 2^8, so at the top t = 0.
         let (l0, l1, t) = split_level(lod, LOD_FRAC_BITS, self.top());
         let wb = weight_bits(T::BITS);

@@ -22,10 +22,9 @@ use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::Error;
 use crate::filters::{Sample, OUT_FRAC_BITS};
-use crate::rect::{Coord, Rect};
+use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
-use crate::width::MAX_FRAC_BITS;
 
 /// The nearest texel to the centre of `rect` under boundary mode `M`: 1 read, 0 multiplies,
 /// 0 additive operations (Heckbert's "point sampling 1,0").
@@ -46,14 +45,20 @@ pub fn point<T: Texel, const C: usize, X: Coord, M: EdgeMode, K: Counter>(
     mode: M,
     k: &mut K,
 ) -> Result<Sample<C>, Error> {
-    let f = X::FRAC_BITS;
-    if f > MAX_FRAC_BITS {
-        return Err(Error::FracBitsUnsupported {
-            frac_bits: f,
-            max: MAX_FRAC_BITS,
-        });
-    }
-    let (x0, y0, x1, y1) = (rect.x0.raw(), rect.y0.raw(), rect.x1.raw(), rect.y1.raw());
+    point_raw(texture, &rect.to_raw(), FracBits::of::<X>()?, mode, k)
+}
+
+/// [`point`] with raw corners (`value * 2^F`) and `F` as a value, checked once by
+/// [`FracBits::new`]: one compiled sampler serves every `F`.
+pub fn point_raw<T: Texel, const C: usize, M: EdgeMode, K: Counter>(
+    texture: &Texture<'_, T, C>,
+    rect: &Rect<i64>,
+    frac_bits: FracBits,
+    mode: M,
+    k: &mut K,
+) -> Result<Sample<C>, Error> {
+    let f = frac_bits.get();
+    let (x0, y0, x1, y1) = (rect.x0, rect.y0, rect.x1, rect.y1);
     if x1 < x0 || y1 < y0 {
         return Err(Error::InvertedBox);
     }

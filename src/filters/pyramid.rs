@@ -40,10 +40,11 @@ use crate::cost::Counter;
 use crate::edge::EdgeKind;
 use crate::error::Error;
 use crate::filters::level::log2_fixed;
-use crate::rect::{Coord, Rect};
+#[cfg(test)]
+use crate::rect::Coord;
+use crate::rect::{FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
-use crate::width::MAX_FRAC_BITS;
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 use crate::{edge::EdgeMode, error::Quantity, filters::Sample, width::bits_of_u64};
 use core::num::NonZeroU64;
@@ -196,16 +197,16 @@ pub(crate) struct Footprint {
 
 /// Validates a footprint: [`Error::FracBitsUnsupported`] for `F > 24`, [`Error::InvertedBox`]
 /// for `x1 < x0` or `y1 < y0`. Returns its centre and sides (never overflows: [`Centre`]).
-#[inline(always)]
+#[cfg(test)]
 pub(crate) fn footprint<X: Coord>(rect: &Rect<X>) -> Result<Footprint, Error> {
-    let f = X::FRAC_BITS;
-    if f > MAX_FRAC_BITS {
-        return Err(Error::FracBitsUnsupported {
-            frac_bits: f,
-            max: MAX_FRAC_BITS,
-        });
-    }
-    let (x0, y0, x1, y1) = (rect.x0.raw(), rect.y0.raw(), rect.x1.raw(), rect.y1.raw());
+    footprint_raw(&rect.to_raw(), FracBits::of::<X>()?)
+}
+
+/// [`footprint`] of raw corners with `F` given as a value.
+#[inline(always)]
+pub(crate) fn footprint_raw(rect: &Rect<i64>, f: FracBits) -> Result<Footprint, Error> {
+    let f = f.get();
+    let (x0, y0, x1, y1) = (rect.x0, rect.y0, rect.x1, rect.y1);
     if x1 < x0 || y1 < y0 {
         return Err(Error::InvertedBox);
     }
@@ -225,7 +226,7 @@ pub(crate) fn footprint<X: Coord>(rect: &Rect<X>) -> Result<Footprint, Error> {
 #[inline(always)]
 pub(crate) fn level_position(side: u64, f: u32, frac_bits: u32, top: u32) -> u32 {
     let max = (top.min(31) as i32) << frac_bits.min(16);
-    log2_fixed(side, f, frac_bits).unwrap_or(0).clamp(0, max) as u32
+    log2_fixed(side, f, frac_bits).unwrap_or(0).max(0).min(max) as u32
 }
 
 /// Splits a level position `L` (`frac_bits` fraction bits, at most `top 2^frac_bits`) into

@@ -111,10 +111,10 @@ use crate::cost::Counter;
 use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::filters::{Sample, OUT_FRAC_BITS};
-use crate::rect::{Coord, Rect};
+use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
-use crate::width::{bits_of, check_texel_bits, max_texel, MAX_FRAC_BITS};
+use crate::width::{bits_of, check_texel_bits, max_texel};
 
 /// An unsigned entry of the order-2 tables: `u32`, `u64` or `u128`.
 ///
@@ -433,7 +433,19 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let Some(fp) = self.footprint(r, mode.kind())? else {
+        self.sample_raw(&r.to_raw(), FracBits::of::<X>()?, mode, k)
+    }
+
+    /// [`TentTable::sample`] with raw corners (`value * 2^F`) and `F` as a value, checked once
+    /// by [`FracBits::new`]: one compiled sampler serves every `F`.
+    pub fn sample_raw<M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let Some(fp) = self.footprint(r, frac_bits, mode.kind())? else {
             return Ok(Sample { values: [0; C] });
         };
         let n = self.paper_numerator(&fp.ax, &fp.ay, fp.s, k)?;
@@ -466,6 +478,20 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
+        self.sample_exact_raw(lines, texture, &r.to_raw(), FracBits::of::<X>()?, mode, k)
+    }
+
+    /// [`TentTable::sample_exact`] with raw corners (`value * 2^F`) and `F` as a value, checked
+    /// once by [`FracBits::new`]: one compiled sampler serves every `F`.
+    pub fn sample_exact_raw<T: Texel, L: TentEntry, M: EdgeMode, K: Counter>(
+        &self,
+        lines: &TentLines<'_, L, C>,
+        texture: &Texture<'_, T, C>,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
         let kind = mode.kind();
         for (got, expected) in [
             (lines.width * C, self.width * C),
@@ -477,7 +503,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
                 return Err(Error::RowLength { expected, got });
             }
         }
-        let Some(fp) = self.footprint(r, kind)? else {
+        let Some(fp) = self.footprint(r, frac_bits, kind)? else {
             return Ok(Sample { values: [0; C] });
         };
         let s = fp.s;
@@ -575,20 +601,14 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
 
     /// Validates a fixed-point footprint and places its three x and y positions (`None`: a
     /// Border footprint entirely outside, whose sample is 0).
-    fn footprint<X: Coord>(&self, r: &Rect<X>, kind: EdgeKind) -> Result<Option<Footprint>, Error> {
-        let f = X::FRAC_BITS;
-        if f > MAX_FRAC_BITS {
-            return Err(Error::FracBitsUnsupported {
-                frac_bits: f,
-                max: MAX_FRAC_BITS,
-            });
-        }
-        let (x0, y0, x1, y1) = (
-            r.x0.raw() as i128,
-            r.y0.raw() as i128,
-            r.x1.raw() as i128,
-            r.y1.raw() as i128,
-        );
+    fn footprint(
+        &self,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        kind: EdgeKind,
+    ) -> Result<Option<Footprint>, Error> {
+        let f = frac_bits.get();
+        let (x0, y0, x1, y1) = (r.x0 as i128, r.y0 as i128, r.x1 as i128, r.y1 as i128);
         if x1 < x0 || y1 < y0 {
             return Err(Error::InvertedBox);
         }

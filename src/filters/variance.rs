@@ -67,7 +67,7 @@ use crate::error::{Error, Quantity};
 use crate::filters::{Sample, OUT_FRAC_BITS};
 use crate::layouts::Layout;
 use crate::lookup::{BoxLookup, BoxSum, Form};
-use crate::rect::{Coord, Rect};
+use crate::rect::{Coord, FracBits, Rect};
 use crate::table::Sat;
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
@@ -313,8 +313,21 @@ impl<'a, E: Entry, const C: usize> VarianceTables<'a, E, C> {
         mode: M,
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
-        let s = self.values.box_sum(r, form, mode, k)?;
-        let q = BoxLookup::box_sum(&self.squares, r, form, mode, k)?;
+        self.variance_raw(&r.to_raw(), FracBits::of::<X>()?, form, mode, k)
+    }
+
+    /// [`VarianceTables::variance`] with raw corners (`value * 2^F`) and `F` as a value,
+    /// checked once by [`FracBits::new`]: one compiled lookup serves every `F`.
+    pub fn variance_raw<Fm: Form, M: EdgeMode, K: Counter>(
+        &self,
+        r: &Rect<i64>,
+        frac_bits: FracBits,
+        form: Fm,
+        mode: M,
+        k: &mut K,
+    ) -> Result<Sample<C>, Error> {
+        let s = self.values.box_sum_raw(r, frac_bits, form, mode, k)?;
+        let q = BoxLookup::box_sum_raw(&self.squares, r, frac_bits, form, mode, k)?;
         finish(&s, &q, k)
     }
 }

@@ -415,6 +415,9 @@ pub(super) struct Geometry {
     pub(super) total_bits: u64,
     /// `ceil(total_bits / 32)`, checked to fit `usize`.
     pub(super) words: usize,
+    /// Bits of the largest value `S` can take: `k` for a modular spec, else the worst-case
+    /// total (computed once here: the lookups' width check reads it per call).
+    pub(super) value_bits: u32,
 }
 
 impl Geometry {
@@ -519,6 +522,10 @@ impl Geometry {
             comps,
             total_bits: offset,
             words,
+            value_bits: match spec.modulus {
+                Some(k) => k,
+                None => width::entry_bits_worst_case(texel_bits, width, height),
+            },
         })
     }
 
@@ -813,12 +820,7 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         self.geo.texel_bits
     }
     fn value_bits(&self) -> u32 {
-        match self.geo.spec.modulus {
-            Some(k) => k,
-            None => {
-                width::entry_bits_worst_case(self.geo.texel_bits, self.geo.width, self.geo.height)
-            }
-        }
+        self.geo.value_bits
     }
     fn modulus(&self) -> Option<u32> {
         self.geo.spec.modulus

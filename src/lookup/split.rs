@@ -19,7 +19,7 @@
 use super::sealed::FormImpl;
 use super::{in_range_wide, WideOf};
 use crate::cost::Counter;
-use crate::edge::{AxisPiece, AxisPlan};
+use crate::edge::{AxisPieces, AxisPlan};
 use crate::error::{Error, Quantity};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
@@ -33,27 +33,13 @@ fn overflow<W: Wide>() -> Error {
     }
 }
 
-/// The pieces of one axis (a placed axis is one piece of multiplicity 1).
-fn pieces(plan: &AxisPlan) -> ([AxisPiece; 3], usize) {
-    let mut out = [AxisPiece::default(); 3];
+/// The pieces of one axis of raw length `p` (a placed axis is one piece of multiplicity 1).
+#[inline(always)]
+fn pieces(plan: AxisPlan, p: i64, f: u32) -> AxisPieces {
     match plan {
-        AxisPlan::Empty => (out, 0),
-        AxisPlan::InRange(lo, hi) => {
-            out[0] = AxisPiece {
-                lo: *lo,
-                hi: *hi,
-                mult: 1,
-                unit: false,
-            };
-            (out, 1)
-        }
-        AxisPlan::Split(s) => {
-            let n = s.as_slice().len();
-            for (o, p) in out.iter_mut().zip(s.as_slice()) {
-                *o = *p;
-            }
-            (out, n)
-        }
+        AxisPlan::Empty => AxisPieces::default(),
+        AxisPlan::InRange(lo, hi) => AxisPieces::one(lo, hi),
+        AxisPlan::Split(s) => s.pieces(p, f),
     }
 }
 
@@ -68,12 +54,12 @@ pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, K: Counter, const C: usize>(
     form: Fm,
     k: &mut K,
 ) -> Result<[WideOf<L, C>; C], Error> {
-    let (xs, nx) = pieces(&px);
-    let (ys, ny) = pieces(&py);
+    let xs = pieces(px, (layout.width() as i64) << f, f);
+    let ys = pieces(py, (layout.height() as i64) << f, f);
     let mut acc = [<WideOf<L, C> as Wide>::ZERO; C];
     let mut terms = 0u32;
-    for a in xs.iter().take(nx) {
-        for b in ys.iter().take(ny) {
+    for a in xs.iter() {
+        for b in ys.iter() {
             let piece = RawBox {
                 x0: a.lo,
                 y0: b.lo,

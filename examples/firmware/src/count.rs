@@ -18,6 +18,8 @@ use core::arch::asm;
 use core::hint::black_box;
 
 use cortex_m_rt::entry;
+
+mod hand;
 use texsat::layouts::{Tiled, TiledSpec};
 use texsat::{Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, Sat, Stable, Texture};
 
@@ -152,6 +154,90 @@ fn m_mip_trilinear_repeat(p: &texsat::filters::mip::MipPyramid<'_, Tx>, r: &Rect
     keep(p.trilinear(r, Repeat, &mut NoCount));
 }
 
+#[inline(never)]
+fn h_box_sum_int_border(t: &hand::Table<'_>, r: &Rect<i32>) {
+    keep(t.box_sum_int_border(r.x0, r.y0, r.x1, r.y1));
+}
+
+#[inline(never)]
+fn h_box_sum_border(t: &hand::Table<'_>, r: &Rect<Co>) {
+    keep(t.box_sum_border(
+        r.x0.to_bits(),
+        r.y0.to_bits(),
+        r.x1.to_bits(),
+        r.y1.to_bits(),
+    ));
+}
+
+#[inline(never)]
+fn h_box_sum_repeat(t: &hand::Table<'_>, r: &Rect<Co>) {
+    keep(t.box_sum_repeat_in_period(
+        r.x0.to_bits(),
+        r.y0.to_bits(),
+        r.x1.to_bits(),
+        r.y1.to_bits(),
+    ));
+}
+
+#[inline(never)]
+fn h_mean_rounded(sum: u64, sides: (u64, u64)) {
+    keep(hand::mean_rounded(sum, black_box(8), sides.0, sides.1));
+}
+
+#[inline(never)]
+fn h_box_sum_border_mean(t: &hand::Table<'_>, r: &Rect<Co>) {
+    let s = t.box_sum_border(
+        r.x0.to_bits(),
+        r.y0.to_bits(),
+        r.x1.to_bits(),
+        r.y1.to_bits(),
+    );
+    let w = (r.x1.to_bits() - r.x0.to_bits()) as u64;
+    let h = (r.y1.to_bits() - r.y0.to_bits()) as u64;
+    keep(hand::mean_rounded(s, black_box(8), w, h));
+}
+
+#[inline(never)]
+fn h_build(texels: &[Tx], storage: &mut [En]) {
+    hand::build(texels, black_box(W), storage);
+    keep(&*storage);
+}
+
+/// Every hand-written result equals texsat's (else the harness exits before measuring, and
+/// count_insns.py reports missing regions).
+fn same_results(
+    sat: &Sat<'_, En>,
+    t: &hand::Table<'_>,
+    ri: &Rect<i32>,
+    boxes: &[Rect<Co>],
+) -> bool {
+    let int_ok = matches!(sat.box_sum_int(ri, Border, &mut NoCount),
+        Ok(s) if s.sum() == t.box_sum_int_border(ri.x0, ri.y0, ri.x1, ri.y1));
+    int_ok
+        && boxes.iter().all(|r| {
+            let bits = (
+                r.x0.to_bits(),
+                r.y0.to_bits(),
+                r.x1.to_bits(),
+                r.y1.to_bits(),
+            );
+            let border = matches!(sat.box_sum(r, Stable, Border, &mut NoCount),
+                Ok(s) if s.sum() == t.box_sum_border(bits.0, bits.1, bits.2, bits.3));
+            let repeat = matches!(sat.box_sum(r, Stable, Repeat, &mut NoCount),
+                Ok(s) if s.sum() == t.box_sum_repeat_in_period(bits.0, bits.1, bits.2, bits.3)
+                    || t.box_sum_repeat_in_period(bits.0, bits.1, bits.2, bits.3) == 0);
+            let mean = match sat.box_sum(r, Stable, Border, &mut NoCount) {
+                Ok(s) => {
+                    let (w, h) = s.sides_raw();
+                    matches!(s.mean_rounded(0, 8, &mut NoCount),
+                        Ok(m) if m == hand::mean_rounded(s.sum(), 8, w, h))
+                }
+                Err(_) => false,
+            };
+            border && repeat && mean
+        })
+}
+
 // --- main ------------------------------------------------------------------------------------
 
 static mut TEXELS: [Tx; W * H] = [0; W * H];
@@ -216,16 +302,37 @@ fn main() -> ! {
     };
     let sum = black_box(sum);
 
-    // Region order (count-insns.sh relies on it): each measure! gives two regions.
+    let hand_table = black_box(hand::Table {
+        t: black_box(sat.entries()),
+        w: black_box(W as u32),
+        h: black_box(H as u32),
+    });
+    let rr_first = rect_fix(f(10.5), f(12.25), f(30.75), f(27.5));
+    if !same_results(&sat, &hand_table, &ri, &[rf, rr_in, rr_first]) {
+        exit()
+    }
+    let sides = black_box(sum.sides_raw());
+
+    // Region order (count_insns.py's ENTRIES relies on it): each measure! gives three regions.
     measure!(m_baseline(&sat, &rf));
     measure!(m_box_sum_int_border(&sat, &ri));
+    measure!(h_box_sum_int_border(&hand_table, &ri));
     measure!(m_box_sum_stable_border(&sat, &rf));
+    measure!(h_box_sum_border(&hand_table, &rf));
+    measure!(m_box_sum_stable_repeat(&sat, &rr_first));
     measure!(m_box_sum_stable_repeat(&sat, &rr_in));
+    measure!(h_box_sum_repeat(&hand_table, &rr_in));
     measure!(m_box_sum_stable_repeat(&sat, &rr_cross));
     measure!(m_mean_rounded(&sum));
+    measure!(h_mean_rounded(sum.sum(), sides));
     measure!(m_box_sum_stable_border_mean(&sat, &rf));
+    measure!(h_box_sum_border_mean(&hand_table, &rf));
     // Sat::build of the whole W x H table (per entry: divided by W * H in count-insns.sh).
     measure!(m_sat_build(&tex, black_box(&mut table2[..])));
+    measure!(h_build(texels, black_box(&mut table2[..])));
+    if table2[..] != sat.entries()[..] {
+        exit()
+    }
     // Tiled, 8 x 8 tiles.
     let tiled = TiledSpec::tiles(black_box(8), black_box(8))
         .ok()

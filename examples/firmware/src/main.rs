@@ -24,8 +24,9 @@ use core::hint::black_box;
 use cortex_m_rt::entry;
 use texsat::layouts::{Modular, ModularBuilder, Tiled, TiledBuilder, TiledSpec};
 use texsat::{
-    Border, BoxLookup, BoxSum, ClampToEdge, DefaultCoord, Layout, MirroredRepeat, NoCount, Paper,
-    Rect, Repeat, RowStreamBuilder, Sat, Shortcut, Stable, Tally, Texture,
+    Border, BoxLookup, BoxSum, ClampToEdge, DefaultCoord, EdgeKind, FormKind, FracBits, Layout,
+    MirroredRepeat, NoCount, Paper, Rect, Repeat, RowStreamBuilder, Sat, Shortcut, Stable, Tally,
+    Texture,
 };
 
 /// Texel type.
@@ -238,6 +239,31 @@ fn gate_box_sum_stable_repeat_tally(sat: &Sat<'_, En>, r: &Rect<Co>) -> Tally {
     keep(sat.box_sum(r, Stable, Repeat, &mut tally));
     keep(tally.multiplicative());
     tally
+}
+
+/// The run-time arguments of the `*_raw` entry points, opaque to the compiler: the raw corners
+/// of `r`, `F` as a value (8 here, but the compiler cannot see it: one lookup for every `F`),
+/// the boundary mode and the form as run-time values (every mode's and form's branch compiled).
+#[inline(always)]
+fn raw_args(r: &Rect<Co>) -> Option<(Rect<i64>, FracBits, EdgeKind, FormKind)> {
+    let f = black_box(FracBits::new(black_box(Co::FRAC_NBITS))).ok()?;
+    Some((
+        black_box(r.to_raw()),
+        f,
+        black_box(EdgeKind::Repeat),
+        black_box(FormKind::Stable),
+    ))
+}
+
+/// `box_sum_raw` and `box_mean_shortcut_raw` with `F`, the mode and the form at run time.
+#[inline(never)]
+fn gate_box_sum_raw(sat: &Sat<'_, En>, r: &Rect<Co>, tol: [u64; 2], out_frac_bits: u32) {
+    let Some((rr, f, kind, form)) = raw_args(r) else {
+        return;
+    };
+    keep(sat.box_sum_raw(&rr, f, form, kind, &mut NoCount));
+    let s = Shortcut::for_tolerance(sat.texel_bits(), tol[0], tol[1]);
+    keep(sat.box_mean_shortcut_raw(&rr, f, form, kind, &s, out_frac_bits, &mut NoCount));
 }
 
 macro_rules! shortcut_gates {
@@ -523,6 +549,15 @@ macro_rules! each_mode {
 fn gate_point(t: &Texture<'_, Tx>, r: &Rect<Co>) {
     use texsat::filters::point::point;
     each_mode!(|m| point(t, r, m, &mut NoCount));
+    if let Some((rr, f, kind, _)) = raw_args(r) {
+        keep(texsat::filters::point::point_raw(
+            t,
+            &rr,
+            f,
+            kind,
+            &mut NoCount,
+        ));
+    }
     if let Ok(sample) = point(t, r, Repeat, &mut NoCount) {
         keep(sample.value_f64(black_box(0)));
     }
@@ -558,6 +593,9 @@ mod mip_gates {
     pub fn gate_mip_queries(p: &MipPyramid<'_, Tx>, r: &Rect<Co>, l: usize, x: usize, y: usize) {
         keep(texsat::filters::mip::trilinear_error_bound(black_box(8)));
         keep(p.lod(r));
+        if let Some((rr, f, _, _)) = raw_args(r) {
+            keep(p.lod_raw(&rr, f));
+        }
         keep(p.level_texel(l, x, y));
         keep((p.levels(), p.level_count(), p.storage_len()));
     }
@@ -565,11 +603,17 @@ mod mip_gates {
     #[inline(never)]
     pub fn gate_mip_point_sample(p: &MipPyramid<'_, Tx>, r: &Rect<Co>) {
         each_mode!(|m| p.point_sample(r, m, &mut NoCount));
+        if let Some((rr, f, kind, _)) = raw_args(r) {
+            keep(p.point_sample_raw(&rr, f, kind, &mut NoCount));
+        }
     }
 
     #[inline(never)]
     pub fn gate_mip_trilinear(p: &MipPyramid<'_, Tx>, r: &Rect<Co>) {
         each_mode!(|m| p.trilinear(r, m, &mut NoCount));
+        if let Some((rr, f, kind, _)) = raw_args(r) {
+            keep(p.trilinear_raw(&rr, f, kind, &mut NoCount));
+        }
     }
 }
 
@@ -609,6 +653,9 @@ mod rip_gates {
     #[inline(never)]
     pub fn gate_rip_sample(map: &RipMap<'_, Tx, 1>, r: &Rect<Co>) {
         each_mode!(|m| map.sample(r, m, &mut NoCount));
+        if let Some((rr, f, kind, _)) = raw_args(r) {
+            keep(map.sample_raw(&rr, f, kind, &mut NoCount));
+        }
     }
 }
 
@@ -643,6 +690,9 @@ mod dip_gates {
     #[inline(never)]
     pub fn gate_dip_sample(map: &DipMap<'_, Tx, 1>, r: &Rect<Co>, filter: DipFilter) {
         each_mode!(|m| map.sample(r, filter, m, &mut NoCount));
+        if let Some((rr, f, kind, _)) = raw_args(r) {
+            keep(map.sample_raw(&rr, f, filter, kind, &mut NoCount));
+        }
     }
 }
 
@@ -695,6 +745,9 @@ mod tent_gates {
     #[inline(never)]
     pub fn gate_tent_sample(q: &TentTable<'_, Te>, r: &Rect<Co>) {
         each_mode!(|m| q.sample(r, m, &mut NoCount));
+        if let Some((rr, f, kind, _)) = raw_args(r) {
+            keep(q.sample_raw(&rr, f, kind, &mut NoCount));
+        }
     }
 
     #[inline(never)]
@@ -705,6 +758,9 @@ mod tent_gates {
         r: &Rect<Co>,
     ) {
         each_mode!(|m| q.sample_exact(l, t, r, m, &mut NoCount));
+        if let Some((rr, f, kind, _)) = raw_args(r) {
+            keep(q.sample_exact_raw(l, t, &rr, f, kind, &mut NoCount));
+        }
     }
 }
 
@@ -763,6 +819,9 @@ mod variance_gates {
     #[inline(never)]
     pub fn gate_variance_stable(v: &VarianceTables<'_, En>, r: &Rect<Co>) {
         each_mode!(|m| v.variance(r, Stable, m, &mut NoCount));
+        if let Some((rr, f, kind, form)) = raw_args(r) {
+            keep(v.variance_raw(&rr, f, form, kind, &mut NoCount));
+        }
     }
 }
 
@@ -920,6 +979,7 @@ fn main() -> ! {
 
         let tol = black_box([1u64, 4]);
         gate_box_mean_shortcut_paper_border(&sat, &rect_fix, tol, out_frac_bits);
+        gate_box_sum_raw(&sat, &rect_fix, tol, out_frac_bits);
         gate_box_mean_shortcut_stable_clamp(&sat, &rect_fix, tol, out_frac_bits);
         gate_box_mean_shortcut_stable_repeat(&sat, &rect_fix, tol, out_frac_bits);
         gate_box_mean_shortcut_paper_mirror(&sat, &rect_fix, tol, out_frac_bits);

@@ -32,26 +32,15 @@
         feature = "filter-tent",
         feature = "filter-variance"
     )),
-    allow(
-        dead_code,
-        unused_imports,
-        unused_macros,
-        unused_variables,
-        unreachable_code
-    )
+    allow(dead_code, unused_imports, unused_variables, unreachable_code)
 )]
 
 use crate::num::Inexact;
 use crate::{answer_lines, entry_name, parse_box, per_channel, round4, EdgeArg, EntryArg, FormArg};
 use clap::ValueEnum;
-use fixed::types::extra::{
-    U0, U1, U10, U11, U12, U13, U14, U15, U16, U17, U18, U19, U2, U20, U21, U22, U23, U24, U3, U4,
-    U5, U6, U7, U8, U9,
-};
-use fixed::FixedI64;
 use serde_json::{json, Map, Value};
 use texsat::filters::{Sample, OUT_FRAC_BITS};
-use texsat::{Error, Rect, Tally, Texel, Texture};
+use texsat::{Error, FracBits, Rect, Tally, Texel, Texture};
 
 #[cfg(feature = "filter-dip")]
 use texsat::filters::dip::{DipFilter, DipMap, DipPyramid};
@@ -205,24 +194,11 @@ pub struct FilterQuery {
     pub entry: Option<EntryArg>,
 }
 
-/// Runs `$body` with `$r` bound to the box `$raw` (raw units, `$f` fraction bits) as a
-/// `Rect<FixedI64<U$f>>`: the filters take the corner type's `F` at compile time.
-macro_rules! by_frac {
-    ($f:expr, $raw:expr, $r:ident => $body:expr) => {
-        by_frac!(@arms $f, $raw, $r, $body;
-            0 U0 1 U1 2 U2 3 U3 4 U4 5 U5 6 U6 7 U7 8 U8 9 U9 10 U10 11 U11 12 U12 13 U13
-            14 U14 15 U15 16 U16 17 U17 18 U18 19 U19 20 U20 21 U21 22 U22 23 U23 24 U24)
-    };
-    (@arms $f:expr, $raw:expr, $r:ident, $body:expr; $($n:literal $u:ident)*) => {
-        match $f {
-            $($n => {
-                let [x0, y0, x1, y1] = $raw.map(FixedI64::<$u>::from_bits);
-                let $r = Rect::new(x0, y0, x1, y1);
-                $body
-            })*
-            _ => unreachable!("F is checked to be in 0..=24"),
-        }
-    };
+/// The query box `[x0, y0, x1, y1]` (raw units) and its `F`, checked once: every filter takes
+/// `F` as a value (`*_raw` entry points), so one sampler per filter serves every `--frac-bits`.
+fn raw_box(raw: [i64; 4], f: u32) -> Result<(Rect<i64>, FracBits), Error> {
+    let [x0, y0, x1, y1] = raw;
+    Ok((Rect::new(x0, y0, x1, y1), FracBits::new(f)?))
 }
 
 /// One answer line: the value(s), the filter, the variant if any, and the costs.
@@ -295,7 +271,8 @@ pub fn query<T: ImageTexel, const C: usize>(
     match q.filter {
         #[cfg(feature = "filter-point")]
         FilterArg::Point => run_lines(q, |raw, k| {
-            by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); point::point(texture, &r, m, k) })
+            raw_box(raw, q.frac_bits)
+                .and_then(|(r, f)| point::point_raw(texture, &r, f, q.edge.kind(), k))
                 .map(|s| (s, None))
         }),
         #[cfg(feature = "filter-mip")]
@@ -308,12 +285,15 @@ pub fn query<T: ImageTexel, const C: usize>(
                 .map_err(|e| build_error(q.filter, "mip pyramid", e))?;
             let tri = q.filter == FilterArg::Trilinear;
             run_lines(q, |raw, k| {
-                by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); if tri {
-                    pyramid.trilinear(&r, m, k)
-                } else {
-                    pyramid.point_sample(&r, m, k)
-                } })
-                .map(|s| (s, None))
+                raw_box(raw, q.frac_bits)
+                    .and_then(|(r, f)| {
+                        if tri {
+                            pyramid.trilinear_raw(&r, f, q.edge.kind(), k)
+                        } else {
+                            pyramid.point_sample_raw(&r, f, q.edge.kind(), k)
+                        }
+                    })
+                    .map(|s| (s, None))
             })
         }
         #[cfg(feature = "filter-rip")]
@@ -323,7 +303,8 @@ pub fn query<T: ImageTexel, const C: usize>(
             let map =
                 RipMap::build(texture, &mut st).map_err(|e| build_error(q.filter, "ripmap", e))?;
             run_lines(q, |raw, k| {
-                by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); map.sample(&r, m, k) })
+                raw_box(raw, q.frac_bits)
+                    .and_then(|(r, f)| map.sample_raw(&r, f, q.edge.kind(), k))
                     .map(|s| (s, None))
             })
         }
@@ -339,7 +320,8 @@ pub fn query<T: ImageTexel, const C: usize>(
                 DipFilter::Trilinear
             };
             run_lines(q, |raw, k| {
-                by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); map.sample(&r, variant, m, k) })
+                raw_box(raw, q.frac_bits)
+                    .and_then(|(r, f)| map.sample_raw(&r, f, variant, q.edge.kind(), k))
                     .map(|s| (s, None))
             })
         }
@@ -397,7 +379,8 @@ fn tent_query<T: ImageTexel, E: TentEntry, const C: usize>(
             }?;
             return Ok((s, Some("int")));
         }
-        let s = by_frac!(f, raw, r => { let m = q.edge.kind(); table.sample(&r, m, k) })?;
+        let (r, fb) = raw_box(raw, f)?;
+        let s = table.sample_raw(&r, fb, q.edge.kind(), k)?;
         Ok((s, Some("paper")))
     })
 }
@@ -436,7 +419,8 @@ fn tent_exact_query<T: ImageTexel, E: TentEntry, L: TentEntry, const C: usize>(
     let mut st = storage(needed, L::ZERO, q.filter)?;
     let lines = TentLines::<L, C>::build(texture, &mut st).map_err(err)?;
     run_lines(q, |raw, k| {
-        by_frac!(q.frac_bits, raw, r => { let m = q.edge.kind(); table.sample_exact(&lines, texture, &r, m, k) })
+        raw_box(raw, q.frac_bits)
+            .and_then(|(r, f)| table.sample_exact_raw(&lines, texture, &r, f, q.edge.kind(), k))
             .map(|s| (s, None))
     })
 }
@@ -481,7 +465,8 @@ fn variance_query<T: ImageTexel, E: texsat::Entry, const C: usize>(
             }
             return Err(Error::CoordinateOutOfRange);
         }
-        let s = by_frac!(f, raw, r => tables.variance(&r, q.form.kind(), q.edge.kind(), k))?;
+        let (r, fb) = raw_box(raw, f)?;
+        let s = tables.variance_raw(&r, fb, q.form.kind(), q.edge.kind(), k)?;
         let form = match q.form {
             FormArg::Paper => "paper",
             FormArg::Stable => "stable",
