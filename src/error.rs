@@ -123,6 +123,14 @@ pub enum Error {
         /// the width given
         bits: u32,
     },
+    /// No candidate table fits the scene's facts (a word for its values and accumulator, and
+    /// its read bound): see [`crate::plan::Plan::for_scene`].
+    NoPlan,
+    /// A box outside the facts its plan was made for ([`crate::plan::Plan::check_box`]).
+    OutsidePlan {
+        /// Which fact it breaks.
+        limit: crate::plan::PlanLimit,
+    },
 }
 
 impl fmt::Display for Quantity {
@@ -201,6 +209,11 @@ impl fmt::Display for Error {
             Error::InvalidTexelBits { bits } => {
                 write!(f, "texel width {bits} bits is outside 1..=16")
             }
+            Error::NoPlan => f.write_str(
+                "no table fits the scene: no entry word holds its values and the lookup's \
+                 accumulator within its read bound",
+            ),
+            Error::OutsidePlan { limit } => write!(f, "box outside the plan's facts: {limit}"),
         }
     }
 }

@@ -56,6 +56,7 @@ mod error;
 pub mod filters;
 pub mod layouts;
 pub mod lookup;
+pub mod plan;
 mod rect;
 pub mod table;
 pub mod texel;

@@ -17,6 +17,28 @@ pub mod packed;
 mod tiled;
 
 pub use modular::{modulus_bits_for, Modular, ModularBuilder};
+
+/// Words of a [`Tiled`] layout with `channels` channels given at run time (the scene plan's
+/// sizes; [`Tiled::words_needed`] is the same for a compile-time `C`).
+pub(crate) const fn tiled_words(
+    spec: TiledSpec,
+    width: usize,
+    height: usize,
+    texel_bits: u32,
+    channels: usize,
+) -> Result<usize, crate::Error> {
+    tiled::words_for_channels(spec, width, height, texel_bits, channels)
+}
+
+/// Words of a [`Modular`] layout with `channels` channels given at run time.
+pub(crate) const fn modular_words(
+    width: usize,
+    height: usize,
+    k: u32,
+    channels: usize,
+) -> Result<usize, crate::Error> {
+    modular::words_for_channels(width, height, k, channels)
+}
 pub use tiled::{AxisLevels, Tiled, TiledBuilder, TiledSpec, MAX_LEVELS};
 
 use crate::cost::Counter;

@@ -80,6 +80,19 @@ pub(super) struct Sizes {
     pub(super) entry_mask: u64,
 }
 
+/// [`Modular::words_needed`] for `k <= 64` with the channels as a value.
+pub(super) const fn words_for_channels(
+    width: usize,
+    height: usize,
+    k: u32,
+    channels: usize,
+) -> Result<usize, Error> {
+    match Sizes::new(width, height, k, channels, usize::MAX as u64) {
+        Ok(s) => Ok(s.words),
+        Err(e) => Err(e),
+    }
+}
+
 impl Sizes {
     /// The sizes of a `w x h` table of `channels` channels at `k <= 64` bits, or
     /// `TextureTooLarge` if the bits overflow `u64` or the words exceed `max_words` (the

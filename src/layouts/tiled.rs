@@ -400,6 +400,20 @@ impl Component {
     }
 }
 
+/// [`Tiled::words_needed`] with the channels as a value.
+pub(super) const fn words_for_channels(
+    spec: TiledSpec,
+    width: usize,
+    height: usize,
+    texel_bits: u32,
+    channels: usize,
+) -> Result<usize, Error> {
+    match Geometry::new(spec, width, height, texel_bits, channels) {
+        Ok(g) => Ok(g.words),
+        Err(e) => Err(e),
+    }
+}
+
 /// The computed geometry of a tiled layout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Geometry {

@@ -1,0 +1,258 @@
+//! Plans against the layouts they name: the sizes agree with the layouts' own `words_needed`,
+//! the chosen table is the smallest candidate that serves, the lookup follows the facts, and a
+//! table built as planned answers every box within the facts.
+extern crate std;
+use super::*;
+use crate::layouts::{Modular, Tiled};
+use crate::{BoxLookup, FracBits, NoCount, Sat, Stable, Texture};
+use std::vec;
+use std::vec::Vec;
+
+fn facts(w: usize, h: usize, f: u32, max: u64, edge: EdgeKind) -> SceneFacts {
+    SceneFacts {
+        max_box: [max << f, max << f],
+        ..SceneFacts::new(w, h, 8, f, edge)
+    }
+}
+
+/// Words (or entries) the real layout needs for the plan (one channel).
+fn real_storage(p: &Plan) -> usize {
+    let f = p.facts();
+    match p.layout() {
+        PlanLayout::Flat => Sat::<u32>::entries_needed(f.width, f.height).unwrap(),
+        PlanLayout::Modular { k } => match p.entry() {
+            EntryWord::U32 => Modular::<u32>::words_needed(f.width, f.height, k).unwrap(),
+            _ => Modular::<u64>::words_needed(f.width, f.height, k).unwrap(),
+        },
+        l => Tiled::<u32>::words_needed(l.tiled_spec().unwrap(), f.width, f.height, 8).unwrap(),
+    }
+}
+
+#[test]
+fn sizes_agree_with_the_layouts_and_the_smallest_wins() {
+    for (w, h) in [
+        (16usize, 16usize),
+        (33, 20),
+        (64, 64),
+        (256, 256),
+        (1000, 3),
+    ] {
+        for f in [0u32, 4, 8] {
+            for max in [2u64, 8, 16, 64, 1024] {
+                for edge in EdgeKind::ALL {
+                    let facts = facts(w, h, f, max.min(w.min(h) as u64), edge);
+                    let p = Plan::for_scene(&facts).unwrap();
+                    assert_eq!(p.storage_len(), real_storage(&p), "{facts:?}");
+                    let unit = match p.layout() {
+                        PlanLayout::Flat => p.entry().bits() as u64 / 8,
+                        _ => 4,
+                    };
+                    assert_eq!(p.table_bytes(), p.storage_len() as u64 * unit);
+                    for r in p.rejected() {
+                        if let RejectReason::Larger { bytes } = r.why {
+                            assert!(bytes >= p.table_bytes(), "{r:?} beats {p:?}");
+                        }
+                    }
+                    // Never larger than the flat u32 table.
+                    assert!(p.table_bytes() <= (w * h * 4) as u64);
+                    assert_eq!(p.lookup() == PlanLookup::Int4, f == 0);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_planned_table_answers_every_box_within_its_facts() {
+    let (w, h) = (40usize, 24usize);
+    let texels: Vec<u8> = (0..w * h).map(|i| (i * 97 % 256) as u8).collect();
+    let tex = Texture::<u8>::new(&texels, w, h).unwrap();
+    for max in [3u64, 6, 12, 24] {
+        for f in [0u32, 4] {
+            let facts = facts(w, h, f, max, EdgeKind::Border);
+            let p = Plan::for_scene(&facts).unwrap();
+            let mut flat = vec![0u32; w * h];
+            let sat = Sat::build(&tex, &mut flat).unwrap();
+            let mut words = vec![0u32; p.storage_len()];
+            let one = 1i64 << f;
+            let check = |l: &dyn Fn(&Rect<i64>) -> Result<u128, Error>| {
+                for x0 in (0..(w as i64 - max as i64) * one).step_by(5) {
+                    for y0 in (0..(h as i64 - max as i64) * one).step_by(7) {
+                        for (dw, dh) in [
+                            (one, one),
+                            (max as i64 * one, max as i64 * one - (one >> 1)),
+                        ] {
+                            let r = Rect::new(x0, y0, x0 + dw, y0 + dh);
+                            assert_eq!(p.check_box(&r), Ok(()));
+                            let want = sat
+                                .box_sum_raw(
+                                    &r,
+                                    FracBits::new(f).unwrap(),
+                                    Stable,
+                                    crate::Border,
+                                    &mut NoCount,
+                                )
+                                .unwrap()
+                                .to_u128()
+                                .sum();
+                            assert_eq!(l(&r), Ok(want), "{} {r:?}", p.layout());
+                        }
+                    }
+                }
+            };
+            let fb = FracBits::new(f).unwrap();
+            match p.layout() {
+                PlanLayout::Flat => {}
+                PlanLayout::Modular { k } => {
+                    let mut row = vec![0u32; w];
+                    let m = Modular::<u32>::build(&tex, k, &mut words, &mut row).unwrap();
+                    check(&|r| {
+                        m.box_sum_raw(r, fb, Stable, crate::Border, &mut NoCount)
+                            .map(|s| s.to_u128().sum())
+                    });
+                }
+                l => {
+                    let spec = l.tiled_spec().unwrap();
+                    let mut scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
+                    let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
+                    check(&|r| {
+                        t.box_sum_raw(r, fb, Stable, crate::Border, &mut NoCount)
+                            .map(|s| s.to_u128().sum())
+                    });
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn boxes_outside_the_facts_are_refused() {
+    let facts = SceneFacts {
+        min_box: [2 << 8, 2 << 8],
+        ..facts(64, 32, 8, 8, EdgeKind::Clamp)
+    };
+    let p = Plan::for_scene(&facts).unwrap();
+    let limit = |l| Err(Error::OutsidePlan { limit: l });
+    assert_eq!(p.check_box(&Rect::new(0, 0, 2 << 8, 8 << 8)), Ok(()));
+    assert_eq!(
+        p.check_box(&Rect::new(0, 0, 1 << 8, 8 << 8)),
+        limit(PlanLimit::BoxTooSmall)
+    );
+    assert_eq!(
+        p.check_box(&Rect::new(0, 0, 9 << 8, 8 << 8)),
+        limit(PlanLimit::BoxTooLarge)
+    );
+    assert_eq!(
+        p.check_box(&Rect::new(-1, 0, 4 << 8, 4 << 8)),
+        limit(PlanLimit::LeavesTexture)
+    );
+    assert_eq!(
+        p.check_box(&Rect::new(60 << 8, 0, (60 << 8) + 1025, 4 << 8)),
+        limit(PlanLimit::LeavesTexture)
+    );
+    assert_eq!(p.check_box(&Rect::new(5, 0, 4, 4)), Err(Error::InvertedBox));
+    let leaves = Plan::for_scene(&SceneFacts {
+        leaves_texture: true,
+        ..facts
+    })
+    .unwrap();
+    assert_eq!(leaves.check_box(&Rect::new(-1, 0, 4 << 8, 4 << 8)), Ok(()));
+}
+
+#[test]
+fn the_read_bound_and_the_tolerance_steer_the_plan() {
+    let base = facts(512, 512, 8, 512, EdgeKind::Border);
+    // Smallest table: tiles (4 fields per corner, 64 reads).
+    let p = Plan::for_scene(&base).unwrap();
+    assert!(matches!(p.layout(), PlanLayout::Tiled { .. }));
+    assert_eq!(p.costs().reads, 64);
+    // At most 16 reads: a one-field layout (packed at the exact width beats flat u32).
+    let p16 = Plan::for_scene(&SceneFacts {
+        max_reads: 16,
+        ..base
+    })
+    .unwrap();
+    assert_eq!(p16.layout(), PlanLayout::Packed);
+    assert!(p16
+        .rejected()
+        .any(|r| matches!(r.why, RejectReason::TooManyReads { reads: 64 })));
+    // At most 4 reads: only the shortcut, which needs a tolerance and large boxes.
+    assert_eq!(
+        Plan::for_scene(&SceneFacts {
+            max_reads: 4,
+            ..base
+        }),
+        Err(Error::NoPlan)
+    );
+    let big = SceneFacts {
+        min_box: [256 << 8, 256 << 8],
+        tolerance: 16,
+        max_reads: 4,
+        mean_frac_bits: 0,
+        ..base
+    };
+    let ps = Plan::for_scene(&big).unwrap();
+    assert_eq!(ps.lookup(), PlanLookup::Shortcut { min_side: 256 });
+    // 255 (1/255 + 1/255) + 1/2 = 2.5 units: (2 * 255 * 510 + 255^2) / (2 * 255^2).
+    assert_eq!(ps.max_error(), (2 * 255 * 510 + 255 * 255, 2 * 255 * 255));
+    // The same tolerance with small boxes: exact lookups.
+    let small = SceneFacts {
+        min_box: [8 << 8, 8 << 8],
+        max_reads: 0,
+        ..big
+    };
+    assert_eq!(
+        Plan::for_scene(&small).unwrap().lookup(),
+        PlanLookup::Stable
+    );
+}
+
+#[test]
+fn words_follow_values_and_accumulators() {
+    // 8 x 8 texture of 8-bit texels: totals fit 14 bits. Integer corners: u16. F = 8 needs
+    // 14 + 16 + 1 = 31 accumulator bits: still u16 (i32 holds 31). F = 9: u32.
+    let p = Plan::for_scene(&SceneFacts::new(8, 8, 8, 0, EdgeKind::Border)).unwrap();
+    assert_eq!(p.entry(), EntryWord::U16);
+    let p = Plan::for_scene(&SceneFacts::new(8, 8, 8, 8, EdgeKind::Border)).unwrap();
+    assert_eq!(p.entry(), EntryWord::U16);
+    assert_eq!(p.acc_bits(), 31);
+    let p = Plan::for_scene(&SceneFacts::new(8, 8, 8, 9, EdgeKind::Border)).unwrap();
+    assert_eq!(p.entry(), EntryWord::U32);
+}
+
+#[test]
+fn invalid_facts_are_refused() {
+    let ok = SceneFacts::new(8, 8, 8, 8, EdgeKind::Border);
+    assert_eq!(
+        Plan::for_scene(&SceneFacts { width: 0, ..ok }),
+        Err(Error::EmptyTexture)
+    );
+    assert_eq!(
+        Plan::for_scene(&SceneFacts {
+            texel_bits: 17,
+            ..ok
+        }),
+        Err(Error::InvalidTexelBits { bits: 17 })
+    );
+    assert_eq!(
+        Plan::for_scene(&SceneFacts {
+            frac_bits: 25,
+            ..ok
+        }),
+        Err(Error::FracBitsUnsupported {
+            frac_bits: 25,
+            max: 24
+        })
+    );
+    assert_eq!(
+        Plan::for_scene(&SceneFacts {
+            min_box: [1 << 20, 1],
+            ..ok
+        }),
+        Err(Error::InvertedBox)
+    );
+    assert_eq!(
+        Plan::for_scene(&SceneFacts { channels: 0, ..ok }),
+        Err(Error::NoSuchChannel)
+    );
+}
