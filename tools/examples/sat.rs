@@ -5,6 +5,9 @@
 //!                                                         one JSON object about the table
 //! sat query IMAGE [--filter NAME] [--layout L] [--frac-bits F] [--edge MODE] [--form FORM] ...
 //!                                                         box queries on stdin, JSON lines out
+//! sat plan --size WxH --texel-bits B --box MIN..MAX [--edge MODE] [--frac-bits F] ...
+//!                                                         the smallest table for a scene, as JSON
+//! sat query IMAGE --plan FILE                             box queries with exactly that plan
 //! sat demo                                                a guided tour on a generated texture
 //! ```
 //!
@@ -27,6 +30,8 @@ mod layout;
 mod load;
 #[path = "sat/num.rs"]
 mod num;
+#[path = "sat/scene.rs"]
+mod scene;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use filter::{FilterArg, FilterQuery, ImageTexel};
@@ -64,6 +69,9 @@ enum Command {
     /// Answer box queries "x0 y0 x1 y1" read from stdin with one JSON object per line.
     #[command(after_long_help = QUERY_HELP)]
     Query(QueryArgs),
+    /// Print the plan for a scene (the smallest table, entry word and lookup that serve its
+    /// facts, with costs and the rejected candidates) as one JSON object.
+    Plan(scene::PlanArgs),
     /// Build the table of a generated 256 x 256 texture and walk through sizes, lookups and costs.
     Demo,
 }
@@ -212,7 +220,7 @@ enum EntryArg {
     U64,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
 enum EdgeArg {
     /// Zero outside the texture; the mean divides by the unclipped area.
     Border,
@@ -314,6 +322,10 @@ struct QueryArgs {
     /// With F > 0, answer boxes whose four coordinates are integers by the 4-read lookup.
     #[arg(long)]
     int4: bool,
+    /// A plan written by `sat plan`: answer with exactly its layout, entry, F, mode and lookup
+    /// (and its mean bits), refusing boxes outside its facts.
+    #[arg(long, conflicts_with_all = ["layout", "entry", "checked", "filter", "frac_bits", "edge", "form", "mean_bits", "int4"])]
+    plan: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -321,6 +333,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Info(args) => info(&args),
         Command::Query(args) => query(&args),
+        Command::Plan(args) => scene::run(&args),
         Command::Demo => demo::run(),
     };
     match result {
@@ -628,9 +641,58 @@ struct QueryOpts {
     form: FormArg,
     inexact: Inexact,
     int4: bool,
+    plan: Option<texsat::plan::Plan>,
+}
+
+/// `sat query --plan FILE`: the plan's configuration, nothing else.
+fn query_plan(args: &QueryArgs, path: &std::path::Path) -> Result<bool, String> {
+    let plan = scene::read(path)?;
+    let facts = *plan.facts();
+    let table = TableArgs {
+        image: args.table.image.clone(),
+        layout: layout::parse_layout(&plan.layout().to_string())?,
+        entry: Some(match plan.entry() {
+            texsat::plan::EntryWord::U16 => EntryArg::U16,
+            texsat::plan::EntryWord::U32 => EntryArg::U32,
+            texsat::plan::EntryWord::U64 => EntryArg::U64,
+        }),
+        checked: false,
+    };
+    let opts = QueryOpts {
+        frac_bits: facts.frac_bits,
+        mean_bits: facts.mean_frac_bits,
+        edge: match facts.edge {
+            EdgeKind::Border => EdgeArg::Border,
+            EdgeKind::Clamp => EdgeArg::Clamp,
+            EdgeKind::Repeat => EdgeArg::Repeat,
+            EdgeKind::Mirror => EdgeArg::Mirror,
+        },
+        form: match plan.lookup().form() {
+            FormKind::Paper => FormArg::Paper,
+            FormKind::Stable => FormArg::Stable,
+        },
+        inexact: if args.round {
+            Inexact::Round
+        } else {
+            Inexact::Refuse
+        },
+        int4: false,
+        plan: Some(plan),
+    };
+    let img = load::load(&table.image)?;
+    with_texture(
+        &img,
+        QueryJob {
+            args: &table,
+            opts: &opts,
+        },
+    )?
 }
 
 fn query(args: &QueryArgs) -> Result<bool, String> {
+    if let Some(path) = &args.plan {
+        return query_plan(args, path);
+    }
     let f = args.frac_bits;
     check_filter_options(args.filter, &args.table)?;
     if args.filter != FilterArg::Box {
@@ -672,6 +734,7 @@ fn query(args: &QueryArgs) -> Result<bool, String> {
             Inexact::Refuse
         },
         int4: args.int4,
+        plan: None,
     };
     let img = load::load(&args.table.image)?;
     with_texture(
@@ -702,6 +765,20 @@ struct QueryJob<'a> {
 impl TextureJob for QueryJob<'_> {
     type Out = Result<bool, String>;
     fn run<T: ImageTexel, const C: usize>(self, texture: &Texture<'_, T, C>) -> Self::Out {
+        if let Some(p) = &self.opts.plan {
+            let f = p.facts();
+            let (got, want) = (
+                (texture.width(), texture.height(), T::BITS, C),
+                (f.width, f.height, f.texel_bits, f.channels),
+            );
+            if got != want {
+                return Err(format!(
+                    "the image is {}x{}, {}-bit, {} channel(s), but the plan is for {}x{}, \
+                     {}-bit, {} channel(s)",
+                    got.0, got.1, got.2, got.3, want.0, want.1, want.2, want.3
+                ));
+            }
+        }
         let plan = self.args.plan(T::BITS)?;
         let job = QueryLayoutJob {
             opts: self.opts,
@@ -842,6 +919,14 @@ fn answer_line<L: BoxLookup<C>, const C: usize>(
     line: &str,
 ) -> Result<Value, String> {
     let raw = parse_box(line, o.frac_bits, o.inexact)?;
+    if let Some(p) = &o.plan {
+        let [x0, y0, x1, y1] = raw;
+        let r = Rect::new(x0, y0, x1, y1);
+        p.check_box(&r).map_err(|e| e.to_string())?;
+        if let Some(shortcut) = p.shortcut() {
+            return answer_shortcut(l, o, &r, &shortcut);
+        }
+    }
     let mut tally = Tally::new();
     let (sum, lookup) = lookup(l, o, raw, &mut tally)?;
     let mean = match sum.means_rounded(o.mean_bits, &mut tally) {
@@ -854,6 +939,40 @@ fn answer_line<L: BoxLookup<C>, const C: usize>(
         "mean": mean,
         "filter": "box",
         "lookup": lookup,
+        "reads": tally.reads,
+        "bits_read": tally.bits_read,
+        "words": tally.words,
+        "muls": tally.muls,
+        "divs": tally.divs,
+        "adds": tally.adds,
+    }))
+}
+
+/// A plan's shortcut lookup: the mean only (the shortcut has no exact sum).
+fn answer_shortcut<L: BoxLookup<C>, const C: usize>(
+    l: &L,
+    o: &QueryOpts,
+    r: &Rect<i64>,
+    shortcut: &texsat::Shortcut,
+) -> Result<Value, String> {
+    let mut tally = Tally::new();
+    let fb = FracBits::new(o.frac_bits).map_err(|e| e.to_string())?;
+    let m = l
+        .box_mean_shortcut_raw(
+            r,
+            fb,
+            o.form.kind(),
+            o.edge.kind(),
+            shortcut,
+            o.mean_bits,
+            &mut tally,
+        )
+        .map_err(|e| e.to_string())?;
+    Ok(json!({
+        "sum": Value::Null,
+        "mean": per_channel(m.to_u128().means, o.mean_bits),
+        "filter": "box",
+        "lookup": if m.shortcut { "shortcut" } else { o.form.kind().name() },
         "reads": tally.reads,
         "bits_read": tally.bits_read,
         "words": tally.words,

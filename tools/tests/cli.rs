@@ -1982,3 +1982,191 @@ fn bad_filters_and_options_fail() {
         a[0]
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// sat plan, sat query --plan
+
+fn plan(args: &[&str]) -> Value {
+    let mut all = vec!["plan"];
+    all.extend_from_slice(args);
+    let out = run(&all, "");
+    assert!(out.status.success(), "sat plan {args:?}: {}", stderr(&out));
+    serde_json::from_str(&stdout(&out)).expect("plan JSON")
+}
+
+#[test]
+fn plan_prints_the_smallest_table_and_its_reasons() {
+    let p = plan(&[
+        "--size",
+        "64x48",
+        "--texel-bits",
+        "8",
+        "--box",
+        "1x1..8x8",
+        "--edge",
+        "repeat",
+    ]);
+    for key in [
+        "layout",
+        "entry",
+        "frac_bits",
+        "lookup",
+        "edge",
+        "table_bytes",
+        "bits_per_entry",
+        "reads",
+        "muls",
+        "adds",
+        "max_error",
+        "features",
+        "rejected",
+    ] {
+        assert!(p.get(key).is_some(), "missing {key}: {p}");
+    }
+    assert_eq!(p["edge"], "repeat");
+    assert_eq!(p["lookup"], "stable");
+    assert_eq!(p["max_error"], 0.5);
+    // Every rejected candidate that serves is at least as large as the plan's table.
+    let bytes = p["table_bytes"].as_u64().unwrap();
+    assert!(bytes < 64 * 48 * 4);
+    for r in p["rejected"].as_array().unwrap() {
+        let why = r["why"].as_str().unwrap();
+        if let Some(n) = why.strip_prefix("larger: ") {
+            let n: u64 = n.trim_end_matches(" bytes").parse().unwrap();
+            assert!(n >= bytes, "{r} vs {bytes}");
+        }
+    }
+    // Integer corners: the 4-read lookup; a read bound of 4 then keeps one field per corner.
+    let p = plan(&[
+        "--size",
+        "64x48",
+        "--texel-bits",
+        "8",
+        "--box",
+        "1x1..64x48",
+        "--frac-bits",
+        "0",
+        "--max-reads",
+        "4",
+    ]);
+    assert_eq!(p["lookup"], "int4");
+    assert_eq!(p["reads"], 4);
+    assert!(
+        ["flat", "packed"].contains(&p["layout"].as_str().unwrap()),
+        "{p}"
+    );
+    // No plan: 16-read lookups under a bound of 4 reads.
+    let out = run(
+        &[
+            "plan",
+            "--size",
+            "64x48",
+            "--texel-bits",
+            "8",
+            "--box",
+            "1x1..8x8",
+            "--max-reads",
+            "4",
+        ],
+        "",
+    );
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("no plan"), "{}", stderr(&out));
+}
+
+#[test]
+fn query_with_a_plan_answers_its_boxes_exactly_and_refuses_others() {
+    let dir = temp_dir("plan");
+    let img = Img::noise(40, 30, 1, 8, 11);
+    let png = dir.join("p.png");
+    img.write_png(&png);
+    let f = 4;
+    let p = plan(&[
+        "--size",
+        "40x30",
+        "--texel-bits",
+        "8",
+        "--box",
+        "0.5x0.5..6x6",
+        "--edge",
+        "repeat",
+        "--frac-bits",
+        "4",
+        "--mean-bits",
+        "12",
+    ]);
+    assert_eq!(p["lookup"], "stable", "{p}");
+    let file = dir.join("plan.json");
+    std::fs::write(&file, p.to_string()).unwrap();
+    // Boxes within the facts (up to 6 x 6 texels, anywhere: Repeat lets them leave).
+    let noise = Img::noise(400, 1, 1, 16, 12).data;
+    let list: Vec<[i64; 4]> = noise
+        .chunks_exact(4)
+        .map(|q| {
+            let x0 = i64::from(q[0]) % (60 << f) - (10 << f);
+            let y0 = i64::from(q[1]) % (50 << f) - (10 << f);
+            let w = (8 + i64::from(q[2]) % (88 + 1)).min(6 << f);
+            let h = (8 + i64::from(q[3]) % (88 + 1)).min(6 << f);
+            [x0, y0, x0 + w, y0 + h]
+        })
+        .collect();
+    let input: String = list.iter().map(|&b| box_line(b, f) + "\n").collect();
+    let (answers, ok) = query(&png, &["--plan", file.to_str().unwrap()], &input);
+    assert!(ok, "{answers:?}");
+    for (v, &b) in answers.iter().zip(&list) {
+        check_answer(&img, v, b, f, 12, "repeat");
+        assert_eq!(
+            v["reads"].as_u64().unwrap() <= p["reads"].as_u64().unwrap(),
+            true
+        );
+    }
+    // Outside the facts: too large, too small.
+    let (answers, ok) = query(
+        &png,
+        &["--plan", file.to_str().unwrap()],
+        "0 0 7 1\n0 0 0.25 1\n",
+    );
+    assert!(!ok);
+    assert!(answers[0]["error"]
+        .as_str()
+        .unwrap()
+        .contains("largest box"));
+    assert!(answers[1]["error"]
+        .as_str()
+        .unwrap()
+        .contains("smallest box"));
+    // A plan edited by hand, or for another image, is refused before any line is read.
+    let mut edited = p.clone();
+    edited["layout"] = json!("flat");
+    std::fs::write(&file, edited.to_string()).unwrap();
+    let out = run(
+        &[
+            "query",
+            png.to_str().unwrap(),
+            "--plan",
+            file.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(
+        !out.status.success() && stderr(&out).contains("its layout is"),
+        "{}",
+        stderr(&out)
+    );
+    let other = plan(&["--size", "41x30", "--texel-bits", "8", "--box", "1x1..6x6"]);
+    std::fs::write(&file, other.to_string()).unwrap();
+    let out = run(
+        &[
+            "query",
+            png.to_str().unwrap(),
+            "--plan",
+            file.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(
+        !out.status.success() && stderr(&out).contains("the plan is for 41x30"),
+        "{}",
+        stderr(&out)
+    );
+}
