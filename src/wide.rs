@@ -154,6 +154,16 @@ impl Wide for u64 {
         if self == 0 {
             return Ok(0);
         }
+        // Sides below 2^32 (any box on a texture a microcontroller holds, at any F): the area is
+        // one 32 x 32 -> 64 multiply, no overflow check.
+        if let (Ok(w32), Ok(h32)) = (u32::try_from(w), u32::try_from(h)) {
+            let area = u64::from(w32) * u64::from(h32);
+            if area != 0 && g < 64 && bits64(self) + g <= 64 {
+                let n = self << g;
+                let (q, r) = (n / area, n % area);
+                return Ok(if r >= area - r { q + 1 } else { q });
+            }
+        }
         if let Some(area) = w.checked_mul(h) {
             if area != 0 && g < 64 && bits64(self) + g <= 64 {
                 // The common case: one u64 division (quotient and remainder together).
