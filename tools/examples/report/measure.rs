@@ -232,6 +232,10 @@ macro_rules! with_const_method {
                 const $m: Method = Method::Sat16StableModular;
                 $body
             }
+            Method::SatPlan => {
+                const $m: Method = Method::SatPlan;
+                $body
+            }
             Method::TentInt => {
                 const $m: Method = Method::TentInt;
                 $body
@@ -300,7 +304,8 @@ fn measure_mode<M: EdgeMode>(
         _ => (texsat::layouts::modulus_bits_for(8, 1), None),
     };
     let mut storage = Storage::new(tex);
-    let structures = storage.build(tw, th, modular_k, modular_k0);
+    let plan = texsat::plan::Plan::for_scene(&methods::scene_facts(tw, th, &inputs, mode.kind()));
+    let structures = storage.build(tw, th, modular_k, modular_k0, plan);
     let refs = Refs::new(tex);
     // EWA once per pixel (it is also the reference of itself).
     let ewa: Vec<f64> = if methods.contains(&Method::Ewa) {
@@ -514,6 +519,21 @@ fn measure_method<M: EdgeMode>(
         if let Some((k0, r0)) = s.modular_k0 {
             note.push_str(&format!(
                 " (k0 = {k0}, from the largest box alone, refuses {r0} boxes)"
+            ));
+        }
+    }
+    if method == Method::SatPlan {
+        if let Some(p) = &s.plan {
+            if !note.is_empty() {
+                note.push_str("; ");
+            }
+            note.push_str(&format!(
+                "plan: {} ({} values, {} lookup), {} bytes, worst case {} reads",
+                p.layout(),
+                p.entry().name(),
+                p.lookup().name(),
+                p.table_bytes(),
+                p.costs().reads
             ));
         }
     }

@@ -10,6 +10,7 @@ use texsat::filters::rip::RipMap;
 use texsat::filters::tent::{TentLines, TentTable};
 use texsat::filters::Sample;
 use texsat::layouts::{Modular, Tiled, TiledSpec};
+use texsat::plan::{EntryWord, Plan, PlanLayout, SceneFacts};
 use texsat::{
     BoxLookup, BoxSum, Counter, Error, Layout, NoCount, Paper, Rect, Sat, Stable, Texture, Wide,
 };
@@ -64,6 +65,9 @@ pub enum Method {
     /// Stable form on the table modulo `2^k`.
     #[value(name = "sat16-stable-modular")]
     Sat16StableModular,
+    /// The scene's plan (`texsat::plan`): the smallest table for the scene's facts.
+    #[value(name = "sat-plan")]
+    SatPlan,
     /// Tent by repeated integration, integer centre and half-widths (9 reads).
     #[value(name = "tent-int")]
     TentInt,
@@ -80,7 +84,7 @@ pub enum Method {
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Method; 16] = [
+    pub const ALL: [Method; 17] = [
         Method::Point,
         Method::MipPoint,
         Method::Trilinear,
@@ -93,6 +97,7 @@ impl Method {
         Method::Sat16StableTiled8,
         Method::Sat16StableTiled2_16,
         Method::Sat16StableModular,
+        Method::SatPlan,
         Method::TentInt,
         Method::TentPaper,
         Method::TentExact,
@@ -125,6 +130,7 @@ impl Method {
             Method::Sat16StableTiled8 => "sat16-stable-tiled8",
             Method::Sat16StableTiled2_16 => "sat16-stable-tiled2-16",
             Method::Sat16StableModular => "sat16-stable-modular",
+            Method::SatPlan => "sat-plan",
             Method::TentInt => "tent-int",
             Method::TentPaper => "tent-paper",
             Method::TentExact => "tent-exact",
@@ -147,6 +153,7 @@ impl Method {
             Method::Sat16StableTiled8 => "stable fractional box on `Tiled` with 8 x 8 tiles",
             Method::Sat16StableTiled2_16 => "stable fractional box on `Tiled`, 2 x 2 tiles within 16 x 16 tiles",
             Method::Sat16StableModular => "stable fractional box on `Modular` (table mod 2^k, k from the scene's largest box)",
+            Method::SatPlan => "the scene's plan: the smallest table for its facts (box sizes, mode, F = 8, exact means) and its lookup (`Plan::for_scene`)",
             Method::TentInt => "triangle filter by repeated integration, integer centre and half-widths (`TentTable::sample_int`)",
             Method::TentPaper => "triangle filter, 9 bilinear interpolations of the order-2 table (`TentTable::sample`)",
             Method::TentExact => "triangle filter, exact for fractional corners (`TentTable::sample_exact` + `TentLines`)",
@@ -179,6 +186,7 @@ impl Method {
                 | Method::Sat16StableTiled8
                 | Method::Sat16StableTiled2_16
                 | Method::Sat16StableModular
+                | Method::SatPlan
         )
     }
 }
@@ -281,6 +289,7 @@ pub struct Storage {
     tiled8: (Vec<u32>, Vec<u32>),
     tiled2_16: (Vec<u32>, Vec<u32>),
     modular: (Vec<u32>, Vec<u64>),
+    planned: (Vec<u32>, Vec<u32>),
     tent: Vec<u64>,
     lines: Vec<u32>,
 }
@@ -309,6 +318,10 @@ pub struct Structures<'a> {
     /// `(k0, boxes refused at k0)` when `modular_k` had to exceed `k0` (see
     /// [`choose_modular_k`]).
     pub modular_k0: Option<(u32, usize)>,
+    /// The scene's plan, and its table (`None` with the reason in `failures`).
+    pub plan: Option<Plan>,
+    /// The plan's table.
+    pub planned: Option<Planned<'a>>,
     /// Order-2 table.
     pub tent: Option<TentTable<'a, u64>>,
     /// Line tables of the exact tent.
@@ -357,13 +370,15 @@ impl Storage {
         }
     }
 
-    /// Builds every structure (`modular_k` bits for the modular table).
+    /// Builds every structure (`modular_k` bits for the modular table, `plan` for the planned
+    /// one).
     pub fn build(
         &mut self,
         w: usize,
         h: usize,
         modular_k: u32,
         modular_k0: Option<(u32, usize)>,
+        plan: Result<Plan, Error>,
     ) -> Result<Structures<'_>, Error> {
         let Storage {
             texels,
@@ -374,6 +389,7 @@ impl Storage {
             tiled8,
             tiled2_16,
             modular,
+            planned,
             tent,
             lines,
         } = self;
@@ -403,6 +419,8 @@ impl Storage {
             "modular table",
             f,
         );
+        let plan = keep(plan, "scene plan", f);
+        let planned = plan.and_then(|p| build_planned(&tex, &p, planned, f));
         let tent = match TentTable::<u64>::storage_needed(w, h) {
             Ok(n) => {
                 *tent = vec![0; n];
@@ -434,10 +452,81 @@ impl Storage {
             modular,
             modular_k,
             modular_k0,
+            plan,
+            planned,
             tent,
             lines,
             failures,
         })
+    }
+}
+
+/// The table a plan names, with `u32` values (the report's 8-bit textures of at most 1024^2
+/// texels have totals below 2^28; a plan for `u64` values is refused as unavailable).
+pub enum Planned<'a> {
+    /// The flat table (the scene's `sat`).
+    Flat,
+    /// Packed, tiled, or tiled and modular.
+    Tiled(Tiled<'a, u32>),
+    /// Modular.
+    Modular(Modular<'a, u32>),
+}
+
+fn build_planned<'a>(
+    tex: &Texture<'_, u8>,
+    p: &Plan,
+    st: &'a mut (Vec<u32>, Vec<u32>),
+    f: &mut Vec<(&'static str, Error)>,
+) -> Option<Planned<'a>> {
+    if p.entry() == EntryWord::U64 {
+        f.push(("plan's table", Error::NoPlan));
+        return None;
+    }
+    let (w, h) = (tex.width(), tex.height());
+    match p.layout() {
+        PlanLayout::Flat => Some(Planned::Flat),
+        PlanLayout::Modular { k } => {
+            st.0 = vec![0; p.storage_len()];
+            st.1 = vec![0; w];
+            keep(
+                Modular::build(tex, k, &mut st.0, &mut st.1),
+                "plan's table",
+                f,
+            )
+            .map(Planned::Modular)
+        }
+        l => {
+            let spec = l.tiled_spec()?;
+            st.0 = vec![0; p.storage_len()];
+            st.1 = vec![0; keep(Tiled::<u32>::scratch_needed(spec, w), "plan's table", f)?];
+            let _ = h;
+            keep(
+                Tiled::build(tex, spec, &mut st.0, &mut st.1),
+                "plan's table",
+                f,
+            )
+            .map(Planned::Tiled)
+        }
+    }
+}
+
+/// The facts of a scene, read off its footprints: the smallest and largest sides (per axis,
+/// raw at `F = 8`), whether any leaves the texture, its mode; exact means with `G` bits.
+pub fn scene_facts(w: usize, h: usize, inputs: &[Input], mode: texsat::EdgeKind) -> SceneFacts {
+    let side = |i: &Input, a: usize| (i.raw[a + 2] - i.raw[a]).max(1) as u64;
+    let fold = |a: usize, pick: fn(u64, u64) -> u64, init: u64| {
+        inputs.iter().map(|i| side(i, a)).fold(init, pick)
+    };
+    let (pw, ph) = ((w as i64) << F, (h as i64) << F);
+    let leaves = inputs
+        .iter()
+        .any(|i| i.raw[0] < 0 || i.raw[1] < 0 || i.raw[2] > pw || i.raw[3] > ph);
+    SceneFacts {
+        min_box: [fold(0, u64::min, u64::MAX), fold(1, u64::min, u64::MAX)],
+        max_box: [fold(0, u64::max, 1), fold(1, u64::max, 1)],
+        leaves_texture: leaves,
+        mean_frac_bits: G,
+        ..SceneFacts::new(w, h, 8, F, mode)
     }
 }
 
@@ -531,6 +620,14 @@ pub fn eval<M: texsat::EdgeMode, K: Counter>(
         Method::Sat16StableModular => {
             mean(BoxLookup::box_sum(get(&s.modular)?, r, Stable, mode, k)?, k)?
         }
+        Method::SatPlan => {
+            let form = get(&s.plan)?.lookup().form();
+            match get(&s.planned)? {
+                Planned::Flat => mean(get(&s.sat)?.box_sum(r, form, mode, k)?, k)?,
+                Planned::Tiled(t) => mean(BoxLookup::box_sum(t, r, form, mode, k)?, k)?,
+                Planned::Modular(m) => mean(BoxLookup::box_sum(m, r, form, mode, k)?, k)?,
+            }
+        }
         Method::TentInt => {
             let (cx, cy, a, b) = inp.tent_int;
             value(get(&s.tent)?.sample_int(cx, cy, a, b, mode, k)?)
@@ -577,6 +674,10 @@ pub fn memory(s: &Structures<'_>, method: Method) -> Option<(f64, &'static str)>
         Method::Sat16StableModular => (
             Layout::<1>::storage_bits(s.modular.as_ref()?) as f64,
             "table mod 2^k, packed at k bits",
+        ),
+        Method::SatPlan => (
+            s.plan.as_ref()?.table_bytes() as f64 * 8.0,
+            "the plan's table (layout in the note)",
         ),
         Method::TentInt | Method::TentPaper => (
             s.tent.as_ref()?.table_bytes() as f64 * 8.0,

@@ -46,6 +46,7 @@ pub fn colour(m: Method) -> RGBColor {
         Method::Sat16StableTiled8 => RGBColor(227, 119, 194),
         Method::Sat16StableTiled2_16 => RGBColor(170, 40, 120),
         Method::Sat16StableModular => RGBColor(140, 86, 75),
+        Method::SatPlan => RGBColor(250, 190, 0),
         Method::TentInt => RGBColor(44, 160, 44),
         Method::TentPaper => RGBColor(130, 210, 110),
         Method::TentExact => RGBColor(0, 90, 0),
