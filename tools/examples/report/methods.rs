@@ -467,7 +467,7 @@ pub enum Planned<'a> {
     /// The flat table (the scene's `sat`).
     Flat,
     /// Packed, tiled, or tiled and modular.
-    Tiled(Tiled<'a, u32>),
+    Tiled(Box<Tiled<'a, u32>>),
     /// Modular.
     Modular(Modular<'a, u32>),
 }
@@ -624,7 +624,7 @@ pub fn eval<M: texsat::EdgeMode, K: Counter>(
             let form = get(&s.plan)?.lookup().form();
             match get(&s.planned)? {
                 Planned::Flat => mean(get(&s.sat)?.box_sum(r, form, mode, k)?, k)?,
-                Planned::Tiled(t) => mean(BoxLookup::box_sum(t, r, form, mode, k)?, k)?,
+                Planned::Tiled(t) => mean(BoxLookup::box_sum(&**t, r, form, mode, k)?, k)?,
                 Planned::Modular(m) => mean(BoxLookup::box_sum(m, r, form, mode, k)?, k)?,
             }
         }
