@@ -505,7 +505,7 @@ fn build_planned<'a>(
                 "plan's table",
                 f,
             )
-            .map(Planned::Tiled)
+            .map(|t| Planned::Tiled(Box::new(t)))
         }
     }
 }
