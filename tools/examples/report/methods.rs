@@ -482,7 +482,7 @@ fn build_planned<'a>(
         f.push(("plan's table", Error::NoPlan));
         return None;
     }
-    let (w, h) = (tex.width(), tex.height());
+    let w = tex.width();
     match p.layout() {
         PlanLayout::Flat => Some(Planned::Flat),
         PlanLayout::Modular { k } => {
@@ -499,7 +499,6 @@ fn build_planned<'a>(
             let spec = l.tiled_spec()?;
             st.0 = vec![0; p.storage_len()];
             st.1 = vec![0; keep(Tiled::<u32>::scratch_needed(spec, w), "plan's table", f)?];
-            let _ = h;
             keep(
                 Tiled::build(tex, spec, &mut st.0, &mut st.1),
                 "plan's table",
