@@ -414,6 +414,18 @@ pub(super) const fn words_for_channels(
     }
 }
 
+/// The field of at most 32 bits at bit `at` of `words` (`mask` its low bits set): the word
+/// holding its first bit shifted down, or-ed with the next word shifted up (`(w << 1) << (31 -
+/// s)`, which is 0 for `s = 0` without a 32-bit shift); words past the slice read as 0.
+#[inline(always)]
+fn read_masked32(words: &[u32], at: u32, mask: u32) -> u32 {
+    let i = (at / WORD_BITS) as usize;
+    let s = at % WORD_BITS;
+    let lo = words.get(i).copied().unwrap_or(0) >> s;
+    let hi = (words.get(i.wrapping_add(1)).copied().unwrap_or(0) << 1) << (31 - s);
+    (lo | hi) & mask
+}
+
 /// The computed geometry of a tiled layout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Geometry {
@@ -706,6 +718,24 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         out: &mut [E; C],
         k: &mut K,
     ) {
+        if self.geo.total_bits <= u32::MAX as u64 && comp.bits <= 32 {
+            // Every offset is below the total, so below 2^32: the offset in 32-bit arithmetic
+            // (exact, the low words of the u64 geometry) and each field from at most two words
+            // with 32-bit shifts. The common case on a microcontroller (tables below 512 MiB).
+            let at = (comp.offset_bits as u32)
+                .wrapping_add(ix.wrapping_mul(comp.row_bits as u32))
+                .wrapping_add(iy.wrapping_mul(comp.stride_bits as u32));
+            let read = comp.stride_bits as u32;
+            k.reads(1, read);
+            k.words((at % WORD_BITS).saturating_add(read).div_ceil(WORD_BITS));
+            let mut at = at;
+            for o in out.iter_mut() {
+                let v = read_masked32(self.words, at, comp.mask as u32);
+                *o = o.wrapping_add(E::from_u64_truncating(u64::from(v)));
+                at = at.wrapping_add(comp.bits);
+            }
+            return;
+        }
         let offset = comp.offset(ix, iy);
         let read = u32::try_from(comp.stride_bits).unwrap_or(u32::MAX);
         k.reads(1, read);
