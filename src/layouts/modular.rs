@@ -16,8 +16,8 @@
 //! sums, never a panic.
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_field, read_masked, words_of_bits, write_field,
-    WORD_BITS,
+    bits_of_mul, check_dimensions, mask, read_field, read_masked, read_masked32, words_of_bits,
+    write_field, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::Counter;
@@ -270,6 +270,25 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
             return out;
         }
         let s = &self.sizes;
+        if s.total_bits <= u32::MAX as u64 && s.entry_bits <= 32 {
+            // Offsets below 2^32 and fields of at most 32 bits (the common case on a
+            // microcontroller): 32-bit offset arithmetic and one two-word read, as the tiled
+            // layout does.
+            let at = ((y - 1) as u32)
+                .wrapping_mul(s.row_bits as u32)
+                .wrapping_add(((x - 1) as u32).wrapping_mul(s.entry_bits as u32));
+            let read = s.entry_bits as u32;
+            k.reads(1, read);
+            k.words((at % WORD_BITS).saturating_add(read).div_ceil(WORD_BITS));
+            let v = u64::from(read_masked32(self.words, at, s.entry_mask as u32));
+            let m = mask(self.k);
+            let mut shift = 0u32;
+            for o in out.iter_mut() {
+                *o = E::from_u64_truncating(v.wrapping_shr(shift) & m);
+                shift = shift.wrapping_add(self.k);
+            }
+            return out;
+        }
         // Below total_bits for x <= w, y <= h (checked when the sizes were made): no wrap.
         let offset = ((y - 1) as u64)
             .wrapping_mul(s.row_bits)

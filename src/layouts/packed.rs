@@ -138,6 +138,18 @@ pub(crate) fn read_masked(words: &[u32], offset: u64, len: u32, mask: u64) -> u6
     v & mask
 }
 
+/// The field of at most 32 bits at bit `at` of `words` (`mask` its low bits set): the word
+/// holding its first bit shifted down, or-ed with the next word shifted up (`(w << 1) << (31 -
+/// s)`, which is 0 for `s = 0` without a 32-bit shift); words past the slice read as 0.
+#[inline(always)]
+pub(crate) fn read_masked32(words: &[u32], at: u32, mask: u32) -> u32 {
+    let i = (at / WORD_BITS) as usize;
+    let s = at % WORD_BITS;
+    let lo = words.get(i).copied().unwrap_or(0) >> s;
+    let hi = (words.get(i.wrapping_add(1)).copied().unwrap_or(0) << 1) << (31 - s);
+    (lo | hi) & mask
+}
+
 /// Reads `len <= 64` bits starting at bit `offset` of `words`; returns the value and the number
 /// of words touched. Bits past the end of the slice read as 0 (callers size the slice with
 /// [`words_for`], so this never happens for a valid layout); `len` above 64 reads 64 bits.
@@ -227,6 +239,29 @@ pub(crate) fn write_field(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn read_masked32_equals_the_64_bit_read() {
+        // Every width up to 32 at every offset of a pseudo-random slice, including fields that
+        // end in the last word and offsets past the slice (read as 0 by both).
+        let mut x = 0x9E37_79B9u32;
+        let words: [u32; 6] = core::array::from_fn(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        });
+        for len in 1..=32u32 {
+            let m = mask(len);
+            for at in 0..(7 * 32) {
+                assert_eq!(
+                    u64::from(read_masked32(&words, at, m as u32)),
+                    read_masked(&words, u64::from(at), len, m),
+                    "len {len} at {at}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn round_trip_every_width_and_offset() {

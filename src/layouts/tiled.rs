@@ -37,7 +37,8 @@
 use core::num::NonZeroU32;
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_masked, words_of_bits, write_field, WORD_BITS,
+    bits_of_mul, check_dimensions, mask, read_masked, read_masked32, words_of_bits, write_field,
+    WORD_BITS,
 };
 use super::Layout;
 use crate::cost::Counter;
@@ -412,18 +413,6 @@ pub(super) const fn words_for_channels(
         Ok(g) => Ok(g.words),
         Err(e) => Err(e),
     }
-}
-
-/// The field of at most 32 bits at bit `at` of `words` (`mask` its low bits set): the word
-/// holding its first bit shifted down, or-ed with the next word shifted up (`(w << 1) << (31 -
-/// s)`, which is 0 for `s = 0` without a 32-bit shift); words past the slice read as 0.
-#[inline(always)]
-fn read_masked32(words: &[u32], at: u32, mask: u32) -> u32 {
-    let i = (at / WORD_BITS) as usize;
-    let s = at % WORD_BITS;
-    let lo = words.get(i).copied().unwrap_or(0) >> s;
-    let hi = (words.get(i.wrapping_add(1)).copied().unwrap_or(0) << 1) << (31 - s);
-    (lo | hi) & mask
 }
 
 /// The computed geometry of a tiled layout.
