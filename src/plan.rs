@@ -440,6 +440,9 @@ impl Plan {
             if let Ok(s) = &r {
                 best = match best {
                     None => Some(i),
+                    // `b < i`: an index already visited (the check keeps the const fn free of a
+                    // bounds-check panic path).
+                    Some(b) if b >= MAX_CANDIDATES => Some(i),
                     Some(b) => match &sized[b] {
                         Some(Ok(bs)) if bs.bytes < s.bytes => Some(b),
                         Some(Ok(bs)) if bs.bytes == s.bytes && bs.costs.reads <= s.costs.reads => {
@@ -455,6 +458,9 @@ impl Plan {
         let Some(b) = best else {
             return Err(Error::NoPlan);
         };
+        if b >= MAX_CANDIDATES {
+            return Err(Error::NoPlan);
+        }
         let Some(Ok(chosen)) = sized[b] else {
             return Err(Error::NoPlan);
         };
@@ -482,7 +488,7 @@ impl Plan {
                 _ => None,
             };
             if let Some(r) = r {
-                if !duplicate(&rejected, n, &r) {
+                if n < MAX_CANDIDATES && !duplicate(&rejected, n, &r) {
                     rejected[n] = Some(r);
                     n += 1;
                 }

@@ -517,6 +517,33 @@ fn gate_shortcut_bound(x: f64, y: f64) {
     keep(Shortcut::error_bound(8, x, y));
 }
 
+/// Scene plans at run time (facts opaque to the compiler): `Plan::for_scene`, the accessors,
+/// `check_box`, the rejections.
+#[inline(never)]
+fn gate_plan(facts: &texsat::plan::SceneFacts, r: &Rect<Co>) {
+    let Ok(p) = black_box(texsat::plan::Plan::for_scene(facts)) else {
+        return;
+    };
+    keep((
+        p.entry(),
+        p.layout(),
+        p.lookup(),
+        p.acc_bits(),
+        p.storage_len(),
+    ));
+    keep((
+        p.table_bytes(),
+        p.bits_per_entry(),
+        p.costs(),
+        p.max_error(),
+    ));
+    keep((p.shortcut(), p.layout().tiled_spec(), p.layout().modulus()));
+    keep(p.check_box(&r.to_raw()));
+    for rej in p.rejected() {
+        keep(rej);
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Filters, each behind its feature; each sample function in all four boundary modes.
 // ---------------------------------------------------------------------------------------------
@@ -941,6 +968,21 @@ fn main() -> ! {
         black_box(64),
     );
     gate_shortcut_bound(black_box(12.5), black_box(7.25));
+    {
+        let facts = texsat::plan::SceneFacts {
+            max_box: black_box([16 << 8, 16 << 8]),
+            tolerance: black_box(0),
+            max_reads: black_box(0),
+            ..texsat::plan::SceneFacts::new(
+                black_box(64),
+                black_box(48),
+                black_box(8),
+                black_box(8),
+                black_box(texsat::EdgeKind::Repeat),
+            )
+        };
+        gate_plan(&black_box(facts), &rect_fix);
+    }
 
     let packed = gate_texture_new(texels, w, h);
     let strided = gate_texture_with_stride(texels, w, h, stride);
