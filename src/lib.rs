@@ -48,6 +48,9 @@
 //! ```
 #![no_std]
 #![forbid(unsafe_code)]
+// docs.rs (and `RUSTDOCFLAGS="--cfg docsrs" cargo +nightly doc --all-features`) shows which
+// cargo feature each gated item needs.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 pub mod cost;

@@ -41,27 +41,42 @@
     feature = "filter-dip",
     feature = "filter-tent"
 ))]
+#[cfg_attr(
+    docsrs,
+    doc(cfg(any(
+        feature = "filter-mip",
+        feature = "filter-rip",
+        feature = "filter-dip",
+        feature = "filter-tent"
+    )))
+)]
 pub mod level;
 
 #[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
 pub(crate) mod pyramid;
 
 #[cfg(feature = "filter-point")]
+#[cfg_attr(docsrs, doc(cfg(feature = "filter-point")))]
 pub mod point;
 
 #[cfg(feature = "filter-mip")]
+#[cfg_attr(docsrs, doc(cfg(feature = "filter-mip")))]
 pub mod mip;
 
 #[cfg(feature = "filter-rip")]
+#[cfg_attr(docsrs, doc(cfg(feature = "filter-rip")))]
 pub mod rip;
 
 #[cfg(feature = "filter-dip")]
+#[cfg_attr(docsrs, doc(cfg(feature = "filter-dip")))]
 pub mod dip;
 
 #[cfg(feature = "filter-tent")]
+#[cfg_attr(docsrs, doc(cfg(feature = "filter-tent")))]
 pub mod tent;
 
 #[cfg(feature = "filter-variance")]
+#[cfg_attr(docsrs, doc(cfg(feature = "filter-variance")))]
 pub mod variance;
 
 /// Fractional bits of every filter's output value.
