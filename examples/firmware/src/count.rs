@@ -122,7 +122,7 @@ fn m_box_sum_stable_border_mean(sat: &Sat<'_, En>, r: &Rect<Co>) {
 }
 
 #[inline(never)]
-fn m_sat_build<'a>(t: &Texture<'_, Tx>, storage: &'a mut [En]) {
+fn m_sat_build(t: &Texture<'_, Tx>, storage: &mut [En]) {
     keep(Sat::build(t, storage));
 }
 
