@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The firmware demo on the emulated Cortex-M4F: builds `texsat-demo` (src/demo.rs: tables sized
-# by scene plans at compile time, footprints computed on the device, three plans sampled), runs
-# it under qemu-system-arm (mps2-an386) with a time limit, and compares the lines it prints
-# through semihosting with the host's (tools/examples/firmware_scene.rs, the same scene code).
-# Exits non-zero on any mismatch, and says which step failed.
+# by scene plans at compile time, footprints computed on the device, three plans sampled) with
+# DEFMT_LOG=info, runs it under qemu-system-arm (mps2-an386) with a time limit, decodes the
+# defmt frames it writes to the semihosting console with defmt-print, and compares the lines
+# with the host's (tools/examples/firmware_scene.rs, the same scene code). Exits non-zero on any
+# mismatch, and says which step failed. Installs qemu-system-arm (apt), defmt-print (cargo
+# install --locked) and the rustup target when missing.
 #
 #   bash examples/firmware/run.sh               build, run, compare; flash and RAM
 #   DEMO_COUNT=1 bash examples/firmware/run.sh  also instructions per table entry built and per
@@ -25,6 +27,10 @@ if ! command -v "$QEMU" >/dev/null; then
   echo "run.sh: installing qemu-system-arm (apt-get)" >&2
   { apt-get update -qq && apt-get install -y -qq qemu-system-arm >/dev/null; } ||
     die "could not install qemu-system-arm (Debian package qemu-system-arm)"
+fi
+if ! command -v defmt-print >/dev/null; then
+  echo "run.sh: installing defmt-print (cargo install defmt-print --locked)" >&2
+  cargo install defmt-print --locked >&2 || die "could not install defmt-print"
 fi
 if ! rustup target list --installed 2>/dev/null | grep -qx "$TARGET"; then
   rustup target add "$TARGET" >&2 || die "could not install the $TARGET target"
@@ -49,19 +55,24 @@ OUT=$TARGET_DIR/demo
 mkdir -p "$OUT"
 
 STEP="build the firmware"
-CARGO_TARGET_DIR=$TARGET_DIR cargo build --release --locked --target "$TARGET" --bin texsat-demo \
+# defmt logs only errors unless DEFMT_LOG is set when the firmware is built.
+DEFMT_LOG=info CARGO_TARGET_DIR=$TARGET_DIR cargo build --release --locked --target "$TARGET" --bin texsat-demo \
   --features demo >"$OUT/build.log" 2>&1 || { tail -n 30 "$OUT/build.log" >&2; die "see $OUT/build.log"; }
 ELF=$TARGET_DIR/$TARGET/release/texsat-demo
 
 STEP="run under QEMU"
 status=0
-rm -f "$OUT/device.txt"
-# The semihosting console goes to a file of its own (QEMU would print it on stderr, mixed with
-# its own messages).
+# The firmware opens the semihosting console (":tt"), which QEMU maps to its own stdout: the
+# binary defmt frames, and nothing else (QEMU's messages go to stderr).
 timeout 120 "$QEMU" -M mps2-an386 -display none -monitor none -serial none \
-  -semihosting-config enable=on,target=native,chardev=semi -chardev "file,id=semi,path=$OUT/device.txt" \
-  -kernel "$ELF" >"$OUT/qemu.log" 2>&1 || status=$?
-[ "$status" = 0 ] || { cat "$OUT/device.txt" "$OUT/qemu.log" >&2; die "QEMU exited with status $status (124: time limit)"; }
+  -semihosting-config enable=on,target=native -kernel "$ELF" >"$OUT/frames.bin" 2>"$OUT/qemu.log" ||
+  status=$?
+[ "$status" = 0 ] || { cat "$OUT/qemu.log" >&2; die "QEMU exited with status $status (124: time limit)"; }
+
+STEP="decode the defmt frames"
+defmt-print -e "$ELF" --log-format "{s}" stdin <"$OUT/frames.bin" >"$OUT/decoded.txt" ||
+  die "defmt-print failed"
+grep '^plan ' "$OUT/decoded.txt" >"$OUT/device.txt" || { cat "$OUT/decoded.txt" >&2; die "no plan lines in the log"; }
 
 STEP="the host's lines"
 (cd "$ROOT" && cargo run -q --locked -p texsat-tools --example firmware_scene) >"$OUT/host.txt" ||
@@ -92,7 +103,7 @@ if [ -n "${DEMO_COUNT:-}" ]; then
   rm -f "$FIFO"
   mkfifo "$FIFO"
   timeout 600 "$QEMU" -M mps2-an386 -display none -monitor none -serial none \
-    -semihosting-config enable=on,target=native,chardev=semi -chardev "file,id=semi,path=$OUT/count-device.txt" \
+    -semihosting-config enable=on,target=native \
     -singlestep -d exec,nochain -D "$FIFO" -kernel "$ELF" >/dev/null &
   QPID=$!
   python3 - "$FIFO" "$MARK" <<'PY'

@@ -1,6 +1,6 @@
 //! The host side of the firmware demo (`examples/firmware/run.sh`): the same scene code as the
 //! firmware (`examples/firmware/src/scene.rs`, included here), the same plans and layouts, built
-//! in `Vec`s, printing the same lines: `plan NAME samples N checksum HEX first A,B,C,D`.
+//! in `Vec`s, printing the same lines: `plan NAME samples N checksum C first A,B,C,D`.
 //! `run.sh` compares them with what the Cortex-M4F printed under QEMU.
 //!
 //! ```text
@@ -20,7 +20,7 @@ use texsat::{Error, Texture};
 fn line(name: &str, c: &Checksum) -> String {
     let first: Vec<String> = c.first.iter().map(u64::to_string).collect();
     format!(
-        "plan {name} samples {} checksum {:016x} first {}",
+        "plan {name} samples {} checksum {} first {}",
         c.samples,
         c.hash,
         first.join(",")

@@ -1,8 +1,9 @@
 //! The firmware demo (feature `demo`, bin `texsat-demo`; run by `run.sh`): builds the tables of
 //! the demo scene (`scene.rs`) into `static`s sized by three scene plans at compile time,
-//! samples the 32 x 24 perspective scene with each plan's configuration, and prints one line per
-//! plan (checksum, first means, samples) through semihosting, then exits QEMU. `run.sh` compares
-//! the lines with the host's (`tools/examples/firmware_scene.rs`, the same scene code).
+//! samples the 32 x 24 perspective scene with each plan's configuration, and logs one line per
+//! plan (checksum, first means, samples) with `defmt`, its frames written to the semihosting
+//! console, then exits QEMU. `run.sh` decodes the frames with `defmt-print` and compares the
+//! lines with the host's (`tools/examples/firmware_scene.rs`, the same scene code).
 //!
 //! Same panic handler as the link gate: this binary links only if no panic path remains.
 #![no_std]
@@ -65,100 +66,100 @@ pub extern "C" fn texsat_demo_mark() {
     unsafe { asm!("nop", options(nomem, nostack, preserves_flags)) }
 }
 
-/// Semihosting SYS_WRITE0: prints a NUL-terminated string on QEMU's stdout.
-fn write0(s: &[u8]) {
-    // SAFETY: semihosting call; r0 = SYS_WRITE0 (0x04), r1 = a NUL-terminated string.
-    unsafe { asm!("bkpt 0xab", inout("r0") 0x04u32 => _, in("r1") s.as_ptr(), options(nostack)) }
-}
+/// Semihosting: `SYS_OPEN` of `":tt"` for writing (the console), `SYS_WRITE` of a buffer.
+mod semihosting {
+    use core::arch::asm;
 
-/// Semihosting SYS_EXIT: ADP_Stopped_ApplicationExit (QEMU exits 0) or RunTimeErrorUnknown (1).
-fn exit(ok: bool) -> ! {
-    let reason = if ok { 0x20026u32 } else { 0x20023u32 };
-    loop {
-        // SAFETY: semihosting call; r0 = SYS_EXIT (0x18), r1 = the reason.
-        unsafe { asm!("bkpt 0xab", in("r0") 0x18u32, in("r1") reason, options(nostack)) }
+    /// One semihosting call: operation `op`, parameter block at `arg`; returns r0.
+    fn call(op: u32, arg: *const u32) -> i32 {
+        let r: i32;
+        // SAFETY: the semihosting trap; `arg` points to a parameter block that lives across it.
+        unsafe { asm!("bkpt 0xab", inout("r0") op as i32 => r, in("r1") arg, options(nostack)) }
+        r
     }
-}
 
-/// A line buffer with hex and decimal formatting (no `core::fmt`).
-struct Line {
-    buf: [u8; 160],
-    len: usize,
-}
+    /// The console, opened once (`:tt`, mode 4 = "w").
+    pub fn console() -> i32 {
+        let name = b":tt\0";
+        let block = [name.as_ptr() as u32, 4, 3];
+        call(0x01, block.as_ptr())
+    }
 
-impl Line {
-    fn new() -> Self {
-        Line {
-            buf: [0; 160],
-            len: 0,
-        }
+    /// Writes `bytes` to `handle` (binary-safe, unlike `SYS_WRITE0`).
+    pub fn write(handle: i32, bytes: &[u8]) {
+        let block = [handle as u32, bytes.as_ptr() as u32, bytes.len() as u32];
+        call(0x05, block.as_ptr());
     }
-    fn text(&mut self, s: &[u8]) -> &mut Self {
-        for &b in s {
-            if let Some(c) = self.buf.get_mut(self.len) {
-                *c = b;
-                self.len += 1;
-            }
-        }
-        self
-    }
-    fn hex(&mut self, v: u64) -> &mut Self {
-        let mut d = [0u8; 16];
-        for (i, c) in d.iter_mut().enumerate() {
-            let n = ((v >> (60 - 4 * i)) & 15) as u8;
-            *c = if n < 10 { b'0' + n } else { b'a' + n - 10 };
-        }
-        self.text(&d)
-    }
-    fn dec(&mut self, mut v: u64) -> &mut Self {
-        let mut d = [0u8; 20];
-        let mut i = d.len();
+
+    /// `SYS_EXIT`: ADP_Stopped_ApplicationExit (QEMU exits 0) or RunTimeErrorUnknown (1).
+    pub fn exit(ok: bool) -> ! {
+        let reason = if ok { 0x20026u32 } else { 0x20023u32 };
         loop {
-            i -= 1;
-            if let Some(c) = d.get_mut(i) {
-                *c = b'0' + (v % 10) as u8;
-            }
-            v /= 10;
-            if v == 0 || i == 0 {
-                break;
-            }
+            // SAFETY: the semihosting trap; r1 holds the reason (a value, not a pointer).
+            unsafe { asm!("bkpt 0xab", in("r0") 0x18u32, in("r1") reason, options(nostack)) }
         }
-        let digits = d.get(i..).unwrap_or(&[]);
-        let mut tmp = [0u8; 20];
-        let n = digits.len();
-        if let Some(t) = tmp.get_mut(..n) {
-            t.copy_from_slice(digits);
-        }
-        self.text(tmp.get(..n).unwrap_or(&[]))
-    }
-    fn print(&mut self) {
-        self.text(b"\n\0");
-        write0(self.buf.get(..self.len).unwrap_or(b"\0"));
-        self.len = 0;
     }
 }
 
-/// Prints `plan NAME samples N checksum HEX first A,B,C,D` (the host prints the same).
-fn report(name: &[u8], c: &Checksum) {
-    let mut l = Line::new();
-    l.text(b"plan ")
-        .text(name)
-        .text(b" samples ")
-        .dec(u64::from(c.samples));
-    l.text(b" checksum ").hex(c.hash).text(b" first ");
-    for (i, v) in c.first.iter().enumerate() {
-        if i > 0 {
-            l.text(b",");
+/// The `defmt` global logger: frames written to the semihosting console (QEMU writes them to a
+/// file, `run.sh` decodes them with `defmt-print`). Panic-free (unlike a logger that checks for
+/// re-entry with `panic!`): the firmware is single-threaded with no interrupts, so frames never
+/// interleave.
+mod logger {
+    use core::ptr::addr_of_mut;
+
+    static mut ENCODER: defmt::Encoder = defmt::Encoder::new();
+    static mut CONSOLE: i32 = -1;
+
+    fn emit(bytes: &[u8]) {
+        // SAFETY: single-threaded, no interrupts: the only access to CONSOLE.
+        let h = unsafe { &mut *addr_of_mut!(CONSOLE) };
+        if *h < 0 {
+            *h = super::semihosting::console();
         }
-        l.dec(*v);
+        super::semihosting::write(*h, bytes);
     }
-    l.print();
+
+    #[defmt::global_logger]
+    struct Logger;
+
+    // SAFETY: defmt's contract: acquire, then writes, then release, never nested: this
+    // firmware logs only from `main` and has no interrupts.
+    unsafe impl defmt::Logger for Logger {
+        fn acquire() {
+            // SAFETY: single-threaded (see above): the only reference to ENCODER.
+            unsafe { (*addr_of_mut!(ENCODER)).start_frame(emit) }
+        }
+        unsafe fn flush() {}
+        unsafe fn release() {
+            // SAFETY: as in `acquire`.
+            unsafe { (*addr_of_mut!(ENCODER)).end_frame(emit) }
+        }
+        unsafe fn write(bytes: &[u8]) {
+            // SAFETY: as in `acquire`.
+            unsafe { (*addr_of_mut!(ENCODER)).write(bytes, emit) }
+        }
+    }
 }
 
-fn fail(what: &[u8]) -> ! {
-    let mut l = Line::new();
-    l.text(b"error ").text(what).print();
-    exit(false)
+/// Logs `plan NAME samples N checksum C first A,B,C,D` (the host prints the same line).
+fn report(name: &str, c: &Checksum) {
+    let [a, b, d, e] = c.first;
+    defmt::info!(
+        "plan {=str} samples {=u32} checksum {=u64} first {=u64},{=u64},{=u64},{=u64}",
+        name,
+        c.samples,
+        c.hash,
+        a,
+        b,
+        d,
+        e
+    );
+}
+
+fn fail(what: &str) -> ! {
+    defmt::error!("error {=str}", what);
+    semihosting::exit(false)
 }
 
 #[entry]
@@ -178,7 +179,7 @@ fn main() -> ! {
     };
     scene::fill_texture(texels);
     let Ok(tex) = Texture::<u8>::new(texels, W, H) else {
-        fail(b"texture")
+        fail("texture")
     };
     texsat_demo_mark();
     let built = Modular::<u16>::build(&tex, SMALL_K, small_w, small_r);
@@ -188,11 +189,11 @@ fn main() -> ! {
             let rendered = scene::render(&m, &SMALL);
             texsat_demo_mark();
             match rendered {
-                Ok(c) => report(b"small", &c),
-                Err(_) => fail(b"small: a box was refused"),
+                Ok(c) => report("small", &c),
+                Err(_) => fail("small: a box was refused"),
             }
         }
-        Err(_) => fail(b"small: build"),
+        Err(_) => fail("small: build"),
     }
     texsat_demo_mark();
     let built = Modular::<u32>::build(&tex, REPEAT_K, rep_w, rep_r);
@@ -202,11 +203,11 @@ fn main() -> ! {
             let rendered = scene::render(&m, &REPEAT);
             texsat_demo_mark();
             match rendered {
-                Ok(c) => report(b"repeat", &c),
-                Err(_) => fail(b"repeat: a box was refused"),
+                Ok(c) => report("repeat", &c),
+                Err(_) => fail("repeat: a box was refused"),
             }
         }
-        Err(_) => fail(b"repeat: build"),
+        Err(_) => fail("repeat: build"),
     }
     texsat_demo_mark();
     let built = Tiled::<u32>::build(&tex, TILED_SPEC, til_w, til_s);
@@ -216,11 +217,11 @@ fn main() -> ! {
             let rendered = scene::render(&t, &TILED);
             texsat_demo_mark();
             match rendered {
-                Ok(c) => report(b"tiled", &c),
-                Err(_) => fail(b"tiled: a box was refused"),
+                Ok(c) => report("tiled", &c),
+                Err(_) => fail("tiled: a box was refused"),
             }
         }
-        Err(_) => fail(b"tiled: build"),
+        Err(_) => fail("tiled: build"),
     }
-    exit(true)
+    semihosting::exit(true)
 }
