@@ -6,6 +6,7 @@
 //! two additions per entry and channel, as Crow counts.
 
 use crate::error::{Error, Quantity};
+use crate::rect::Rect;
 use crate::texel::{Entry, Texel};
 use crate::texture::{check_dimensions, Texture};
 use crate::width;
@@ -322,6 +323,37 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         } else {
             Some(self.s(x, y))
         }
+    }
+
+    /// The 4-read box sum `S(x1, y1) - S(x0, y1) - S(x1, y0) + S(x0, y0)` over `[x0, x1) x [y0,
+    /// y1)` for a scene whose boxes lie inside the texture (a plan with `leaves_texture: false`
+    /// and integer corners): no boundary mode, no area bookkeeping, the sum in the entry word
+    /// itself (exact: the table is monotone, so no difference wraps and the sum is at most the
+    /// total, which `E` holds). A box that is inverted or reaches outside `[0, w] x [0, h]` is
+    /// [`Error::CoordinateOutOfRange`], never clipped or wrapped. 4 reads (fewer on the zero row
+    /// and column), 3 additive operations per channel; for the mean use
+    /// [`Sat::box_sum_int`] or divide by the area yourself.
+    #[inline]
+    pub fn box_sum_inside(&self, r: &Rect<u32>) -> Result<[E; C], Error> {
+        let (x0, y0, x1, y1) = (r.x0 as usize, r.y0 as usize, r.x1 as usize, r.y1 as usize);
+        if x0 > x1 || y0 > y1 || x1 > self.width || y1 > self.height {
+            return Err(Error::CoordinateOutOfRange);
+        }
+        let (d, c, b, a) = (
+            self.s(x1, y1),
+            self.s(x0, y1),
+            self.s(x1, y0),
+            self.s(x0, y0),
+        );
+        let mut out = [E::ZERO; C];
+        for (i, o) in out.iter_mut().enumerate() {
+            let (Some(d), Some(c), Some(b), Some(a)) = (d.get(i), c.get(i), b.get(i), a.get(i))
+            else {
+                continue;
+            };
+            *o = d.wrapping_sub(*c).wrapping_sub(b.wrapping_sub(*a));
+        }
+        Ok(out)
     }
 
     /// `S(x, y)` for `x <= w`, `y <= h` (callers guarantee the range).

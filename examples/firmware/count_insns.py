@@ -21,6 +21,8 @@ ENTRIES = [
     ("baseline", "harness overhead per call (empty wrapper: loop, `bl`, `bx lr`, `black_box` of the arguments)", None),
     ("int_border", "1. `Sat::box_sum_int` Border, interior box (4 reads)", "hand_int_border"),
     ("hand_int_border", "", None),
+    ("inside", "1b. `Sat::box_sum_inside`, a box known inside (4 reads, no edge handling)", "hand_inside"),
+    ("hand_inside", "", None),
     ("stable_border", "2. `Sat::box_sum` Stable Border, interior box", "hand_border"),
     ("hand_border", "", None),
     ("stable_repeat_first", "3a. `Sat::box_sum` Stable Repeat, inside the first period", None),

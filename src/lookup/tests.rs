@@ -220,3 +220,33 @@ fn split_costs() {
     assert_eq!(c.adds, 4 * 31 + 3, "{c:?}");
     assert_eq!(one.adds, 31);
 }
+
+#[test]
+fn box_sum_inside_equals_box_sum_int_and_refuses_outside() {
+    // Every box of a 5 x 4 texture: the inside lookup equals the 4-read lookup; every box that
+    // reaches outside or is inverted is refused, never clipped.
+    let texels: [u8; 20] = core::array::from_fn(|i| (i as u8).wrapping_mul(37).wrapping_add(5));
+    let tex = crate::Texture::<u8>::new(&texels, 5, 4).unwrap();
+    let mut table = [0u32; 20];
+    let sat = crate::Sat::build(&tex, &mut table).unwrap();
+    for x0 in 0..7u32 {
+        for x1 in 0..7u32 {
+            for y0 in 0..6u32 {
+                for y1 in 0..6u32 {
+                    let r = crate::Rect::new(x0, y0, x1, y1);
+                    let got = sat.box_sum_inside(&r);
+                    if x0 <= x1 && y0 <= y1 && x1 <= 5 && y1 <= 4 {
+                        let ri = crate::Rect::new(x0 as i32, y0 as i32, x1 as i32, y1 as i32);
+                        let want = sat
+                            .box_sum_int(&ri, crate::Border, &mut crate::NoCount)
+                            .unwrap()
+                            .sum();
+                        assert_eq!(got, Ok([want as u32]), "{r:?}");
+                    } else {
+                        assert_eq!(got, Err(crate::Error::CoordinateOutOfRange), "{r:?}");
+                    }
+                }
+            }
+        }
+    }
+}

@@ -100,6 +100,16 @@ fn m_box_sum_int_border(sat: &Sat<'_, En>, r: &Rect<i32>) {
 }
 
 #[inline(never)]
+fn m_box_sum_inside(sat: &Sat<'_, En>, r: &Rect<u32>) {
+    keep(sat.box_sum_inside(r));
+}
+
+#[inline(never)]
+fn h_box_sum_inside(t: &hand::Table<'_>, r: &Rect<u32>) {
+    keep(t.box_sum_inside(r.x0, r.y0, r.x1, r.y1));
+}
+
+#[inline(never)]
 fn m_box_sum_stable_border(sat: &Sat<'_, En>, r: &Rect<Co>) {
     keep(sat.box_sum(r, Stable, Border, &mut NoCount));
 }
@@ -317,6 +327,19 @@ fn main() -> ! {
     measure!(m_baseline(&sat, &rf));
     measure!(m_box_sum_int_border(&sat, &ri));
     measure!(h_box_sum_int_border(&hand_table, &ri));
+    let ru: Rect<u32> = black_box(Rect::new(
+        black_box(10),
+        black_box(12),
+        black_box(30),
+        black_box(27),
+    ));
+    if sat.box_sum_inside(&ru).map(|s| u64::from(s[0]))
+        != Ok(hand_table.box_sum_inside(10, 12, 30, 27))
+    {
+        exit()
+    }
+    measure!(m_box_sum_inside(&sat, &ru));
+    measure!(h_box_sum_inside(&hand_table, &ru));
     measure!(m_box_sum_stable_border(&sat, &rf));
     measure!(h_box_sum_border(&hand_table, &rf));
     measure!(m_box_sum_stable_repeat(&sat, &rr_first));

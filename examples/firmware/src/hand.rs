@@ -24,6 +24,18 @@ impl Table<'_> {
         self.t.get(i).copied().unwrap_or(0) as u64
     }
 
+    /// 4-read box sum for a box known to lie inside the texture (0 for one that does not).
+    #[inline(always)]
+    pub fn box_sum_inside(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> u64 {
+        if x0 > x1 || y0 > y1 || x1 > self.w || y1 > self.h {
+            return 0;
+        }
+        self.s(x1, y1)
+            .wrapping_sub(self.s(x0, y1))
+            .wrapping_sub(self.s(x1, y0))
+            .wrapping_add(self.s(x0, y0))
+    }
+
     /// 4-read box sum at integer corners, Border (the box clipped to the texture).
     #[inline(always)]
     pub fn box_sum_int_border(&self, x0: i32, y0: i32, x1: i32, y1: i32) -> u64 {

@@ -212,6 +212,13 @@ box_sum_int_gates! {
     gate_box_sum_int_mirror: MirroredRepeat;
 }
 
+/// `Sat::box_sum_inside` (boxes known inside, no edge handling).
+#[inline(never)]
+fn gate_box_sum_inside(sat: &Sat<'_, En>, r: &Rect<i32>) {
+    let u = Rect::new(r.x0 as u32, r.y0 as u32, r.x1 as u32, r.y1 as u32);
+    keep(sat.box_sum_inside(&black_box(u)));
+}
+
 macro_rules! box_sum_gates {
     ($($name:ident: $form:expr, $mode:expr;)*) => {$(
         #[inline(never)]
@@ -1006,6 +1013,7 @@ fn main() -> ! {
         gate_sat_accessors(&sat, x, y);
 
         let s0 = gate_box_sum_int_border(&sat, &rect_int);
+        gate_box_sum_inside(&sat, &rect_int);
         gate_box_sum_int_clamp(&sat, &rect_int);
         gate_box_sum_int_repeat(&sat, &rect_int);
         gate_box_sum_int_mirror(&sat, &rect_int);
