@@ -70,6 +70,27 @@ pub trait Layout<const C: usize> {
     /// `S(x, y)` per channel (mod `2^k` for a modular layout), for `x <= w` and `y <= h`;
     /// reports the words it reads to `k`. `S(0, y) = S(x, 0) = 0` are never stored or read.
     fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [Self::Value; C];
+    /// The four corners `[S(xa, ya), S(xb, ya), S(xa, yb), S(xb, yb)]` for `xa, xb <= w` and
+    /// `ya, yb <= h`: what a 4-read box sum (`xb >= xa`, `yb >= ya`) and each corner of a
+    /// 16-read lookup (`xb = xa + 1`, `yb = ya + 1`) read. The same values and counts as four
+    /// [`Layout::corner`] calls (the default); a layout overrides it where the four share work
+    /// (the flat table: two row slices, one range check each, instead of four index checks).
+    #[inline(always)]
+    fn quad<K: Counter>(
+        &self,
+        xa: usize,
+        xb: usize,
+        ya: usize,
+        yb: usize,
+        k: &mut K,
+    ) -> [[Self::Value; C]; 4] {
+        [
+            self.corner(xa, ya, k),
+            self.corner(xb, ya, k),
+            self.corner(xa, yb, k),
+            self.corner(xb, yb, k),
+        ]
+    }
     /// Bits per texel and channel: `storage_bits / (w h C)`.
     fn bits_per_entry(&self) -> f64 {
         self.storage_bits() as f64 / (self.width() as f64 * self.height() as f64 * C as f64)
@@ -96,6 +117,17 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
     #[inline(always)]
     fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
         self.read(x, y, k)
+    }
+    #[inline(always)]
+    fn quad<K: Counter>(
+        &self,
+        xa: usize,
+        xb: usize,
+        ya: usize,
+        yb: usize,
+        k: &mut K,
+    ) -> [[E; C]; 4] {
+        self.read_quad(xa, xb, ya, yb, k)
     }
 }
 

@@ -37,10 +37,7 @@ impl FormImpl for Corners4 {
         k: &mut K,
     ) -> [AccOf<L, C>; C] {
         let (x0, y0, x1, y1) = (b.x0 as usize, b.y0 as usize, b.x1 as usize, b.y1 as usize);
-        let d = t.corner(x1, y1, k);
-        let c_ = t.corner(x1, y0, k);
-        let b_ = t.corner(x0, y1, k);
-        let a = t.corner(x0, y0, k);
+        let [a, c_, b_, d] = t.quad(x0, x1, y0, y1, k);
         k.adds(3 * C as u32);
         let modulus = t.modulus();
         let mut out = [<AccOf<L, C> as Acc>::ZERO; C];
