@@ -4,6 +4,7 @@
 #
 #   examples/firmware/count-insns.sh            prints a markdown table
 #   COUNT_PROFILE=1 examples/firmware/count-insns.sh   also instructions per call by function (stderr)
+#   COUNT_LINES=mip_trilinear ...          also that entry point's instructions per call by source line
 #   COUNT_KEEP_LOG=1 ...                        keeps QEMU's exec log (about 300 MB) in target/count-insns/
 #
 # How: builds the `texsat-count` binary (src/count.rs, feature `count`, plus `filter-mip`) with
@@ -62,6 +63,7 @@ QEMU_ARGS=(-M mps2-an386 -display none -monitor none -serial none -semihosting
   -singlestep -d exec,nochain -kernel "$ELF")
 PARSE_ARGS=("$ELF" --llvm-bin "$LLVM_BIN" --reps 11 --texels 4096 --mip)
 [ -n "${COUNT_PROFILE:-}" ] && PARSE_ARGS+=(--profile)
+[ -n "${COUNT_LINES:-}" ] && PARSE_ARGS+=(--lines "$COUNT_LINES")
 
 echo "count-insns: $("$QEMU" --version | head -n 1); $QEMU ${QEMU_ARGS[*]} -D <log>" >&2
 if [ -n "${COUNT_KEEP_LOG:-}" ]; then

@@ -11,6 +11,7 @@ between consecutive marks come in triples (setup since the last mark, 1 call, RE
 entry (an empty wrapper of the same shape) is subtracted from the others.
 """
 import argparse
+import shutil
 import re
 import subprocess
 import sys
@@ -77,7 +78,6 @@ def profile(a, entries, pcs):
 
     syms = symbols(a.llvm_bin, a.elf)
     addrs = [s[0] for s in syms]
-    pcs.insert(0, [])
     for i, (key, label, _) in enumerate(entries):
         c = Counter()
         for pc in pcs[3 * i + 2]:
@@ -89,6 +89,36 @@ def profile(a, entries, pcs):
             print(f"  {n / a.reps:10.1f}  {name}", file=sys.stderr)
 
 
+def lines(a, entries, pcs, key):
+    """Instructions per call by source line (innermost inlined frame) for one entry point."""
+    from collections import Counter
+
+    for i, (k, _label, _) in enumerate(entries):
+        if k != key:
+            continue
+        c = Counter(pcs[3 * i + 2])
+        addrs = sorted(c)
+        # llvm-symbolizer (the system's, or the toolchain's llvm-tools if it ships one): for
+        # each address its inlined frames, innermost first, a blank line after each address.
+        sym = shutil.which("llvm-symbolizer") or f"{a.llvm_bin}/llvm-symbolizer"
+        out = subprocess.run(
+            [sym, f"--obj={a.elf}"],
+            input="\n".join(hex(pc) for pc in addrs),
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip().split("\n\n")
+        per_line = Counter()
+        for pc, frames in zip(addrs, out):
+            f = frames.splitlines()
+            loc = f[1] if len(f) > 1 else "?"
+            loc = re.sub(r"^.*/(src|library)/", r"\1/", loc)
+            per_line[loc] += c[pc]
+        print(f"lines {key} ({a.reps} calls, instructions per call by source line):", file=sys.stderr)
+        for loc, n in per_line.most_common(60):
+            print(f"  {n / a.reps:8.1f}  {loc}", file=sys.stderr)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("elf")
@@ -97,6 +127,11 @@ def main():
     ap.add_argument("--reps", type=int, default=11)
     ap.add_argument("--texels", type=int, default=64 * 64)
     ap.add_argument("--mip", action="store_true")
+    ap.add_argument(
+        "--lines",
+        metavar="ENTRY",
+        help="also print the instructions per call of this entry point by source line",
+    )
     ap.add_argument("--raw", action="store_true", help="also print the raw region counts")
     ap.add_argument(
         "--profile",
@@ -119,14 +154,15 @@ def main():
                 if cur is not None:
                     regions.append(cur)
                 cur = 0
-                if a.profile:
+                if a.profile or a.lines:
                     pcs.append([])
             elif cur is not None:
                 cur += 1
-                if a.profile:
+                if a.profile or a.lines:
                     pcs[-1].append(pc)
     entries = ENTRIES + (MIP_ENTRIES if a.mip else [])
     regions.insert(0, 0)  # the first setup region precedes the first mark
+    pcs.insert(0, [])  # the same for the captured PCs: pcs[3 i + 2] is entry i's REPS region
     if len(regions) != 3 * len(entries):
         sys.exit(
             f"count_insns: expected {3 * len(entries)} regions between marks, found {len(regions)} "
@@ -143,6 +179,8 @@ def main():
             print(f"raw {key}: 1 call region {c1}, {a.reps} calls region {cr}", file=sys.stderr)
     if a.profile:
         profile(a, entries, pcs)
+    if a.lines:
+        lines(a, entries, pcs, a.lines)
     base = per_call["baseline"]
     print("| entry point | texsat, instructions per call | hand-written, same behaviour |")
     print("|---|---:|---:|")

@@ -41,20 +41,29 @@ pub fn log2_fixed(raw: u64, f: u32, out_frac: u32) -> Option<i32> {
     let e = 63 - raw.leading_zeros(); // raw in [2^e, 2^(e+1))
     let int_part = e as i32 - f as i32;
     // Q1.31: the top 32 significant bits of raw, in [2^31, 2^32).
-    let mut m: u64 = if e >= 31 {
+    let mut m = (if e >= 31 {
         raw >> (e - 31)
     } else {
         raw << (31 - e)
-    };
+    }) as u32;
     let mut frac = 0i32;
     for _ in 0..out_frac {
-        // m < 2^32: m^2 < 2^64; (m^2) >> 31 in [2^31, 2^33).
-        m = (m * m) >> 31;
-        let bit = (m >> 32) as u32; // 0 or 1
-        frac = (frac << 1) | bit as i32;
-        m >>= bit;
+        // The square in Q2.62, one `32 x 32 -> 64` multiply: in [2^62, 2^64). At least 2
+        // (2^63) gives a one bit and the halved square `p >> 32`; else the square `p >> 31`,
+        // below 2^32. (The same truncations as squaring to Q1.31 in `u64` and halving: both
+        // are `floor(p / 2^32)` and `floor(p / 2^31)`.) All in 32-bit words: the high word's
+        // top bit decides.
+        let p = u64::from(m) * u64::from(m);
+        let hi = (p >> 32) as u32;
+        if hi >> 31 != 0 {
+            frac = (frac << 1) | 1;
+            m = hi;
+        } else {
+            frac <<= 1;
+            m = (p >> 31) as u32;
+        }
     }
-    if m >= FALLBACK_FROM {
+    if u64::from(m) >= FALLBACK_FROM {
         frac = frac_q63(raw << (63 - e), out_frac);
     }
     Some((int_part << out_frac) + frac)
