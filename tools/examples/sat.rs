@@ -17,6 +17,11 @@
 //! `trilinear`, `ripmap`, `dipmap`, `dipmap-trilinear`, `tent`, `tent-exact`, `variance` (see
 //! `sat/filter.rs`; they need the crate's `filters` feature: `--features filters`).
 //!
+//! Every command estimates the memory and work it is about to take from the image header
+//! before it allocates, and refuses above `--max-memory` (default 1G) or `--max-work` (default
+//! 32G texel operations); see `sat --help` and `texsat_tools::budget`. Exit status: 0 success,
+//! 1 refused input, budget, build or query line, 2 command-line usage error; never a signal.
+//!
 //! Run `sat help <command>` for the details of each command; `cargo run --example sat -- demo`
 //! for the tour.
 
@@ -35,8 +40,8 @@ mod scene;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use filter::{FilterArg, FilterQuery, ImageTexel};
-use layout::{with_layout, Detail, LayoutArg, LayoutJob, LayoutKind, Plan};
-use load::{channel_totals, with_texture, TextureJob};
+use layout::{with_layout, Detail, LayoutArg, LayoutJob, LayoutKind, Plan, Refused};
+use load::{channel_totals, with_texture, with_types, Probe, TextureJob, TypesJob};
 use num::{fixed_decimal, parse_fixed, Inexact};
 use serde_json::{json, Value};
 use std::io::{BufRead, Write};
@@ -48,18 +53,64 @@ use texsat::{
     BoxLookup, BoxSum, EdgeKind, Entry, Error, FormKind, FracBits, NoCount, Quantity, Rect, Tally,
     Texel, Texture,
 };
+use texsat_tools::budget::{self, Budget, Estimate, MAX_LINE_BYTES};
 
 #[derive(Parser)]
 #[command(
     name = "sat",
     version,
     about = "Summed-area tables (Crow 1984) of PNG/PNM images: table sizes, exact box sums and means, lookup costs",
-    long_about = None
+    long_about = None,
+    after_long_help = RESOURCES_HELP
 )]
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    #[command(flatten)]
+    budget: BudgetArgs,
 }
+
+/// `--max-memory` and `--max-work`, taken by every command.
+#[derive(Args, Clone, Copy)]
+struct BudgetArgs {
+    /// Memory budget in bytes (suffixes K, M, G, T: powers of 1024). A command whose image,
+    /// table or filter structure would take more is refused before it allocates.
+    #[arg(long, global = true, value_name = "BYTES", default_value = "1G",
+          value_parser = budget::parse_amount)]
+    max_memory: u64,
+    /// Work budget in texel operations (texels x channels x per-texel cost of each pass over
+    /// the image; 32G is about 15 s of one core). A command that would take more is refused
+    /// before it starts.
+    #[arg(long, global = true, value_name = "N", default_value = "32G",
+          value_parser = budget::parse_amount)]
+    max_work: u64,
+}
+
+impl BudgetArgs {
+    fn budget(self) -> Budget {
+        Budget {
+            max_memory: self.max_memory,
+            max_work: self.max_work,
+        }
+    }
+}
+
+const RESOURCES_HELP: &str = "\
+RESOURCES: every command reads the image header first (decoder limits: sides up to 2^31 - 1,
+the decoder's own allocations within --max-memory), then estimates what it is about to take,
+from the same size functions the builds use: memory (the decoded image, the table in the chosen
+entry type and layout, the filter's pyramids, ripmap, dipmap, order-2 or variance tables, the
+builders' scratch) and work (texel operations: texels x channels x the per-texel cost of each
+pass over the image, e.g. one pass per ripmap level). Above --max-memory (default 1G) or
+--max-work (default 32G, about 15 s of one core) it refuses, naming the need, the budget and
+the flag that raises it, before anything large is allocated. A buffer the system cannot give is
+reported, not aborted on. Query lines are read up to 4096 bytes each (a longer line is answered
+with an error line); every lookup takes a bounded number of reads, whatever the box.
+
+EXIT STATUS: 0 success; 1 refused input (unreadable, corrupt or unsupported image, a plan file
+that does not hold), a budget exceeded, a table or structure that cannot be built, or at least
+one query line answered with an error line; 2 command-line usage error (unknown option, a
+malformed --layout, --max-memory, --max-work or --frac-bits value). Never a signal.";
 
 #[derive(Subcommand)]
 enum Command {
@@ -71,8 +122,10 @@ enum Command {
     Query(QueryArgs),
     /// Print the plan for a scene (the smallest table, entry word and lookup that serve its
     /// facts, with costs and the rejected candidates) as one JSON object.
+    #[command(after_long_help = RESOURCES_HELP)]
     Plan(scene::PlanArgs),
     /// Build the table of a generated 256 x 256 texture and walk through sizes, lookups and costs.
+    #[command(after_long_help = RESOURCES_HELP)]
     Demo,
 }
 
@@ -330,11 +383,12 @@ struct QueryArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let budget = cli.budget.budget();
     let result = match cli.command {
-        Command::Info(args) => info(&args),
-        Command::Query(args) => query(&args),
+        Command::Info(args) => info(&args, &budget),
+        Command::Query(args) => query(&args, &budget),
         Command::Plan(args) => scene::run(&args),
-        Command::Demo => demo::run(),
+        Command::Demo => demo::run(&budget),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
@@ -365,13 +419,18 @@ fn entry_bits(e: EntryArg) -> u32 {
     }
 }
 
-/// The message for a refused build: the crate's reason, the numbers behind it, and what to do.
+/// The message for a refused build: the crate's reason, the numbers behind it, and what to do
+/// (or the allocation that failed).
 fn refusal<T: Texel, const C: usize>(
     texture: &Texture<'_, T, C>,
     args: &TableArgs,
     plan: &Plan,
-    err: Error,
+    refused: Refused,
 ) -> String {
+    let err = match refused {
+        Refused::Build(e) => e,
+        Refused::Alloc(msg) => return msg,
+    };
     let (w, h, b) = (texture.width(), texture.height(), T::BITS);
     let actual = channel_totals(texture)
         .iter()
@@ -441,11 +500,22 @@ fn round4(v: f64) -> Value {
 // ---------------------------------------------------------------------------------------------
 // sat info
 
-fn info(args: &InfoArgs) -> Result<bool, String> {
+fn info(args: &InfoArgs, budget: &Budget) -> Result<bool, String> {
     if let Some(f) = args.filter {
         check_filter_options(f, &args.table)?;
     }
-    let img = load::load(&args.table.image)?;
+    let probe = load::probe(&args.table.image, budget)?;
+    let filter = args
+        .filter
+        .map_or(String::new(), |f| format!(" --filter {}", f.name()));
+    let job = EstimateJob {
+        subject: format!("info{filter} on this {}", probe.describe()),
+        table: &args.table,
+        filter: args.filter.unwrap_or(FilterArg::Box),
+        probe: &probe,
+    };
+    with_types(&probe, job)??.check(budget)?;
+    let img = probe.decode()?;
     let json = with_texture(
         &img,
         InfoJob {
@@ -453,8 +523,42 @@ fn info(args: &InfoArgs) -> Result<bool, String> {
             filter: args.filter,
         },
     )??;
-    println!("{json}");
+    print_line(&json)?;
     Ok(true)
+}
+
+/// Prints one line on stdout; a closed or full stdout is an error (exit status 1), not a panic.
+fn print_line(v: &dyn std::fmt::Display) -> Result<(), String> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{v}")
+        .and_then(|()| out.flush())
+        .map_err(|e| format!("writing stdout: {e}"))
+}
+
+/// What a command on an image takes: the decoded image, then the table (`--filter box`, any
+/// `--layout`) or the filter's structure, estimated before the samples are read.
+struct EstimateJob<'a> {
+    subject: String,
+    table: &'a TableArgs,
+    filter: FilterArg,
+    probe: &'a Probe,
+}
+
+impl TypesJob for EstimateJob<'_> {
+    type Out = Result<Estimate, String>;
+    fn run<T: ImageTexel, const C: usize>(self, w: usize, h: usize) -> Self::Out {
+        let mut est = Estimate::new(self.subject);
+        est.push(self.probe.image_item());
+        if self.filter == FilterArg::Box {
+            // `sat info` sums the texels; a query does when it explains a refused build.
+            est.push(budget::totals(w, h, C));
+            let plan = self.table.plan(T::BITS)?;
+            layout::estimate::<T, C>(&plan, w, h, &mut est);
+        } else {
+            filter::estimate::<T, C>(self.filter, self.table.entry, w, h, &mut est);
+        }
+        Ok(est)
+    }
 }
 
 /// Refuses table options that do not apply to `filter` (and filters not compiled in).
@@ -645,7 +749,7 @@ struct QueryOpts {
 }
 
 /// `sat query --plan FILE`: the plan's configuration, nothing else.
-fn query_plan(args: &QueryArgs, path: &std::path::Path) -> Result<bool, String> {
+fn query_plan(args: &QueryArgs, path: &std::path::Path, budget: &Budget) -> Result<bool, String> {
     let plan = scene::read(path)?;
     let facts = *plan.facts();
     let table = TableArgs {
@@ -679,7 +783,15 @@ fn query_plan(args: &QueryArgs, path: &std::path::Path) -> Result<bool, String> 
         int4: false,
         plan: Some(plan),
     };
-    let img = load::load(&table.image)?;
+    let probe = load::probe(&table.image, budget)?;
+    let job = EstimateJob {
+        subject: format!("query --plan on this {}", probe.describe()),
+        table: &table,
+        filter: FilterArg::Box,
+        probe: &probe,
+    };
+    with_types(&probe, job)??.check(budget)?;
+    let img = probe.decode()?;
     with_texture(
         &img,
         QueryJob {
@@ -689,9 +801,27 @@ fn query_plan(args: &QueryArgs, path: &std::path::Path) -> Result<bool, String> 
     )?
 }
 
-fn query(args: &QueryArgs) -> Result<bool, String> {
+/// The probed image of a query, checked against the budget with the table or the filter's
+/// structure, then decoded.
+fn query_image(args: &QueryArgs, budget: &Budget) -> Result<load::Image, String> {
+    let probe = load::probe(&args.table.image, budget)?;
+    let job = EstimateJob {
+        subject: format!(
+            "query --filter {} on this {}",
+            args.filter.name(),
+            probe.describe()
+        ),
+        table: &args.table,
+        filter: args.filter,
+        probe: &probe,
+    };
+    with_types(&probe, job)??.check(budget)?;
+    probe.decode()
+}
+
+fn query(args: &QueryArgs, budget: &Budget) -> Result<bool, String> {
     if let Some(path) = &args.plan {
-        return query_plan(args, path);
+        return query_plan(args, path, budget);
     }
     let f = args.frac_bits;
     check_filter_options(args.filter, &args.table)?;
@@ -720,7 +850,7 @@ fn query(args: &QueryArgs) -> Result<bool, String> {
             },
             entry: args.table.entry,
         };
-        let img = load::load(&args.table.image)?;
+        let img = query_image(args, budget)?;
         return with_texture(&img, FilterJob { q: &q })?;
     }
     let opts = QueryOpts {
@@ -736,7 +866,7 @@ fn query(args: &QueryArgs) -> Result<bool, String> {
         int4: args.int4,
         plan: None,
     };
-    let img = load::load(&args.table.image)?;
+    let img = query_image(args, budget)?;
     with_texture(
         &img,
         QueryJob {
@@ -850,9 +980,49 @@ impl LayoutJob for QueryLayoutJob<'_> {
     }
 }
 
+/// Reads one line of `input` into `buf` (without its `'\n'`), keeping at most `max` bytes and
+/// discarding the rest of a longer line: `None` at the end of the input, else whether the line
+/// fit. Memory stays bounded by `max` whatever the input (a line without an end included).
+fn read_line_bounded(
+    input: &mut impl BufRead,
+    buf: &mut Vec<u8>,
+    max: usize,
+) -> std::io::Result<Option<bool>> {
+    buf.clear();
+    let (mut any, mut fits) = (false, true);
+    loop {
+        let chunk = match input.fill_buf() {
+            Ok(c) => c,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if chunk.is_empty() {
+            return Ok(any.then_some(fits));
+        }
+        any = true;
+        let (take, end) = match chunk.iter().position(|&b| b == b'\n') {
+            Some(i) => (i, true),
+            None => (chunk.len(), false),
+        };
+        if fits {
+            if buf.len() + take <= max {
+                buf.extend_from_slice(&chunk[..take]);
+            } else {
+                fits = false;
+                buf.clear();
+            }
+        }
+        input.consume(if end { take + 1 } else { take });
+        if end {
+            return Ok(Some(fits));
+        }
+    }
+}
+
 /// Reads query lines from stdin and prints `answer`'s JSON for each (`{"error": ..., "line": N}`
-/// for a refused one). Empty lines and lines starting with '#' are skipped. Returns whether every
-/// line was answered.
+/// for a refused one). Empty lines and lines starting with '#' are skipped; a line longer than
+/// [`MAX_LINE_BYTES`] is refused (and skipped to its end). Returns whether every line was
+/// answered.
 fn answer_lines(mut answer: impl FnMut(&str) -> Result<Value, String>) -> Result<bool, String> {
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
@@ -862,15 +1032,16 @@ fn answer_lines(mut answer: impl FnMut(&str) -> Result<Value, String>) -> Result
     let mut line_no = 0usize;
     let mut all_ok = true;
     loop {
-        buf.clear();
-        let n = input
-            .read_until(b'\n', &mut buf)
+        let fits = read_line_bounded(&mut input, &mut buf, MAX_LINE_BYTES)
             .map_err(|e| format!("reading stdin: {e}"))?;
-        if n == 0 {
+        let Some(fits) = fits else {
             break;
-        }
+        };
         line_no += 1;
         let result = match std::str::from_utf8(&buf) {
+            _ if !fits => Some(Err(format!(
+                "line is longer than {MAX_LINE_BYTES} bytes (the rest of it is skipped)"
+            ))),
             Err(_) => Some(Err("line is not valid UTF-8".to_string())),
             Ok(line) => {
                 let line = line.trim();

@@ -3,11 +3,13 @@
 
 use crate::num::{fixed_decimal, grouped};
 use fixed::types::I24F8;
+use std::io::Write;
 use texsat::width::{self, bits_of};
 use texsat::{
     Border, ClampToEdge, EdgeMode, Form, MirroredRepeat, Paper, Rect, Repeat, Sat, Shortcut,
     Stable, Tally, Texture,
 };
+use texsat_tools::budget::{self, Budget, Estimate};
 
 const W: usize = 256;
 const H: usize = 256;
@@ -147,10 +149,32 @@ fn cost(t: &Tally) -> String {
     format!("{:>3} {:>4} {:>4} {:>4}", t.reads, t.muls, t.divs, t.adds)
 }
 
-pub fn run() -> Result<bool, String> {
+/// Appends a formatted line to the demo's text (printed at the end in one write).
+macro_rules! say {
+    ($out:ident) => {
+        $out.push('\n')
+    };
+    ($out:ident, $($arg:tt)*) => {{
+        $out.push_str(&format!($($arg)*));
+        $out.push('\n');
+    }};
+}
+
+/// The demo's memory and work, checked against `budget` like every other command's.
+fn estimate() -> Estimate {
+    let mut est = Estimate::new(format!("demo ({W} x {H} texels)"));
+    est.push(budget::image(W, H, 1, 1));
+    est.push_sized(budget::flat::<u32, 1>(W, H));
+    est
+}
+
+pub fn run(budget: &Budget) -> Result<bool, String> {
+    estimate().check(budget)?;
+    let mut out = String::new();
     let t = texels();
     let texture = Texture::<u8>::new(&t, W, H).map_err(|e| e.to_string())?;
-    let mut storage = vec![0u32; W * H];
+    let entries = Sat::<u32>::entries_needed(W, H).map_err(|e| e.to_string())?;
+    let mut storage = budget::zeroed(entries, 0u32, "demo table")?;
     let sat = Sat::build(&texture, &mut storage).map_err(|e| e.to_string())?;
 
     let b = 8u32;
@@ -158,42 +182,51 @@ pub fn run() -> Result<bool, String> {
     let total = u128::from(sat.total()[0]);
     let tex_bytes = W * H;
     let heading = "texsat demo: summed-area tables (Crow, SIGGRAPH 1984)";
-    println!("{heading}\n{}\n", "=".repeat(heading.len()));
-    println!(
+    say!(out, "{heading}\n{}\n", "=".repeat(heading.len()));
+    say!(
+        out,
         "Texture   {W} x {H} texels, 1 channel of {b} bits (u8): {} bytes",
         grouped(tex_bytes as u128)
     );
-    println!("          a checkerboard of 32-texel squares (0 or 128) plus a left-to-right ramp (0..127)");
-    println!();
-    println!(
+    say!(out, "          a checkerboard of 32-texel squares (0 or 128) plus a left-to-right ramp (0..127)");
+    say!(out);
+    say!(
+        out,
         "Table     one u32 entry per texel: {} entries, {} bytes ({}x the texture)",
         grouped(sat.entries().len() as u128),
         grouped(sat.table_bytes() as u128),
         sat.table_bytes() / tex_bytes
     );
-    println!("          entry (i, j) = sum of the texels (i', j') with i' <= i and j' <= j");
-    println!();
+    say!(
+        out,
+        "          entry (i, j) = sum of the texels (i', j') with i' <= i and j' <= j"
+    );
+    say!(out);
     let need = width::entry_bits_worst_case(b, W, H);
-    println!(
+    say!(
+        out,
         "Width     worst case: 255 x {W} x {H} = {} needs {need} bits (Crow: 24 bits for 256 x 256)",
         grouped(worst)
     );
-    println!(
+    say!(
+        out,
         "          textbook bound b + ceil(log2(w h)) = {} bits; Sat::build proves the exact one",
         width::entry_bits_naive(b, W, H)
     );
-    println!(
+    say!(
+        out,
         "          this texture sums to {} ({} bits); packed {need}-bit entries would take {} bytes",
         grouped(total),
         bits_of(total),
         grouped((W * H * need as usize / 8) as u128)
     );
-    println!(
+    say!(
+        out,
         "          16-read lookups at F = {F} accumulate in i64 (63 value bits): paper needs {}, stable {}",
         texsat::FormKind::Paper.acc_bits(sat.total_bits(), F),
         texsat::FormKind::Stable.acc_bits(sat.total_bits(), F)
     );
-    println!();
+    say!(out);
 
     // The tour: an interior box with integer corners, the same region with fractional corners in
     // both forms, a box on the zero row and column, a box over the left edge in every mode, and a
@@ -214,18 +247,35 @@ pub fn run() -> Result<bool, String> {
         lookup(&sat, &t, edge_box, F, MirroredRepeat, Paper)?,
         lookup(&sat, &t, wide_box, F, Repeat, Paper)?,
     ];
-    println!(
+    say!(
+        out,
         "Lookups   sum: the exact integral over the box (a multiple of 2^-2F, all digits shown)"
     );
-    println!("          mean: sum / area, computed to 2^-{G} and shown to 4 places");
-    println!(
+    say!(
+        out,
+        "          mean: sum / area, computed to 2^-{G} and shown to 4 places"
+    );
+    say!(
+        out,
         "          costs: Tally over the lookup and the mean (reads, multiplies, divides, adds)"
     );
-    println!("          check: the sum equals a direct texel-by-texel integral");
-    println!();
-    println!(
+    say!(
+        out,
+        "          check: the sum equals a direct texel-by-texel integral"
+    );
+    say!(out);
+    say!(
+        out,
         "  {:<30} {:<7} {:<10} {:>15} {:>9}  {:>3} {:>4} {:>4} {:>4}  check",
-        "box [x0, x1) x [y0, y1)", "mode", "lookup", "sum", "mean", "rd", "mul", "div", "add"
+        "box [x0, x1) x [y0, y1)",
+        "mode",
+        "lookup",
+        "sum",
+        "mean",
+        "rd",
+        "mul",
+        "div",
+        "add"
     );
     let mut all_ok = true;
     let mut last_what = String::new();
@@ -236,7 +286,8 @@ pub fn run() -> Result<bool, String> {
             row.what.clone()
         };
         last_what = row.what.clone();
-        println!(
+        say!(
+            out,
             "  {:<30} {:<7} {:<10} {:>15} {:>9.4}  {}  {}",
             what,
             row.mode,
@@ -248,19 +299,22 @@ pub fn run() -> Result<bool, String> {
         );
         all_ok &= row.ok;
     }
-    println!();
-    println!("          The integer box reads 4 entries; its fractional neighbour reads 16, four per corner.");
-    println!("          A corner on row 0 or column 0 of the corner function costs no read (the corner box");
-    println!(
+    say!(out);
+    say!(out, "          The integer box reads 4 entries; its fractional neighbour reads 16, four per corner.");
+    say!(out, "          A corner on row 0 or column 0 of the corner function costs no read (the corner box");
+    say!(
+        out,
         "          reads 1). Boxes over the edge under clamp, repeat and mirror have no in-range"
     );
-    println!(
+    say!(
+        out,
         "          equivalent and take the weighted path (up to 9 reads per corner); whole periods"
     );
-    println!(
+    say!(
+        out,
         "          fold into the weights, so the wide box, 3.5 periods across, costs no more."
     );
-    println!();
+    say!(out);
 
     // Crow's shortcut for large footprints.
     let big = [r(20.375), r(15.125), r(220.625), r(235.875)];
@@ -290,54 +344,71 @@ pub fn run() -> Result<bool, String> {
         (big[3] - big[1]) as f64 / 256.0,
     );
     let bound = Shortcut::error_bound(b, bw, bh);
-    println!(
+    say!(
+        out,
         "Shortcut  Crow 2.2: for large footprints, skip the corner interpolation (4 reads, not 16)"
     );
-    println!(
+    say!(
+        out,
         "          box [{}, {}) x [{}, {}), {bw} x {bh} texels; a tolerance of {tolerance} texel units",
         coord(big[0], F),
         coord(big[2], F),
         coord(big[1], F),
         coord(big[3], F)
     );
-    println!(
+    say!(
+        out,
         "          allows it for sides >= {} texels (bound 2m / (s - 1), m = 255)",
         shortcut.min_side()
     );
-    println!(
+    say!(
+        out,
         "          exact     mean {me:>9.4}  cost {}  (shortcut: {})",
         cost(&exact_tally),
         exact.shortcut
     );
-    println!(
+    say!(
+        out,
         "          shortcut  mean {ms:>9.4}  cost {}  (shortcut: {})",
         cost(&short_tally),
         short.shortcut
     );
     let err = (me - ms).abs();
     let within = err <= bound + 1.0 / (1u64 << G) as f64;
-    println!(
+    say!(
+        out,
         "          |error| = {err:.4} <= proven bound m (1/(W-1) + 1/(H-1)) = {bound:.4}: {}",
         if within { "ok" } else { "VIOLATED" }
     );
     all_ok &= within && short.shortcut && !exact.shortcut;
-    println!();
+    say!(out);
 
     // Crow's cost table against what the tallies above counted (interior boxes, one channel).
     let (int_t, paper_t, stable_t) = (&rows[0].tally, &rows[1].tally, &rows[2].tally);
     let mult = |t: &Tally| format!("{} ({} mul + {} div)", t.multiplicative(), t.muls, t.divs);
-    println!(
+    say!(
+        out,
         "Costs     per filtered sample, one channel: Crow (1984, 2.2) and this crate's tallies"
     );
-    println!(
+    say!(
+        out,
         "  {:<38} {:>5}  {:<22} {:>8}  {:>9}",
-        "", "reads", "multiplicative", "additive", "bits read"
+        "",
+        "reads",
+        "multiplicative",
+        "additive",
+        "bits read"
     );
-    println!(
+    say!(
+        out,
         "  {:<38} {:>5}  {:<22} {:>8}",
-        "Crow: no interpolation", 4, "2", 3
+        "Crow: no interpolation",
+        4,
+        "2",
+        3
     );
-    println!(
+    say!(
+        out,
         "  {:<38} {:>5}  {:<22} {:>8}  {:>9}",
         "texsat int4 + mean (box_sum_int)",
         int_t.reads,
@@ -345,11 +416,16 @@ pub fn run() -> Result<bool, String> {
         int_t.adds,
         int_t.bits_read
     );
-    println!(
+    say!(
+        out,
         "  {:<38} {:>5}  {:<22} {:>8}",
-        "Crow: interpolated corners", 16, "14", 27
+        "Crow: interpolated corners",
+        16,
+        "14",
+        27
     );
-    println!(
+    say!(
+        out,
         "  {:<38} {:>5}  {:<22} {:>8}  {:>9}",
         "texsat paper + mean (box_sum, Paper)",
         paper_t.reads,
@@ -357,7 +433,8 @@ pub fn run() -> Result<bool, String> {
         paper_t.adds,
         paper_t.bits_read
     );
-    println!(
+    say!(
+        out,
         "  {:<38} {:>5}  {:<22} {:>8}  {:>9}",
         "texsat stable + mean (box_sum, Stable)",
         stable_t.reads,
@@ -365,9 +442,13 @@ pub fn run() -> Result<bool, String> {
         stable_t.adds,
         stable_t.bits_read
     );
-    println!();
-    println!("          Stable spends 4 more additions to subtract before it multiplies, so its");
-    println!(
+    say!(out);
+    say!(
+        out,
+        "          Stable spends 4 more additions to subtract before it multiplies, so its"
+    );
+    say!(
+        out,
         "          multiplier operands are bounded by the box, not the table (texsat::width)."
     );
     let crow = [(int_t, 4, 2, 3), (paper_t, 16, 14, 27)];
@@ -375,8 +456,9 @@ pub fn run() -> Result<bool, String> {
         .iter()
         .all(|&(t, rd, mu, ad)| (t.reads, t.multiplicative(), t.adds) == (rd, mu, ad));
     all_ok &= matches;
-    println!();
-    println!(
+    say!(out);
+    say!(
+        out,
         "{}",
         if all_ok {
             "All sums match the direct integrals; the counts match Crow's."
@@ -384,5 +466,10 @@ pub fn run() -> Result<bool, String> {
             "SOMETHING DID NOT MATCH: see the rows marked above."
         }
     );
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(out.as_bytes())
+        .and_then(|()| stdout.flush())
+        .map_err(|e| format!("writing stdout: {e}"))?;
     Ok(all_ok)
 }

@@ -14,7 +14,9 @@
 //! | `tent-exact` | [`TentTable`] + [`TentLines`] | [`TentTable::sample_exact`] | — |
 //! | `variance` | [`VarianceTables`] | [`VarianceTables::variance_int`] or `variance` | — |
 //!
-//! Each structure is built once per run, in `Vec`s of the sizes its `storage_needed` gives. Each
+//! Each structure is built once per run, in `Vec`s of the sizes its `storage_needed` gives,
+//! reserved with `try_reserve_exact`; [`estimate`] counts the same sizes before the image is
+//! decoded, so a command over its budget is refused before anything large is allocated. Each
 //! filter is compiled only with its crate feature (`filter-point`, ..., or `filters` for all);
 //! without it `--filter NAME` is refused with a message naming the feature.
 //!
@@ -41,6 +43,7 @@ use clap::ValueEnum;
 use serde_json::{json, Map, Value};
 use texsat::filters::{Sample, OUT_FRAC_BITS};
 use texsat::{Error, FracBits, Rect, Tally, Texel, Texture};
+use texsat_tools::budget::{self, Estimate};
 
 #[cfg(feature = "filter-dip")]
 use texsat::filters::dip::{DipFilter, DipMap, DipPyramid};
@@ -251,7 +254,8 @@ fn build_error(filter: FilterArg, what: &str, e: Error) -> String {
     format!("cannot build the {what} of --filter {}: {e}", filter.name())
 }
 
-/// `needed` elements of `T`, refusing the saturated sizes some `storage_needed` return.
+/// `needed` elements of `T`, refusing the saturated sizes some `storage_needed` return, and
+/// reporting (not aborting on) an allocation failure.
 fn storage<T: Clone>(needed: usize, zero: T, filter: FilterArg) -> Result<Vec<T>, String> {
     if needed == usize::MAX || needed > isize::MAX as usize / 16 {
         return Err(format!(
@@ -259,7 +263,67 @@ fn storage<T: Clone>(needed: usize, zero: T, filter: FilterArg) -> Result<Vec<T>
             filter.name()
         ));
     }
-    Ok(vec![zero; needed])
+    budget::zeroed(
+        needed,
+        zero,
+        &format!("structure of --filter {}", filter.name()),
+    )
+}
+
+/// Whether the tent table of a `w x h` texture of `T` needs `u128` entries (else `u64`).
+#[cfg(feature = "filter-tent")]
+fn tent_wide<T: Texel>(w: usize, h: usize) -> bool {
+    tent_entry_bits(T::BITS, w, h) > 64
+}
+
+/// Whether the exact tent's line tables of a `w x h` texture of `T` need `u64` entries (else
+/// `u32`).
+#[cfg(feature = "filter-tent")]
+fn lines_wide<T: Texel>(w: usize, h: usize) -> bool {
+    tent_line_bits(T::BITS, w.max(h)) > 32
+}
+
+/// Adds to `est` the storage and build work of `filter`'s structure (every filter but box) on a
+/// `w x h` texture of `T` texels with `C` channels: the sizes [`query`] and [`info`] allocate,
+/// from the same `texsat` functions (through [`budget`]).
+pub fn estimate<T: ImageTexel, const C: usize>(
+    filter: FilterArg,
+    entry: Option<EntryArg>,
+    w: usize,
+    h: usize,
+    est: &mut Estimate,
+) {
+    #[allow(unreachable_patterns)]
+    match filter {
+        #[cfg(feature = "filter-mip")]
+        FilterArg::Mip | FilterArg::Trilinear => est.push_sized(budget::mip::<T, C>(w, h)),
+        #[cfg(feature = "filter-rip")]
+        FilterArg::Ripmap => est.push(budget::rip::<T, C>(w, h)),
+        #[cfg(feature = "filter-dip")]
+        FilterArg::Dipmap | FilterArg::DipmapTrilinear => est.push(budget::dip::<T, C>(w, h)),
+        #[cfg(feature = "filter-tent")]
+        FilterArg::Tent | FilterArg::TentExact => {
+            est.push_sized(if tent_wide::<T>(w, h) {
+                budget::tent::<u128, C>(w, h)
+            } else {
+                budget::tent::<u64, C>(w, h)
+            });
+            if filter == FilterArg::TentExact {
+                est.push_sized(if lines_wide::<T>(w, h) {
+                    budget::tent_lines::<u64, C>(w, h)
+                } else {
+                    budget::tent_lines::<u32, C>(w, h)
+                });
+            }
+        }
+        #[cfg(feature = "filter-variance")]
+        FilterArg::Variance => est.push_sized(match variance_entry::<T>(w, h, entry) {
+            EntryArg::U64 => budget::variance::<u64, C>(w, h),
+            _ => budget::variance::<u32, C>(w, h),
+        }),
+        // point reads the texture only; box is the table (`layout::estimate`).
+        _ => {}
+    }
 }
 
 /// Runs the query lines through `q.filter` on `texture` (every filter but box).
@@ -328,10 +392,10 @@ pub fn query<T: ImageTexel, const C: usize>(
         #[cfg(feature = "filter-tent")]
         FilterArg::Tent | FilterArg::TentExact => {
             let (w, h) = (texture.width(), texture.height());
-            if tent_entry_bits(T::BITS, w, h) <= 64 {
-                tent_query::<T, u64, C>(texture, q)
-            } else {
+            if tent_wide::<T>(w, h) {
                 tent_query::<T, u128, C>(texture, q)
+            } else {
+                tent_query::<T, u64, C>(texture, q)
             }
         }
         #[cfg(feature = "filter-variance")]
@@ -364,10 +428,10 @@ fn tent_query<T: ImageTexel, E: TentEntry, const C: usize>(
     let mut st = storage(needed, E::ZERO, q.filter)?;
     let table = TentTable::<E, C>::build(texture, &mut st).map_err(err)?;
     if q.filter == FilterArg::TentExact {
-        return if tent_line_bits(T::BITS, w.max(h)) <= 32 {
-            tent_exact_query::<T, E, u32, C>(texture, &table, q)
-        } else {
+        return if lines_wide::<T>(w, h) {
             tent_exact_query::<T, E, u64, C>(texture, &table, q)
+        } else {
+            tent_exact_query::<T, E, u32, C>(texture, &table, q)
         };
     }
     let f = q.frac_bits;
@@ -557,10 +621,10 @@ pub fn info<T: ImageTexel, const C: usize>(
         }
         #[cfg(feature = "filter-tent")]
         FilterArg::Tent | FilterArg::TentExact => {
-            if tent_entry_bits(T::BITS, w, h) <= 64 {
-                tent_memory::<T, u64, C>(texture, filter)?
-            } else {
+            if tent_wide::<T>(w, h) {
                 tent_memory::<T, u128, C>(texture, filter)?
+            } else {
+                tent_memory::<T, u64, C>(texture, filter)?
             }
         }
         #[cfg(feature = "filter-variance")]
@@ -644,15 +708,15 @@ fn tent_memory<T: ImageTexel, E: TentEntry, const C: usize>(
         });
     }
     let line_bits = tent_line_bits(T::BITS, w.max(h));
-    let lines_bytes = if line_bits <= 32 {
-        tent_lines_bytes::<T, u32, C>(texture, filter)?
-    } else {
+    let lines_bytes = if lines_wide::<T>(w, h) {
         tent_lines_bytes::<T, u64, C>(texture, filter)?
+    } else {
+        tent_lines_bytes::<T, u32, C>(texture, filter)?
     };
     extra.extend([
         (
             "lines_entry_type",
-            json!(if line_bits <= 32 { "u32" } else { "u64" }),
+            json!(if lines_wide::<T>(w, h) { "u64" } else { "u32" }),
         ),
         ("lines_bits_needed", json!(line_bits)),
         ("lines_bytes", json!(lines_bytes)),

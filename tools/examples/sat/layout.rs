@@ -15,6 +15,7 @@ use crate::{entry_bits, entry_name, EntryArg};
 use texsat::layouts::{modulus_bits_for, AxisLevels, Modular, Tiled, TiledSpec, MAX_LEVELS};
 use texsat::width;
 use texsat::{BoxLookup, Entry, Error, Sat, Texel, Texture};
+use texsat_tools::budget::{self, Estimate};
 
 /// The accepted forms, for error messages and help.
 pub const FORMS: &str = "flat, packed, tiled:WxH, tiled:W1xH1/W2xH2[/...], modular:K, \
@@ -320,7 +321,44 @@ pub fn max_exact_area(k: u32, texel_bits: u32) -> u128 {
     modulus / width::max_texel(texel_bits)
 }
 
-/// Builds the layout `plan` of `texture` and runs `job` on it.
+/// Why a layout was not built: the crate refused it (the caller explains the numbers), or its
+/// storage could not be allocated.
+#[derive(Debug)]
+pub enum Refused {
+    Build(Error),
+    Alloc(String),
+}
+
+impl From<Error> for Refused {
+    fn from(e: Error) -> Self {
+        Refused::Build(e)
+    }
+}
+
+/// Adds to `est` the storage [`with_layout`] allocates for `plan` on a `w x h` texture of `T`
+/// texels with `C` channels: the same `texsat` size functions, through [`budget`].
+pub fn estimate<T: Texel, const C: usize>(plan: &Plan, w: usize, h: usize, est: &mut Estimate) {
+    let item = match *plan {
+        Plan::Flat { entry, .. } => match entry {
+            EntryArg::U16 => budget::flat::<u16, C>(w, h),
+            EntryArg::U32 => budget::flat::<u32, C>(w, h),
+            EntryArg::U64 => budget::flat::<u64, C>(w, h),
+        },
+        Plan::Tiled { spec, value } => match value {
+            EntryArg::U16 => budget::tiled::<u16, C>(spec, w, h, T::BITS),
+            EntryArg::U32 => budget::tiled::<u32, C>(spec, w, h, T::BITS),
+            EntryArg::U64 => budget::tiled::<u64, C>(spec, w, h, T::BITS),
+        },
+        Plan::Modular { k, value } => match value {
+            EntryArg::U64 => budget::modular::<u64, C>(w, h, k),
+            _ => budget::modular::<u32, C>(w, h, k),
+        },
+    };
+    est.push_sized(item);
+}
+
+/// Builds the layout `plan` of `texture` and runs `job` on it. Every buffer is sized by the
+/// function [`estimate`] counts and reserved with `try_reserve_exact`.
 ///
 /// Monomorphization: the job runs on `Sat<u16 | u32 | u64>`, `Tiled<u16 | u32 | u64>` (packed,
 /// tiled and tiled+modular share that type) and `Modular<u32 | u64>`, for each channel count.
@@ -328,7 +366,7 @@ pub fn with_layout<T: Texel, const C: usize, J: LayoutJob>(
     texture: &Texture<'_, T, C>,
     plan: &Plan,
     job: J,
-) -> Result<J::Out, Error> {
+) -> Result<J::Out, Refused> {
     match *plan {
         Plan::Flat { entry, checked } => match entry {
             EntryArg::U16 => flat::<T, u16, C, J>(texture, checked, job),
@@ -343,7 +381,10 @@ pub fn with_layout<T: Texel, const C: usize, J: LayoutJob>(
         Plan::Modular { k, value } => match value {
             EntryArg::U32 => modular::<T, u32, C, J>(texture, k, job),
             EntryArg::U64 => modular::<T, u64, C, J>(texture, k, job),
-            EntryArg::U16 => unreachable!("resolve() never picks u16 for the modular layout"),
+            // resolve() never picks u16 for the modular layout.
+            EntryArg::U16 => Err(Refused::Alloc(
+                "internal error: the modular layout has no u16 values".to_string(),
+            )),
         },
     }
 }
@@ -352,8 +393,9 @@ fn flat<T: Texel, E: Entry, const C: usize, J: LayoutJob>(
     texture: &Texture<'_, T, C>,
     checked: bool,
     job: J,
-) -> Result<J::Out, Error> {
-    let mut storage = vec![E::ZERO; texture.width() * texture.height() * C];
+) -> Result<J::Out, Refused> {
+    let n = Sat::<E, C>::entries_needed(texture.width(), texture.height())?;
+    let mut storage = budget::zeroed(n, E::ZERO, "summed-area table").map_err(Refused::Alloc)?;
     let sat = if checked {
         Sat::build_checked(texture, &mut storage)?
     } else {
@@ -370,16 +412,19 @@ fn tiled<T: Texel, E: Entry, const C: usize, J: LayoutJob>(
     texture: &Texture<'_, T, C>,
     spec: TiledSpec,
     job: J,
-) -> Result<J::Out, Error> {
+) -> Result<J::Out, Refused> {
     let (w, h) = (texture.width(), texture.height());
     let words_needed = Tiled::<E, C>::words_needed(spec, w, h, T::BITS)?;
-    let mut words = vec![0u32; words_needed];
-    let mut scratch = vec![E::ZERO; Tiled::<E, C>::scratch_needed(spec, w)?];
+    let scratch_needed = Tiled::<E, C>::scratch_needed(spec, w)?;
+    let mut words = budget::zeroed(words_needed, 0u32, "tiled table").map_err(Refused::Alloc)?;
+    let mut scratch =
+        budget::zeroed(scratch_needed, E::ZERO, "tiled build's scratch").map_err(Refused::Alloc)?;
     let t = Tiled::<E, C>::build(texture, spec, &mut words, &mut scratch)?;
+    drop(scratch);
     let field_bits = (0..spec.x.components())
         .map(|p| {
             (0..spec.y.components())
-                .map(|q| t.field_bits(p, q).expect("component in range"))
+                .map(|q| t.field_bits(p, q).unwrap_or(0))
                 .collect()
         })
         .collect();
@@ -396,11 +441,13 @@ fn modular<T: Texel, E: Entry, const C: usize, J: LayoutJob>(
     texture: &Texture<'_, T, C>,
     k: u32,
     job: J,
-) -> Result<J::Out, Error> {
+) -> Result<J::Out, Refused> {
     let (w, h) = (texture.width(), texture.height());
     let words_needed = Modular::<E, C>::words_needed(w, h, k)?;
-    let mut words = vec![0u32; words_needed];
-    let mut row = vec![E::ZERO; w * C];
+    let row_needed = budget::modular_row::<C>(w)?;
+    let mut words = budget::zeroed(words_needed, 0u32, "modular table").map_err(Refused::Alloc)?;
+    let mut row =
+        budget::zeroed(row_needed, E::ZERO, "modular build's row").map_err(Refused::Alloc)?;
     let m = Modular::<E, C>::build(texture, k, &mut words, &mut row)?;
     let detail = Detail::Modular {
         k,

@@ -1,13 +1,22 @@
-//! Reading PNG and PNM images into texel buffers, and dispatching on texel type and channel
-//! count to code generic over `Texture<T, C>`.
+//! Reading PNG and PNM images into texel buffers, in two steps so that nothing large is
+//! allocated before the command has checked its budget: [`probe`] reads the header (size,
+//! channels, sample width) under the `image` crate's decoder limits, [`Probe::decode`] reads the
+//! samples into a buffer reserved with `try_reserve_exact`. And dispatching on texel type and
+//! channel count to code generic over `Texture<T, C>` ([`with_types`] before decoding,
+//! [`with_texture`] after).
 
 use crate::filter::ImageTexel;
 use image::codecs::pnm::PnmDecoder;
-use image::{DynamicImage, ImageFormat, ImageReader};
+use image::{ColorType, ImageDecoder, ImageFormat, ImageReader, Limits};
 use std::fs::File;
 use std::io::BufReader;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use texsat::{Texel, Texture};
+use texsat_tools::budget::{self, Budget};
+
+/// The largest side the decoders accept: the crate's own limit on a texture side (`2^31 - 1`,
+/// `texsat::Texture`), so that no header the crate would refuse gets as far as a buffer.
+const MAX_SIDE: u32 = (1 << 31) - 1;
 
 /// Texels as read from the file: 8 or 16 bits per sample, channels interleaved.
 pub enum Pixels {
@@ -23,57 +32,189 @@ pub struct Image {
     pub channels: usize,
 }
 
-/// Reads a PNG or PNM (PBM, PGM, PPM, PAM) file. 8-bit samples become `u8` texels, 16-bit
-/// samples `u16` texels, with the values stored in the file. Gray, gray+alpha, RGB and RGBA give
-/// 1, 2, 3 and 4 channels.
+/// An image whose header has been read and checked, and whose samples have not.
+pub struct Probe {
+    path: PathBuf,
+    decoder: Box<dyn ImageDecoder>,
+    pub width: usize,
+    pub height: usize,
+    pub channels: usize,
+    /// 8 or 16.
+    pub sample_bits: u32,
+}
+
+/// Reads the header of a PNG or PNM (PBM, PGM, PPM, PAM) file under decoder limits (sides up
+/// to `2^31 - 1`, the decoder's own allocations within `budget.max_memory`). 8-bit samples
+/// become `u8` texels, 16-bit samples `u16` texels, with the values stored in the file. Gray,
+/// gray+alpha, RGB and RGBA give 1, 2, 3 and 4 channels.
 ///
-/// The `image` crate rescales PNM samples whose maxval is neither 255 nor 65535 (through `f32`),
-/// which would change the data; such files are refused rather than silently rescaled. PBM
-/// bitmaps read as 8-bit gray with black = 0 and white = 255, and PNG gray of 1, 2 or 4 bits is
-/// scaled to 8 bits exactly (by 255, 85, 17), as the `png` crate expands it.
-pub fn load(path: &Path) -> Result<Image, String> {
+/// Refused here, before any sample is read: a directory, a missing or unreadable file, an
+/// unknown format, a corrupt header, a zero side, an unsupported sample type, and PNM samples
+/// whose maxval is neither 255 nor 65535 (the `image` crate would rescale them through `f32`,
+/// changing the data). PBM bitmaps read as 8-bit gray with black = 0 and white = 255, and PNG
+/// gray of 1, 2 or 4 bits is scaled to 8 bits exactly (by 255, 85, 17), as the `png` crate
+/// expands it.
+pub fn probe(path: &Path, budget: &Budget) -> Result<Probe, String> {
     let name = path.display();
     let err = |e: &dyn std::fmt::Display| format!("{name}: {e}");
-    let reader = ImageReader::open(path)
+    if path.is_dir() {
+        return Err(err(&"is a directory, not an image file"));
+    }
+    let limits = {
+        let mut l = Limits::no_limits();
+        l.max_image_width = Some(MAX_SIDE);
+        l.max_image_height = Some(MAX_SIDE);
+        l.max_alloc = Some(budget.max_memory);
+        l
+    };
+    let mut reader = ImageReader::open(path)
         .and_then(|r| r.with_guessed_format())
         .map_err(|e| err(&e))?;
-    let decoded = if reader.format() == Some(ImageFormat::Pnm) {
-        let file = File::open(path).map_err(|e| err(&e))?;
-        let decoder = PnmDecoder::new(BufReader::new(file)).map_err(|e| err(&e))?;
-        let header = decoder.header();
-        let maxval = header.maximal_sample();
-        if header.as_bitmap().is_none() && maxval != 255 && maxval != 65535 {
-            return Err(err(&format_args!(
-                "PNM maxval {maxval} is not 255 or 65535; the image decoder would rescale the \
-                 samples, so the file is refused (store it with maxval 255 or 65535)"
-            )));
+    reader.limits(limits.clone());
+    let decoder: Box<dyn ImageDecoder> = match reader.format() {
+        Some(ImageFormat::Pnm) => {
+            let file = File::open(path).map_err(|e| err(&e))?;
+            let mut decoder = PnmDecoder::new(BufReader::new(file)).map_err(|e| err(&e))?;
+            let header = decoder.header();
+            let maxval = header.maximal_sample();
+            if header.as_bitmap().is_none() && maxval != 255 && maxval != 65535 {
+                return Err(err(&format_args!(
+                    "PNM maxval {maxval} is not 255 or 65535; the image decoder would rescale \
+                     the samples, so the file is refused (store it with maxval 255 or 65535)"
+                )));
+            }
+            decoder.set_limits(limits).map_err(|e| err(&e))?;
+            Box::new(decoder)
         }
-        DynamicImage::from_decoder(decoder).map_err(|e| err(&e))?
-    } else {
-        reader.decode().map_err(|e| err(&e))?
+        Some(ImageFormat::Png) => Box::new(reader.into_decoder().map_err(|e| err(&e))?),
+        Some(other) => {
+            return Err(err(&format_args!(
+                "{other:?} images are not supported (PNG or PNM only)"
+            )))
+        }
+        None => {
+            return Err(err(
+                &"not a PNG or PNM image (the file's first bytes are no known signature)",
+            ))
+        }
     };
-    let (width, height) = (decoded.width() as usize, decoded.height() as usize);
-    let (pixels, channels) = match decoded {
-        DynamicImage::ImageLuma8(b) => (Pixels::U8(b.into_raw()), 1),
-        DynamicImage::ImageLumaA8(b) => (Pixels::U8(b.into_raw()), 2),
-        DynamicImage::ImageRgb8(b) => (Pixels::U8(b.into_raw()), 3),
-        DynamicImage::ImageRgba8(b) => (Pixels::U8(b.into_raw()), 4),
-        DynamicImage::ImageLuma16(b) => (Pixels::U16(b.into_raw()), 1),
-        DynamicImage::ImageLumaA16(b) => (Pixels::U16(b.into_raw()), 2),
-        DynamicImage::ImageRgb16(b) => (Pixels::U16(b.into_raw()), 3),
-        DynamicImage::ImageRgba16(b) => (Pixels::U16(b.into_raw()), 4),
+    let (w, h) = decoder.dimensions();
+    let (channels, sample_bits) = match decoder.color_type() {
+        ColorType::L8 => (1, 8),
+        ColorType::La8 => (2, 8),
+        ColorType::Rgb8 => (3, 8),
+        ColorType::Rgba8 => (4, 8),
+        ColorType::L16 => (1, 16),
+        ColorType::La16 => (2, 16),
+        ColorType::Rgb16 => (3, 16),
+        ColorType::Rgba16 => (4, 16),
         other => {
             return Err(err(&format_args!(
-                "unsupported sample type {:?} (only 8- and 16-bit integer samples)",
-                other.color()
+                "unsupported sample type {other:?} (only 8- and 16-bit integer samples)"
             )))
         }
     };
-    Ok(Image {
-        pixels,
-        width,
-        height,
+    if w == 0 || h == 0 {
+        return Err(err(&format_args!(
+            "the image is {w} x {h} texels: a texture needs at least one"
+        )));
+    }
+    Ok(Probe {
+        path: path.to_path_buf(),
+        decoder,
+        width: w as usize,
+        height: h as usize,
         channels,
+        sample_bits,
+    })
+}
+
+impl Probe {
+    /// Bytes per sample (1 or 2).
+    pub fn sample_bytes(&self) -> usize {
+        if self.sample_bits == 8 {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// `"W x H, C channel(s) of B bits"`, for messages.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} x {} image ({} channel{} of {} bits)",
+            self.width,
+            self.height,
+            self.channels,
+            if self.channels == 1 { "" } else { "s" },
+            self.sample_bits
+        )
+    }
+
+    /// The decoded image: what [`budget::image`] estimates.
+    pub fn image_item(&self) -> budget::Item {
+        budget::image(self.width, self.height, self.channels, self.sample_bytes())
+    }
+
+    /// Reads the samples into a buffer of exactly [`Probe::image_item`]'s bytes, reserved with
+    /// `try_reserve_exact` (an allocation failure is an error, not an abort). Truncated or
+    /// corrupt data is an error.
+    pub fn decode(self) -> Result<Image, String> {
+        let name = self.path.display();
+        let err = |e: &dyn std::fmt::Display| format!("{name}: {e}");
+        let samples = self
+            .width
+            .checked_mul(self.height)
+            .and_then(|n| n.checked_mul(self.channels))
+            .ok_or_else(|| err(&"the image is too large to address"))?;
+        let expected = samples as u128 * self.sample_bytes() as u128;
+        if u128::from(self.decoder.total_bytes()) != expected {
+            return Err(err(&format_args!(
+                "internal error: the decoder wants {} bytes, the estimate is {expected}",
+                self.decoder.total_bytes()
+            )));
+        }
+        let what = format!("buffer of the {}", self.describe());
+        let pixels = if self.sample_bits == 8 {
+            let mut buf = budget::zeroed(samples, 0u8, &what)?;
+            self.decoder.read_image(&mut buf).map_err(|e| err(&e))?;
+            Pixels::U8(buf)
+        } else {
+            let mut buf = budget::zeroed(samples, 0u16, &what)?;
+            // The decoder writes native-endian 16-bit samples.
+            self.decoder
+                .read_image(bytemuck::cast_slice_mut(&mut buf))
+                .map_err(|e| err(&e))?;
+            Pixels::U16(buf)
+        };
+        Ok(Image {
+            pixels,
+            width: self.width,
+            height: self.height,
+            channels: self.channels,
+        })
+    }
+}
+
+/// Code generic over the texel type and channel count of an image not yet decoded (estimates).
+pub trait TypesJob {
+    type Out;
+    fn run<T: ImageTexel, const C: usize>(self, width: usize, height: usize) -> Self::Out;
+}
+
+/// Runs `job` with the texel type (`u8`, `u16`) and channel count (1 to 4) of `p`.
+pub fn with_types<J: TypesJob>(p: &Probe, job: J) -> Result<J::Out, String> {
+    let (w, h) = (p.width, p.height);
+    Ok(match (p.sample_bits, p.channels) {
+        (8, 1) => job.run::<u8, 1>(w, h),
+        (8, 2) => job.run::<u8, 2>(w, h),
+        (8, 3) => job.run::<u8, 3>(w, h),
+        (8, 4) => job.run::<u8, 4>(w, h),
+        (16, 1) => job.run::<u16, 1>(w, h),
+        (16, 2) => job.run::<u16, 2>(w, h),
+        (16, 3) => job.run::<u16, 3>(w, h),
+        (16, 4) => job.run::<u16, 4>(w, h),
+        (b, c) => return Err(format!("{c} channels of {b} bits are not supported")),
     })
 }
 
@@ -108,8 +249,7 @@ pub fn with_texture<J: TextureJob>(img: &Image, job: J) -> Result<J::Out, String
 /// Exact per-channel whole-texture sums, straight from the texels (independent of the table).
 pub fn channel_totals<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> [u128; C] {
     let mut totals = [0u128; C];
-    for y in 0..texture.height() {
-        let row = texture.row(y).expect("row in range");
+    for row in (0..texture.height()).filter_map(|y| texture.row(y)) {
         for px in row.chunks_exact(C) {
             for (t, &v) in totals.iter_mut().zip(px) {
                 *t += u128::from(v.to_u16());

@@ -46,9 +46,12 @@ pub enum Inexact {
 
 /// Parses a decimal number `[+-]digits[.digits]` (at least one digit) *exactly* and returns
 /// `value * 2^f` as an `i64` (the raw bits of a fixed-point number with `f` fractional bits,
-/// `f <= 24`). A value that is not a multiple of `2^-f` is refused or rounded per `inexact`.
+/// `f <= 24`, else an error). A value that is not a multiple of `2^-f` is refused or rounded per
+/// `inexact`.
 pub fn parse_fixed(s: &str, f: u32, inexact: Inexact) -> Result<i64, String> {
-    assert!(f <= 24);
+    if f > 24 {
+        return Err(format!("{f} fractional bits are outside 0..=24"));
+    }
     let (neg, body) = match s.as_bytes().first() {
         Some(b'-') => (true, &s[1..]),
         Some(b'+') => (false, &s[1..]),
@@ -142,6 +145,9 @@ mod tests {
         assert!(parse_fixed("-", 8, r).is_err());
         assert!(parse_fixed("nan", 8, r).is_err());
         assert!(parse_fixed("99999999999999999999", 8, r).is_err());
+        assert!(parse_fixed("1", 25, r).is_err());
+        assert!(parse_fixed("1", u32::MAX, r).is_err());
+        assert_eq!(parse_fixed("1", 24, r), Ok(1 << 24));
         let n = Inexact::Round;
         assert_eq!(parse_fixed("0.3", 2, n), Ok(1)); // 1.2 -> 1
         assert_eq!(parse_fixed("0.4", 2, n), Ok(2)); // 1.6 -> 2

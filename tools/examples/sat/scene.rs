@@ -101,7 +101,7 @@ impl PlanArgs {
 pub fn run(args: &PlanArgs) -> Result<bool, String> {
     let facts = args.facts()?;
     let plan = Plan::for_scene(&facts).map_err(|e| format!("no plan: {e}"))?;
-    println!("{}", to_json(&plan));
+    crate::print_line(&to_json(&plan))?;
     Ok(true)
 }
 
@@ -191,11 +191,35 @@ pub fn to_json(p: &Plan) -> Value {
     Value::Object(o)
 }
 
+/// The largest plan file read (bytes): a plan written by `sat plan` is about 2 KB.
+pub const MAX_PLAN_BYTES: u64 = 1 << 20;
+
+/// Reads at most [`MAX_PLAN_BYTES`] of `path` as UTF-8 (a directory, a device without end or a
+/// larger file is refused, never read whole).
+fn read_bounded(path: &Path) -> Result<String, String> {
+    use std::io::Read;
+    let name = path.display();
+    if path.is_dir() {
+        return Err(format!("--plan {name}: is a directory, not a plan file"));
+    }
+    let file = std::fs::File::open(path).map_err(|e| format!("--plan {name}: {e}"))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_PLAN_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("--plan {name}: {e}"))?;
+    if bytes.len() as u64 > MAX_PLAN_BYTES {
+        return Err(format!(
+            "--plan {name}: larger than {MAX_PLAN_BYTES} bytes, so not a plan written by sat plan"
+        ));
+    }
+    String::from_utf8(bytes).map_err(|_| format!("--plan {name}: not UTF-8 text"))
+}
+
 /// Reads a plan written by `sat plan` and re-plans from its facts; refuses a file whose
-/// choices differ from the re-plan.
+/// choices differ from the re-plan. Every number of the facts is range-checked as the flags of
+/// `sat plan` are (no silent truncation of a hand-edited value).
 pub fn read(path: &Path) -> Result<Plan, String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("--plan {}: {e}", path.display()))?;
+    let text = read_bounded(path)?;
     let v: Value = serde_json::from_str(&text)
         .map_err(|e| format!("--plan {}: not JSON: {e}", path.display()))?;
     let bad = |what: &str| format!("--plan {}: missing or invalid {what}", path.display());
@@ -218,10 +242,21 @@ pub fn read(path: &Path) -> Result<Plan, String> {
         .get("leaves_texture")
         .and_then(Value::as_bool)
         .ok_or_else(|| bad("facts.leaves_texture"))?;
+    // A number of the facts within `0..=max`, as the flags of `sat plan` take it.
+    let within = |k: &str, max: u64| -> Result<u64, String> {
+        n(k).and_then(|v| {
+            if v <= max {
+                Ok(v)
+            } else {
+                Err(format!("{} (above {max})", bad(&format!("facts.{k}"))))
+            }
+        })
+    };
+    let small = |k: &str, max: u32| within(k, u64::from(max)).map(|v| v as u32);
     let args = PlanArgs {
         size: s("size")?,
-        texel_bits: n("texel_bits")? as u32,
-        channels: n("channels")? as usize,
+        texel_bits: small("texel_bits", u32::MAX)?,
+        channels: within("channels", u64::from(u32::MAX))? as usize,
         box_range: s("box")?,
         edge: match edge {
             EdgeKind::Border => EdgeArg::Border,
@@ -230,10 +265,10 @@ pub fn read(path: &Path) -> Result<Plan, String> {
             EdgeKind::Mirror => EdgeArg::Mirror,
         },
         inside: !leaves,
-        frac_bits: n("frac_bits")? as u32,
-        mean_bits: n("mean_bits")? as u32,
+        frac_bits: small("frac_bits", 24)?,
+        mean_bits: small("mean_bits", 32)?,
         tolerance: n("tolerance")?,
-        max_reads: n("max_reads")? as u32,
+        max_reads: small("max_reads", u32::MAX)?,
     };
     let facts = args.facts()?;
     if facts.leaves_texture != leaves {
