@@ -509,7 +509,7 @@ fn info(args: &InfoArgs, budget: &Budget) -> Result<bool, String> {
         .filter
         .map_or(String::new(), |f| format!(" --filter {}", f.name()));
     let job = EstimateJob {
-        subject: format!("info{filter} on this {}", probe.describe()),
+        subject: probe.subject(&format!("info{filter}")),
         table: &args.table,
         filter: args.filter.unwrap_or(FilterArg::Box),
         probe: &probe,
@@ -785,7 +785,7 @@ fn query_plan(args: &QueryArgs, path: &std::path::Path, budget: &Budget) -> Resu
     };
     let probe = load::probe(&table.image, budget)?;
     let job = EstimateJob {
-        subject: format!("query --plan on this {}", probe.describe()),
+        subject: probe.subject("query --plan"),
         table: &table,
         filter: FilterArg::Box,
         probe: &probe,
@@ -806,11 +806,7 @@ fn query_plan(args: &QueryArgs, path: &std::path::Path, budget: &Budget) -> Resu
 fn query_image(args: &QueryArgs, budget: &Budget) -> Result<load::Image, String> {
     let probe = load::probe(&args.table.image, budget)?;
     let job = EstimateJob {
-        subject: format!(
-            "query --filter {} on this {}",
-            args.filter.name(),
-            probe.describe()
-        ),
+        subject: probe.subject(&format!("query --filter {}", args.filter.name())),
         table: &args.table,
         filter: args.filter,
         probe: &probe,
