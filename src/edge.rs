@@ -281,17 +281,21 @@ pub(crate) enum AxisSplit {
 }
 
 impl AxisSplit {
-    /// The in-range pieces on an axis of raw length `p = n 2^F`, `F = f`.
+    /// The in-range pieces on an axis of raw length `p = n 2^F`, `F = f`, under the mode `kind`
+    /// that made the split ([`place_axis`]). Matched on the mode as well as the split, so that
+    /// a lookup with a zero-sized mode (a constant `kind`) compiles only its own pieces; a
+    /// split of another mode (never made) has no pieces.
     #[inline(always)]
-    pub(crate) fn pieces(self, p: i64, f: u32) -> AxisPieces {
-        match self {
-            AxisSplit::Clamp { lo, hi } => split_clamp(lo, hi, p, f),
-            AxisSplit::Periodic {
-                mirror,
-                odd,
-                r0,
-                rest,
-            } => split_periodic(mirror, odd, r0, rest, p),
+    pub(crate) fn pieces(self, kind: EdgeKind, p: i64, f: u32) -> AxisPieces {
+        match (kind, self) {
+            (EdgeKind::Clamp, AxisSplit::Clamp { lo, hi }) => split_clamp(lo, hi, p, f),
+            (EdgeKind::Repeat, AxisSplit::Periodic { odd, r0, rest, .. }) => {
+                split_periodic(false, odd, r0, rest, p)
+            }
+            (EdgeKind::Mirror, AxisSplit::Periodic { odd, r0, rest, .. }) => {
+                split_periodic(true, odd, r0, rest, p)
+            }
+            _ => AxisPieces::default(),
         }
     }
 }
@@ -335,9 +339,7 @@ fn div_euclid_narrow(x: i64, p: i64) -> Option<(i64, i64)> {
             (-q0 - 1, p - r0)
         });
     }
-    // `q p` cannot overflow: `|q p| <= |x| + p`.
-    let q = x.checked_div_euclid(p)?;
-    Some((q, x.wrapping_sub(q.wrapping_mul(p))))
+    crate::div::div_euclid_i64(x, p)
 }
 
 /// `(x / d, x % d)` in 32 bits when both fit (one hardware `udiv`), else in 64; `None` for
@@ -348,8 +350,7 @@ fn div_rem_narrow(x: u64, d: u64) -> Option<(u64, u64)> {
         let d = core::num::NonZeroU32::new(d)?;
         return Some((u64::from(a / d), u64::from(a % d)));
     }
-    let d = core::num::NonZeroU64::new(d)?;
-    Some((x / d, x % d))
+    crate::div::divrem_u64(x, d)
 }
 
 /// Places `[lo, hi)` (raw, `hi >= lo`) against an axis of `n >= 1` texels at `F = f`
@@ -467,7 +468,7 @@ mod tests {
             AxisPlan::Empty => 0,
             AxisPlan::InRange(a, b) => seg(a, b),
             AxisPlan::Split(s) => s
-                .pieces(t.len() as i64, 0)
+                .pieces(kind, t.len() as i64, 0)
                 .iter()
                 .map(|pc| seg(pc.lo, pc.hi) * pc.mult)
                 .sum(),
@@ -502,7 +503,7 @@ mod tests {
                 (5, 9),
             ] {
                 if let Ok(AxisPlan::Split(s)) = place_axis(kind, lo, hi, 4, 0) {
-                    let s = s.pieces(4, 0);
+                    let s = s.pieces(kind, 4, 0);
                     for p in s.iter() {
                         assert!(0 <= p.lo && p.lo < p.hi && p.hi <= 4, "{kind:?} {p:?}");
                     }

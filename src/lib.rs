@@ -54,6 +54,7 @@
 #![deny(missing_docs)]
 
 pub mod cost;
+mod div;
 pub mod edge;
 mod error;
 pub mod filters;

@@ -130,63 +130,6 @@ fn div_round_long(num: u64, g: u32, w: u64, h: u64) -> Result<u64, Error> {
     Ok(q)
 }
 
-/// `(n / d, n % d)` for a 64-bit `n` and a 32-bit `d` whose quotient fits 32 bits
-/// (`n >> 32 < d`); `None` otherwise (and for `d = 0`).
-///
-/// Why: a Cortex-M4 divides 32 by 32 bits in hardware but has no 64-bit divide, so `u64 / u64`
-/// is a library loop (`__aeabi_uldivmod`). The mean's denominator, the area `W H` in units of
-/// `2^-2F`, is below `2^32` for any box on a texture a microcontroller holds, and its quotient
-/// (the mean times `2^g`) fits 32 bits, so schoolbook division by 16-bit digits does it with
-/// two hardware divides (Knuth, TAOCP vol. 2, §4.3.1, Algorithm D, with `b = 2^16`, `n = 2`,
-/// `m = 2`; as in Warren, *Hacker's Delight*, §9-4): normalize `d` so its top bit is set, then
-/// estimate each 16-bit quotient digit from the top 32 bits of the partial remainder divided
-/// by the top 16-bit digit of `d`; the estimate is at most 2 too large, and the test against
-/// the second digit corrects it (at most two steps per digit). No 64-bit divide, no loop of
-/// more than two steps. Exhaustively checked against `u64` division on small sizes and by
-/// random tests at every normalization shift (tests below).
-#[cfg_attr(all(target_pointer_width = "64", not(test)), allow(dead_code))]
-#[inline]
-pub(crate) fn div_u64_by_u32(n: u64, d: u32) -> Option<(u32, u32)> {
-    const B: u32 = 1 << 16;
-    if d == 0 || (n >> 32) >= u64::from(d) {
-        return None;
-    }
-    let s = d.leading_zeros();
-    let v = d << s;
-    // `n << s` does not overflow: `n >> 32 < d < 2^(32 - s)`.
-    let n_norm = n << s;
-    let un32 = (n_norm >> 32) as u32;
-    let un10 = n_norm as u32;
-    let (vn1, vn0) = (v >> 16, v & 0xFFFF);
-    let (un1, un0) = (un10 >> 16, un10 & 0xFFFF);
-    // `vn1 >= 2^15` (the top bit of `v` is set): never zero.
-    let vn1_nz = core::num::NonZeroU32::new(vn1)?;
-    // One quotient digit of `top / v`, where `top` is the two-digit remainder `hi` followed
-    // by the digit `lo`, with `hi < v`; and the new remainder.
-    let digit = |hi: u32, lo: u32| -> (u32, u32) {
-        let mut q = hi / vn1_nz;
-        let mut rhat = hi - q * vn1;
-        // At most two corrections (Knuth's Theorem B). `q < B` before the product: no wrap;
-        // `rhat < B` in the comparison: no wrap.
-        for _ in 0..2 {
-            if q >= B || q * vn0 > (rhat << 16 | lo) {
-                q -= 1;
-                rhat += vn1;
-                if rhat < B {
-                    continue;
-                }
-            }
-            break;
-        }
-        // The remainder is below `v`: the wrapping arithmetic gives it exactly.
-        let rem = (hi << 16).wrapping_add(lo).wrapping_sub(q.wrapping_mul(v));
-        (q, rem)
-    };
-    let (q1, r1) = digit(un32, un1);
-    let (q0, r0) = digit(r1, un0);
-    Some((q1 << 16 | q0, r0 >> s))
-}
-
 impl Wide for u64 {
     const BITS: u32 = 64;
     const ZERO: Self = 0;
@@ -212,32 +155,26 @@ impl Wide for u64 {
             return Ok(0);
         }
         // Sides below 2^32 (any box on a texture a microcontroller holds, at any F): the area is
-        // one 32 x 32 -> 64 multiply, no overflow check.
+        // one 32 x 32 -> 64 multiply, no overflow check, and the quotient and remainder come
+        // from `div::divrem_u64` (hardware 32-bit divides on a 32-bit core, never the 64-bit
+        // library routine).
         if let (Ok(w32), Ok(h32)) = (u32::try_from(w), u32::try_from(h)) {
             let area = u64::from(w32) * u64::from(h32);
-            if area != 0 && g < 64 && bits64(self) + g <= 64 {
+            if g < 64 && bits64(self) + g <= 64 {
                 let n = self << g;
-                // On 32-bit cores, an area below 2^32 and a quotient below 2^32 (the usual
-                // mean): two hardware divides instead of the `u64` division routine. (Also in
-                // the host's unit tests, so they check this path against the reference.)
+                // The usual mean (area and quotient below 2^32) inline on a 32-bit core: two
+                // hardware divides; anything else out of line.
                 #[cfg(any(not(target_pointer_width = "64"), test))]
                 if let Some((q, r)) = u32::try_from(area)
                     .ok()
-                    .and_then(|a| div_u64_by_u32(n, a))
+                    .and_then(|a| crate::div::div_u64_by_u32(n, a))
                 {
                     let (q, r) = (u64::from(q), u64::from(r));
                     return Ok(if r >= area - r { q + 1 } else { q });
                 }
-                let (q, r) = (n / area, n % area);
-                return Ok(if r >= area - r { q + 1 } else { q });
-            }
-        }
-        if let Some(area) = w.checked_mul(h) {
-            if area != 0 && g < 64 && bits64(self) + g <= 64 {
-                // The common case: one u64 division (quotient and remainder together).
-                let n = self << g;
-                let (q, r) = (n / area, n % area);
-                return Ok(if r >= area - r { q + 1 } else { q });
+                if let Some((q, r)) = crate::div::divrem_u64(n, area) {
+                    return Ok(if r >= area - r { q + 1 } else { q });
+                }
             }
         }
         if w == 0 || h == 0 {
@@ -373,49 +310,6 @@ mod tests {
             // The long path alone agrees too.
             if let Some(v) = want.filter(|&v| v <= u64::MAX as u128) {
                 assert_eq!(div_round_long(num, g, w, h), Ok(v as u64));
-            }
-        }
-    }
-
-    #[test]
-    fn div_u64_by_u32_is_exact_or_refuses() {
-        let check = |n: u64, d: u32| {
-            let got = div_u64_by_u32(n, d);
-            if d == 0 || n / u64::from(d) > u64::from(u32::MAX) {
-                assert_eq!(got, None, "{n} / {d}");
-            } else {
-                let (q, r) = (n / u64::from(d), n % u64::from(d));
-                assert_eq!(got, Some((q as u32, r as u32)), "{n} / {d}");
-            }
-        };
-        // Exhaustive over small dividends and divisors.
-        for d in 0..=300u32 {
-            for n in 0..=3000u64 {
-                check(n, d);
-            }
-        }
-        // Every normalization shift, the extremes of each digit, and random values.
-        let mut s = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        };
-        for shift in 0..32 {
-            for _ in 0..20_000 {
-                let d = ((next() as u32) >> shift).max(1);
-                // A quotient that fits: n < d 2^32.
-                let n = next() % (u64::from(d) << 32);
-                check(n, d);
-                check(u64::from(d) << 32, d); // quotient 2^32: refused
-                check((u64::from(d) << 32) - 1, d); // the largest accepted
-                check(next(), d);
-            }
-        }
-        for d in [1, 2, 0xFFFF, 0x1_0000, 0x1_0001, 0x8000_0000, 0xFFFF_FFFF] {
-            for n in [0, 1, u64::from(d) - 1, u64::from(d), u64::MAX, u64::MAX >> 1] {
-                check(n, d);
             }
         }
     }

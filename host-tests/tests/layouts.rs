@@ -1630,7 +1630,10 @@ fn lookup_costs() {
     l.corner(16, 24, &mut k);
     assert_eq!((k.reads, k.adds), (1, 0));
 
-    // Fractional corners with every cell index off the tile grid: 16 corners x 4 fields.
+    // Fractional corners with every cell inside one tile, off its left and top edges (cells
+    // 13 and 27 on x, 19 and 42 on y: digits 5, 3, 3, 2 of 8, all tiles past the first): each
+    // cell's four corners share the tile-level fields, 4 local sums + 2 strips above + 2
+    // strips left + 1 tile corner = 9 fields (not 4 x 4), and 10 additions (4 + 4 + 2).
     let r = Rect::new(q4(13.5), q4(19.5), q4(27.25), q4(42.75));
     for form in [RefForm::Paper, RefForm::Stable] {
         let mut kf = Tally::new();
@@ -1638,9 +1641,24 @@ fn lookup_costs() {
         let mut k = Tally::new();
         assert_eq!(lsum(&l, &r, form, RefMode::Border, &mut k), Ok(want));
         assert_eq!(kf.reads, 16);
-        assert_eq!(k.reads, 64, "{form:?} {k:?}");
-        assert_eq!(k.adds, kf.adds + 16 * 3, "{form:?}");
+        assert_eq!(k.reads, 4 * 9, "{form:?} {k:?}");
+        assert_eq!(k.adds, kf.adds + 4 * 10, "{form:?}");
         assert_eq!((k.muls, k.divs), (kf.muls, kf.divs), "{form:?}");
+    }
+    // A cell on a tile's left edge (cell 16: digit 0) takes the general path: each corner's
+    // fields read once per distinct field, 16 corners' worth of values, the same sums.
+    let r = Rect::new(q4(16.5), q4(19.5), q4(27.25), q4(42.75));
+    for form in [RefForm::Paper, RefForm::Stable] {
+        let mut kf = Tally::new();
+        let want = lsum(&flat, &r, form, RefMode::Border, &mut kf).unwrap();
+        let mut k = Tally::new();
+        assert_eq!(lsum(&l, &r, form, RefMode::Border, &mut k), Ok(want));
+        // Cell 16 (digit 0, tile 2) with cell 17 (digit 1): the local sums and strips above of
+        // column 16 are not stored (digit 0); x = 16, 17 share the tile-level fields. Per cell
+        // (16, j): corners (16, j), (16, j+1) read the strip left and the tile corner (2
+        // fields, the corner shared: 3), (17, j), (17, j+1) the local sums and strips above
+        // (4, the strip above shared along y: 3) and share the left strips and corner: 6.
+        assert_eq!(k.reads, 2 * 6 + 2 * 9, "{form:?} {k:?}");
     }
 
     // Flat packed and modular: one field per corner.

@@ -91,6 +91,14 @@ pub trait Layout<const C: usize> {
             self.corner(xb, yb, k),
         ]
     }
+    /// The corners of cell `(i, j)`, `[S(i, j), S(i + 1, j), S(i, j + 1), S(i + 1, j + 1)]`
+    /// for `i < w`, `j < h`: what one corner of a 16-read lookup reads. [`Layout::quad`] by
+    /// default; the flat table keeps four [`Layout::corner`] calls (one multiply-add each
+    /// beats two row slices there), a tiled layout shares the fields of the tile level.
+    #[inline(always)]
+    fn cell_corners<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[Self::Value; C]; 4] {
+        self.quad(i, i.wrapping_add(1), j, j.wrapping_add(1), k)
+    }
     /// Bits per texel and channel: `storage_bits / (w h C)`.
     fn bits_per_entry(&self) -> f64 {
         self.storage_bits() as f64 / (self.width() as f64 * self.height() as f64 * C as f64)
@@ -128,6 +136,15 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
         k: &mut K,
     ) -> [[E; C]; 4] {
         self.read_quad(xa, xb, ya, yb, k)
+    }
+    #[inline(always)]
+    fn cell_corners<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[E; C]; 4] {
+        [
+            self.read(i, j, k),
+            self.read(i + 1, j, k),
+            self.read(i, j + 1, k),
+            self.read(i + 1, j + 1, k),
+        ]
     }
 }
 

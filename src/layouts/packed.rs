@@ -145,9 +145,12 @@ pub(crate) fn read_masked(words: &[u32], offset: u64, len: u32, mask: u64) -> u6
 pub(crate) fn read_masked32(words: &[u32], at: u32, mask: u32) -> u32 {
     let i = (at / WORD_BITS) as usize;
     let s = at % WORD_BITS;
-    let lo = words.get(i).copied().unwrap_or(0) >> s;
-    let hi = (words.get(i.wrapping_add(1)).copied().unwrap_or(0) << 1) << (31 - s);
-    (lo | hi) & mask
+    // Both words with one range check; the last word of the slice alone (0 past it).
+    let pair = match words.get(i..i.wrapping_add(2)) {
+        Some(&[a, b]) => u64::from(a) | u64::from(b) << 32,
+        _ => u64::from(words.get(i).copied().unwrap_or(0)),
+    };
+    (pair >> s) as u32 & mask
 }
 
 /// Reads `len <= 64` bits starting at bit `offset` of `words`; returns the value and the number

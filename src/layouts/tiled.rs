@@ -401,6 +401,63 @@ impl Component {
     }
 }
 
+/// A component of a [`OneLevel`] geometry in 32-bit words (every offset below `2^32`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Comp32 {
+    offset: u32,
+    row: u32,
+    stride: u32,
+    bits: u32,
+    mask: u32,
+}
+
+impl Comp32 {
+    const ZERO: Comp32 = Comp32 {
+        offset: 0,
+        row: 0,
+        stride: 0,
+        bits: 0,
+        mask: 0,
+    };
+}
+
+/// One level of power-of-two tiles on both axes, offsets below `2^32` and fields of at most
+/// 32 bits (8 x 8 tiles on any texture a microcontroller holds): the digits are a shift and a
+/// mask, every offset two multiply-adds. Precomputed once by [`Geometry::new_for`], so a lookup
+/// reads 36 bytes of it instead of walking the general geometry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct OneLevel {
+    shift_x: u32,
+    low_x: u32,
+    shift_y: u32,
+    low_y: u32,
+    /// Components `(0, 0)` (local sums), `(0, 1)` (strips above the tile, per column), `(1,
+    /// 0)` (strips left of it, per row), `(1, 1)` (tile corners).
+    comps: [Comp32; 4],
+}
+
+/// One coordinate under a [`OneLevel`] geometry: the digit `d` (position inside the tile),
+/// `q` (whole tiles before it) and the index of `trunc_0(x)` (`q (t - 1) + d - 1`, meaningful
+/// when `d != 0`); the tile-level index is `q - 1` (meaningful when `q != 0`).
+#[derive(Clone, Copy)]
+struct OneDigits {
+    d: u32,
+    q: u32,
+    i0: u32,
+}
+
+impl OneLevel {
+    #[inline(always)]
+    fn digits(shift: u32, low: u32, x: u32) -> OneDigits {
+        let (d, q) = (x & low, x >> (shift & 31));
+        OneDigits {
+            d,
+            q,
+            i0: q.wrapping_mul(low).wrapping_add(d).wrapping_sub(1),
+        }
+    }
+}
+
 /// [`Tiled::words_needed`] with the channels as a value.
 pub(super) const fn words_for_channels(
     spec: TiledSpec,
@@ -433,6 +490,13 @@ pub(super) struct Geometry {
     /// Bits of the largest value `S` can take: `k` for a modular spec, else the worst-case
     /// total (computed once here: the lookups' width check reads it per call).
     pub(super) value_bits: u32,
+    /// Every bit offset is below `2^32` and every field at most 32 bits wide: the lookups
+    /// compute offsets in 32-bit words and read each field from at most two words (decided
+    /// once here, not per field).
+    pub(super) fields32: bool,
+    /// The straight-line path's constants when the spec is one level of power-of-two tiles
+    /// and `fields32` holds.
+    pub(super) one_level: Option<OneLevel>,
 }
 
 impl Geometry {
@@ -526,6 +590,18 @@ impl Geometry {
         let Some(words) = words_of_bits(offset, max_words) else {
             return Err(too_large);
         };
+        let mut fields32 = offset <= u32::MAX as u64;
+        let mut p = 0;
+        while p < N {
+            let mut q = 0;
+            while q < N {
+                if comps[p][q].bits > 32 {
+                    fields32 = false;
+                }
+                q += 1;
+            }
+            p += 1;
+        }
         Ok(Geometry {
             spec,
             width,
@@ -540,6 +616,32 @@ impl Geometry {
             value_bits: match spec.modulus {
                 Some(k) => k,
                 None => width::entry_bits_worst_case(texel_bits, width, height),
+            },
+            fields32,
+            one_level: if fields32 && ax.levels == 1 && ay.levels == 1 && ax.pow2 && ay.pow2 {
+                let mut c = [Comp32::ZERO; 4];
+                let mut i = 0;
+                while i < 4 {
+                    // fields32: every offset, row, stride and field fits 32 bits.
+                    let comp = comps[i / 2][i % 2];
+                    c[i] = Comp32 {
+                        offset: comp.offset_bits as u32,
+                        row: comp.row_bits as u32,
+                        stride: comp.stride_bits as u32,
+                        bits: comp.bits,
+                        mask: comp.mask as u32,
+                    };
+                    i += 1;
+                }
+                Some(OneLevel {
+                    shift_x: ax.shift[0],
+                    low_x: ax.low[0],
+                    shift_y: ay.shift[0],
+                    low_y: ay.low[0],
+                    comps: c,
+                })
+            } else {
+                None
             },
         })
     }
@@ -707,7 +809,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         out: &mut [E; C],
         k: &mut K,
     ) {
-        if self.geo.total_bits <= u32::MAX as u64 && comp.bits <= 32 {
+        if self.geo.fields32 {
             // Every offset is below the total, so below 2^32: the offset in 32-bit arithmetic
             // (exact, the low words of the u64 geometry) and each field from at most two words
             // with 32-bit shifts. The common case on a microcontroller (tables below 512 MiB).
@@ -740,6 +842,250 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             *o = o.wrapping_add(E::from_u64_truncating(v));
             at = at.wrapping_add(comp.bits as u64);
         }
+    }
+
+    /// The `C` fields of entry `(ix, iy)` of a [`OneLevel`] component, the read counted.
+    #[inline(always)]
+    fn field32<K: Counter>(&self, c: &Comp32, ix: u32, iy: u32, k: &mut K) -> [E; C] {
+        let mut at = c
+            .offset
+            .wrapping_add(ix.wrapping_mul(c.row))
+            .wrapping_add(iy.wrapping_mul(c.stride));
+        k.reads(1, c.stride);
+        k.words(
+            (at % WORD_BITS)
+                .saturating_add(c.stride)
+                .div_ceil(WORD_BITS),
+        );
+        let mut out = [E::ZERO; C];
+        for o in out.iter_mut() {
+            *o = E::from_u64_truncating(u64::from(read_masked32(self.words, at, c.mask)));
+            at = at.wrapping_add(c.bits);
+        }
+        out
+    }
+
+    /// `S(x, y)` for `x <= w`, `y <= h` under a [`OneLevel`] geometry: one field per pair of
+    /// non-zero digits (`x = 0` or `y = 0` reads nothing and gives 0).
+    #[inline(always)]
+    fn corner_fast<K: Counter>(&self, o: &OneLevel, x: u32, y: u32, k: &mut K) -> [E; C] {
+        let dx = OneLevel::digits(o.shift_x, o.low_x, x);
+        let dy = OneLevel::digits(o.shift_y, o.low_y, y);
+        let [c00, c01, c10, c11] = &o.comps;
+        let mut out = [E::ZERO; C];
+        let mut add = |v: [E; C]| {
+            for (o, v) in out.iter_mut().zip(v) {
+                *o = o.wrapping_add(v);
+            }
+        };
+        if dx.d != 0 {
+            if dy.d != 0 {
+                add(self.field32(c00, dx.i0, dy.i0, k));
+            }
+            if dy.q != 0 {
+                add(self.field32(c01, dx.i0, dy.q.wrapping_sub(1), k));
+            }
+        }
+        if dx.q != 0 {
+            if dy.d != 0 {
+                add(self.field32(c10, dx.q.wrapping_sub(1), dy.i0, k));
+            }
+            if dy.q != 0 {
+                add(self.field32(c11, dx.q.wrapping_sub(1), dy.q.wrapping_sub(1), k));
+            }
+        }
+        count_corner_adds::<K, C>(&dx, &dy, k);
+        if let Some(m) = self.geo.spec.modulus {
+            for o in out.iter_mut() {
+                *o = o.low_bits(m);
+            }
+        }
+        out
+    }
+
+    /// The four corners `[S(xa, ya), S(xb, ya), S(xa, yb), S(xb, yb)]` (all `<= w`, `<= h`)
+    /// under a [`OneLevel`] geometry, each field read once: a tile-level field depends on its
+    /// axis only through `q`, so two corners with the same `q` on that axis share it. For the
+    /// 2 x 2 neighbourhood of a 16-read corner inside one tile (`xb = xa + 1`, `yb = ya + 1`,
+    /// the usual case) that is 9 fields instead of 16: 4 local sums, 2 strips per side, 1
+    /// tile corner. The sums, and the additions counted per corner, are those of four
+    /// [`Layout::corner`] calls; only the reads are fewer.
+    #[inline(always)]
+    fn quad_fast<K: Counter>(
+        &self,
+        o: &OneLevel,
+        [xa, xb, ya, yb]: [u32; 4],
+        k: &mut K,
+    ) -> [[E; C]; 4] {
+        let xa = OneLevel::digits(o.shift_x, o.low_x, xa);
+        let xb = OneLevel::digits(o.shift_x, o.low_x, xb);
+        let ya = OneLevel::digits(o.shift_y, o.low_y, ya);
+        let yb = OneLevel::digits(o.shift_y, o.low_y, yb);
+        let [c00, c01, c10, c11] = &o.comps;
+        let z = [E::ZERO; C];
+        let (same_qx, same_qy) = (xa.q == xb.q, ya.q == yb.q);
+        // Tile corners C11 at (qx - 1, qy - 1).
+        let t11 = |x: &OneDigits, y: &OneDigits, k: &mut K| {
+            if x.q != 0 && y.q != 0 {
+                self.field32(c11, x.q.wrapping_sub(1), y.q.wrapping_sub(1), k)
+            } else {
+                z
+            }
+        };
+        let t11_aa = t11(&xa, &ya, k);
+        let t11_ba = if same_qx { t11_aa } else { t11(&xb, &ya, k) };
+        let t11_ab = if same_qy { t11_aa } else { t11(&xa, &yb, k) };
+        let t11_bb = match (same_qy, same_qx) {
+            (true, _) => t11_ba,
+            (false, true) => t11_ab,
+            (false, false) => t11(&xb, &yb, k),
+        };
+        // Strips left of the tile, C10 at (qx - 1, i0(y)): shared along x.
+        let t10 = |x: &OneDigits, y: &OneDigits, k: &mut K| {
+            if x.q != 0 && y.d != 0 {
+                self.field32(c10, x.q.wrapping_sub(1), y.i0, k)
+            } else {
+                z
+            }
+        };
+        let t10_aa = t10(&xa, &ya, k);
+        let t10_ba = if same_qx { t10_aa } else { t10(&xb, &ya, k) };
+        let t10_ab = t10(&xa, &yb, k);
+        let t10_bb = if same_qx { t10_ab } else { t10(&xb, &yb, k) };
+        // Strips above the tile, C01 at (i0(x), qy - 1): shared along y.
+        let t01 = |x: &OneDigits, y: &OneDigits, k: &mut K| {
+            if x.d != 0 && y.q != 0 {
+                self.field32(c01, x.i0, y.q.wrapping_sub(1), k)
+            } else {
+                z
+            }
+        };
+        let t01_aa = t01(&xa, &ya, k);
+        let t01_ab = if same_qy { t01_aa } else { t01(&xa, &yb, k) };
+        let t01_ba = t01(&xb, &ya, k);
+        let t01_bb = if same_qy { t01_ba } else { t01(&xb, &yb, k) };
+        // Local sums C00 at (i0(x), i0(y)).
+        let t00 = |x: &OneDigits, y: &OneDigits, k: &mut K| {
+            if x.d != 0 && y.d != 0 {
+                self.field32(c00, x.i0, y.i0, k)
+            } else {
+                z
+            }
+        };
+        let t00_aa = t00(&xa, &ya, k);
+        let t00_ba = t00(&xb, &ya, k);
+        let t00_ab = t00(&xa, &yb, k);
+        let t00_bb = t00(&xb, &yb, k);
+        for (x, y) in [(&xa, &ya), (&xb, &ya), (&xa, &yb), (&xb, &yb)] {
+            count_corner_adds::<K, C>(x, y, k);
+        }
+        let modulus = self.geo.spec.modulus;
+        let sum = |a: [E; C], b: [E; C], c: [E; C], d: [E; C]| -> [E; C] {
+            core::array::from_fn(|i| {
+                let g = |v: &[E; C]| v.get(i).copied().unwrap_or(E::ZERO);
+                let v = g(&a)
+                    .wrapping_add(g(&b))
+                    .wrapping_add(g(&c))
+                    .wrapping_add(g(&d));
+                match modulus {
+                    Some(m) => v.low_bits(m),
+                    None => v,
+                }
+            })
+        };
+        [
+            sum(t00_aa, t01_aa, t10_aa, t11_aa),
+            sum(t00_ba, t01_ba, t10_ba, t11_ba),
+            sum(t00_ab, t01_ab, t10_ab, t11_ab),
+            sum(t00_bb, t01_bb, t10_bb, t11_bb),
+        ]
+    }
+
+    /// The fields at bit `at` (all channels), the read counted: [`Tiled::field32`] with the
+    /// offset already formed.
+    #[inline(always)]
+    fn field_at<K: Counter>(&self, c: &Comp32, mut at: u32, k: &mut K) -> [E; C] {
+        k.reads(1, c.stride);
+        k.words(
+            (at % WORD_BITS)
+                .saturating_add(c.stride)
+                .div_ceil(WORD_BITS),
+        );
+        let mut out = [E::ZERO; C];
+        for o in out.iter_mut() {
+            *o = E::from_u64_truncating(u64::from(read_masked32(self.words, at, c.mask)));
+            at = at.wrapping_add(c.bits);
+        }
+        out
+    }
+
+    /// The corners of cell `(i, j)` when the cell lies inside one tile away from its left and
+    /// top edges (`i` and `j` not multiples of the tile sides, and neither is `i + 1`, `j + 1`:
+    /// every digit non-zero, both columns and both rows in the same tile): the usual corner of
+    /// a 16-read lookup. The 9 fields ([`Tiled::quad_fast`]) at offsets formed by additions
+    /// from three products: the local sums at `o`, `o + row`, `o + stride`, `o + row + stride`;
+    /// the strips above at `o01` and `o01 + row`; the strips left at `o10` and `o10 + stride`;
+    /// the tile corner. `None` when the cell is not of that kind.
+    #[inline(never)]
+    fn cell_fast<K: Counter>(
+        &self,
+        o: &OneLevel,
+        i: u32,
+        j: u32,
+        k: &mut K,
+    ) -> Option<[[E; C]; 4]> {
+        let x = OneLevel::digits(o.shift_x, o.low_x, i);
+        let y = OneLevel::digits(o.shift_y, o.low_y, j);
+        // d != 0 and d + 1 <= low: i, i + 1 inside the same tile, off its left edge.
+        if x.d == 0 || x.d >= o.low_x || y.d == 0 || y.d >= o.low_y {
+            return None;
+        }
+        let [c00, c01, c10, c11] = &o.comps;
+        let at = |c: &Comp32, ix: u32, iy: u32| {
+            c.offset
+                .wrapping_add(ix.wrapping_mul(c.row))
+                .wrapping_add(iy.wrapping_mul(c.stride))
+        };
+        let o00 = at(c00, x.i0, y.i0);
+        let mut s0 = self.field_at(c00, o00, k);
+        let mut s1 = self.field_at(c00, o00.wrapping_add(c00.row), k);
+        let mut s2 = self.field_at(c00, o00.wrapping_add(c00.stride), k);
+        let mut s3 = self.field_at(c00, o00.wrapping_add(c00.row).wrapping_add(c00.stride), k);
+        if y.q != 0 {
+            let o01 = at(c01, x.i0, y.q.wrapping_sub(1));
+            let a = self.field_at(c01, o01, k);
+            let b = self.field_at(c01, o01.wrapping_add(c01.row), k);
+            add_to(&mut s0, &a);
+            add_to(&mut s1, &b);
+            add_to(&mut s2, &a);
+            add_to(&mut s3, &b);
+        }
+        if x.q != 0 {
+            let o10 = at(c10, x.q.wrapping_sub(1), y.i0);
+            let mut a = self.field_at(c10, o10, k);
+            let mut b = self.field_at(c10, o10.wrapping_add(c10.stride), k);
+            if y.q != 0 {
+                let t = self.field32(c11, x.q.wrapping_sub(1), y.q.wrapping_sub(1), k);
+                add_to(&mut a, &t);
+                add_to(&mut b, &t);
+            }
+            add_to(&mut s0, &a);
+            add_to(&mut s1, &a);
+            add_to(&mut s2, &b);
+            add_to(&mut s3, &b);
+        }
+        let mut s = [s0, s1, s2, s3];
+        // The additions done: 4 for the strips above, 4 for those to the left, 2 for the
+        // tile corner (into the two left strips), per channel.
+        let adds =
+            4 * (y.q != 0) as u32 + 4 * (x.q != 0) as u32 + 2 * (x.q != 0 && y.q != 0) as u32;
+        k.adds(adds.saturating_mul(C as u32));
+        if let Some(m) = self.geo.spec.modulus {
+            for v in s.iter_mut().flatten() {
+                *v = v.low_bits(m);
+            }
+        }
+        Some(s)
     }
 
     /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
@@ -841,6 +1187,24 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     }
 }
 
+/// `acc += v` per channel (wrapping: sums of parts of `S`, which `E` holds on a valid layout).
+#[inline(always)]
+fn add_to<E: Entry, const C: usize>(acc: &mut [E; C], v: &[E; C]) {
+    for (a, v) in acc.iter_mut().zip(v) {
+        *a = a.wrapping_add(*v);
+    }
+}
+
+/// The additions of one corner under a [`OneLevel`] geometry: one per field after the first,
+/// per channel (as [`Tiled::corner_one_level`] counts them).
+#[inline(always)]
+fn count_corner_adds<K: Counter, const C: usize>(x: &OneDigits, y: &OneDigits, k: &mut K) {
+    let fields = ((x.d != 0) as u32 + (x.q != 0) as u32) * ((y.d != 0) as u32 + (y.q != 0) as u32);
+    if fields > 1 {
+        k.adds((fields - 1).saturating_mul(C as u32));
+    }
+}
+
 impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     type Value = E;
     fn width(&self) -> usize {
@@ -873,6 +1237,9 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         }
         // x <= w and y <= h are below 2^31: lossless.
         let (x, y) = (x as u32, y as u32);
+        if let Some(o) = &g.one_level {
+            return self.corner_fast(o, x, y, k);
+        }
         if g.ax.levels == 1 && g.ay.levels == 1 {
             self.corner_one_level(x, y, &mut out, k);
         } else {
@@ -884,6 +1251,44 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
             }
         }
         out
+    }
+    #[inline(always)]
+    fn cell_corners<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[E; C]; 4] {
+        if let Some(o) = &self.geo.one_level {
+            // i + 1 <= w and j + 1 <= h (so both below 2^31) for the fast path.
+            if i < self.geo.width && j < self.geo.height {
+                if let Some(v) = self.cell_fast(o, i as u32, j as u32, k) {
+                    return v;
+                }
+            }
+        }
+        self.quad(i, i.wrapping_add(1), j, j.wrapping_add(1), k)
+    }
+    /// Under one level of power-of-two tiles ([`OneLevel`]), each field of the four corners
+    /// read once (9 instead of 16 for a 16-read corner inside a tile); else four
+    /// [`Layout::corner`] calls.
+    #[inline]
+    fn quad<K: Counter>(
+        &self,
+        xa: usize,
+        xb: usize,
+        ya: usize,
+        yb: usize,
+        k: &mut K,
+    ) -> [[E; C]; 4] {
+        let g = &self.geo;
+        match &g.one_level {
+            Some(o) if xa.max(xb) <= g.width && ya.max(yb) <= g.height => {
+                // At most w, h < 2^31: lossless.
+                self.quad_fast(o, [xa as u32, xb as u32, ya as u32, yb as u32], k)
+            }
+            _ => [
+                self.corner(xa, ya, k),
+                self.corner(xb, ya, k),
+                self.corner(xa, yb, k),
+                self.corner(xb, yb, k),
+            ],
+        }
     }
 }
 

@@ -601,7 +601,7 @@ pub(crate) fn sum_raw<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const
         (px, py) => {
             check_modular(layout, r, f, form.modular_headroom_bits(f))?;
             check_acc(layout, form, f)?;
-            out.sums = split::sum(layout, px, py, f, form, k)?;
+            out.sums = split::sum(layout, px, py, f, form, mode, k)?;
         }
     }
     Ok(out)

@@ -22,10 +22,7 @@ fn corner<L: Layout<C>, const C: usize, K: Counter>(
 ) -> [AccOf<L, C>; C] {
     let (i, a) = split_coord(x, t.width(), f);
     let (j, b) = split_coord(y, t.height(), f);
-    let q00 = t.corner(i, j, k);
-    let q10 = t.corner(i + 1, j, k);
-    let q01 = t.corner(i, j + 1, k);
-    let q11 = t.corner(i + 1, j + 1, k);
+    let [q00, q10, q01, q11] = t.cell_corners(i, j, k);
     k.muls(3 * C as u32);
     k.adds(6 * C as u32);
     let a = AccOf::<L, C>::from_u32(a);

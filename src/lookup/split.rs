@@ -19,7 +19,7 @@
 use super::sealed::FormImpl;
 use super::{in_range_wide, WideOf};
 use crate::cost::Counter;
-use crate::edge::{AxisPieces, AxisPlan};
+use crate::edge::{AxisPieces, AxisPlan, EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
@@ -33,29 +33,34 @@ fn overflow<W: Wide>() -> Error {
     }
 }
 
-/// The pieces of one axis of raw length `p` (a placed axis is one piece of multiplicity 1).
+/// The pieces of one axis of raw length `p` (a placed axis is one piece of multiplicity 1),
+/// under the mode `kind` that placed it: with a constant `kind` (a zero-sized mode) only that
+/// mode's pieces are compiled.
 #[inline(always)]
-fn pieces(plan: AxisPlan, p: i64, f: u32) -> AxisPieces {
+fn pieces(kind: EdgeKind, plan: AxisPlan, p: i64, f: u32) -> AxisPieces {
     match plan {
         AxisPlan::Empty => AxisPieces::default(),
         AxisPlan::InRange(lo, hi) => AxisPieces::one(lo, hi),
-        AxisPlan::Split(s) => s.pieces(p, f),
+        AxisPlan::Split(s) => s.pieces(kind, p, f),
     }
 }
 
 /// The sum over the product of both axes' pieces. Not inlined: the common in-range case stays
-/// small, this one is compiled once per layout, form and counter.
+/// small; this one is compiled once per layout, form, mode and counter, with only the mode's
+/// own pieces.
 #[inline(never)]
-pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, K: Counter, const C: usize>(
+pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: usize>(
     layout: &L,
     px: AxisPlan,
     py: AxisPlan,
     f: u32,
     form: Fm,
+    mode: M,
     k: &mut K,
 ) -> Result<[WideOf<L, C>; C], Error> {
-    let xs = pieces(px, (layout.width() as i64) << f, f);
-    let ys = pieces(py, (layout.height() as i64) << f, f);
+    let kind = mode.kind();
+    let xs = pieces(kind, px, (layout.width() as i64) << f, f);
+    let ys = pieces(kind, py, (layout.height() as i64) << f, f);
     let mut acc = [<WideOf<L, C> as Wide>::ZERO; C];
     let mut terms = 0u32;
     for a in xs.iter() {

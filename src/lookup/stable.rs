@@ -35,10 +35,7 @@ fn corner<L: Layout<C>, const C: usize, K: Counter>(
 ) -> CornerParts<L::Value, AccOf<L, C>, C> {
     let (i, a) = split_coord(x, t.width(), f);
     let (j, b) = split_coord(y, t.height(), f);
-    let q00 = t.corner(i, j, k);
-    let q10 = t.corner(i + 1, j, k);
-    let q01 = t.corner(i, j + 1, k);
-    let q11 = t.corner(i + 1, j + 1, k);
+    let [q00, q10, q01, q11] = t.cell_corners(i, j, k);
     k.adds(4 * C as u32);
     let z = <L::Value as Entry>::ZERO;
     let mut parts = [Part {

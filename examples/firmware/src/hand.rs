@@ -48,6 +48,34 @@ impl Table<'_> {
         self.s(x1, y1) - self.s(x0, y1) - self.s(x1, y0) + self.s(x0, y0)
     }
 
+    /// 4-read box sum at integer corners under clamp-to-edge: per axis the part left of the
+    /// texture (the first column, repeated), the part inside and the part right of it (the
+    /// last column, repeated); the sum over the up to 3 x 3 pieces, each a 4-read box sum
+    /// times its repeat counts.
+    #[inline(always)]
+    pub fn box_sum_int_clamp(&self, x0: i32, y0: i32, x1: i32, y1: i32) -> u64 {
+        if x1 <= x0 || y1 <= y0 {
+            return 0;
+        }
+        let axis = |v0: i32, v1: i32, n: u32| -> [(u32, u32, u64); 3] {
+            let n_i = n as i32;
+            [
+                (0, 1, (v1.min(0) - v0).max(0) as u64),
+                (v0.max(0).min(n_i) as u32, v1.min(n_i).max(0) as u32, 1),
+                (n - 1, n, (v1 - v0.max(n_i)).max(0) as u64),
+            ]
+        };
+        let mut sum = 0u64;
+        for (xa, xb, wx) in axis(x0, x1, self.w) {
+            for (ya, yb, wy) in axis(y0, y1, self.h) {
+                if wx != 0 && wy != 0 && xa < xb && ya < yb {
+                    sum += wx * wy * self.box_sum_inside(xa, ya, xb, yb);
+                }
+            }
+        }
+        sum
+    }
+
     /// `2^16 S(x, y)` at `F = 8` raw corners clipped to the texture: bilinear interpolation of
     /// the table (Crow §2.1), exact in `u64` (`2^32 2^16` fits).
     #[inline(always)]

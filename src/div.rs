@@ -1,0 +1,272 @@
+//! Integer division on 32-bit cores without the 64-bit library routine.
+//!
+//! A Cortex-M4 divides 32 by 32 bits in hardware (`UDIV`, 2 to 12 cycles) but has no 64-bit
+//! divide: `u64 / u64` in Rust calls `__aeabi_uldivmod`, a loop of a few hundred instructions that
+//! also links about 1 KiB of `compiler_builtins` into the firmware. The lookups divide 64-bit
+//! values in a few places (the mean by the box's area, the whole periods of a [`crate::Repeat`]
+//! box), almost always by a divisor below `2^32`; these functions do that with hardware 32-bit
+//! divides, and the rare divisor of 33 to 64 bits with a bounded shift-and-subtract loop, so the
+//! library routine is never linked.
+//!
+//! On 64-bit hosts (outside this module's tests) they are the native operations: there `u64 /
+//! u64` is one instruction.
+
+/// `(n / d, n % d)` for a 64-bit `n` and a 32-bit `d` whose quotient fits 32 bits
+/// (`n >> 32 < d`); `None` otherwise (and for `d = 0`).
+///
+/// Why: a Cortex-M4 divides 32 by 32 bits in hardware but has no 64-bit divide, so `u64 / u64`
+/// is a library loop (`__aeabi_uldivmod`). The mean's denominator, the area `W H` in units of
+/// `2^-2F`, is below `2^32` for any box on a texture a microcontroller holds, and its quotient
+/// (the mean times `2^g`) fits 32 bits, so schoolbook division by 16-bit digits does it with
+/// two hardware divides (Knuth, TAOCP vol. 2, §4.3.1, Algorithm D, with `b = 2^16`, `n = 2`,
+/// `m = 2`; as in Warren, *Hacker's Delight*, §9-4): normalize `d` so its top bit is set, then
+/// estimate each 16-bit quotient digit from the top 32 bits of the partial remainder divided
+/// by the top 16-bit digit of `d`; the estimate is at most 2 too large, and the test against
+/// the second digit corrects it (at most two steps per digit). No 64-bit divide, no loop of
+/// more than two steps. Exhaustively checked against `u64` division on small sizes and by
+/// random tests at every normalization shift (tests below).
+#[cfg(any(not(target_pointer_width = "64"), test))]
+#[inline]
+pub(crate) fn div_u64_by_u32(n: u64, d: u32) -> Option<(u32, u32)> {
+    const B: u32 = 1 << 16;
+    if d == 0 || (n >> 32) >= u64::from(d) {
+        return None;
+    }
+    let s = d.leading_zeros();
+    let v = d << s;
+    // `n << s` does not overflow: `n >> 32 < d < 2^(32 - s)`.
+    let n_norm = n << s;
+    let un32 = (n_norm >> 32) as u32;
+    let un10 = n_norm as u32;
+    let (vn1, vn0) = (v >> 16, v & 0xFFFF);
+    let (un1, un0) = (un10 >> 16, un10 & 0xFFFF);
+    // `vn1 >= 2^15` (the top bit of `v` is set): never zero.
+    let vn1_nz = core::num::NonZeroU32::new(vn1)?;
+    // One quotient digit of `top / v`, where `top` is the two-digit remainder `hi` followed
+    // by the digit `lo`, with `hi < v`; and the new remainder.
+    let digit = |hi: u32, lo: u32| -> (u32, u32) {
+        let mut q = hi / vn1_nz;
+        let mut rhat = hi - q * vn1;
+        // At most two corrections (Knuth's Theorem B). `q < B` before the product: no wrap;
+        // `rhat < B` in the comparison: no wrap.
+        for _ in 0..2 {
+            if q >= B || q * vn0 > (rhat << 16 | lo) {
+                q -= 1;
+                rhat += vn1;
+                if rhat < B {
+                    continue;
+                }
+            }
+            break;
+        }
+        // The remainder is below `v`: the wrapping arithmetic gives it exactly.
+        let rem = (hi << 16).wrapping_add(lo).wrapping_sub(q.wrapping_mul(v));
+        (q, rem)
+    };
+    let (q1, r1) = digit(un32, un1);
+    let (q0, r0) = digit(r1, un0);
+    Some((q1 << 16 | q0, r0 >> s))
+}
+
+/// `(n / d, n % d)` for any `n` and `d != 0`; `None` for `d = 0`.
+///
+/// Divisor below `2^32`: the high word by one hardware divide, then the rest (remainder
+/// followed by the low word, whose quotient fits 32 bits) by [`div_u64_by_u32`]. Divisor of 33
+/// to 64 bits: the quotient is below `2^32`, found bit by bit from the top (at most 32 steps of
+/// a comparison and a subtraction).
+#[inline]
+pub(crate) fn divrem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
+    #[cfg(all(target_pointer_width = "64", not(test)))]
+    {
+        let d = core::num::NonZeroU64::new(d)?;
+        Some((n / d, n % d))
+    }
+    #[cfg(any(not(target_pointer_width = "64"), test))]
+    {
+        divrem_u64_narrow(n, d)
+    }
+}
+
+/// [`divrem_u64`] as a 32-bit core computes it (also compiled on hosts for the tests).
+#[cfg(any(not(target_pointer_width = "64"), test))]
+#[inline]
+fn divrem_u64_narrow(n: u64, d: u64) -> Option<(u64, u64)> {
+    if let Ok(d32) = u32::try_from(d) {
+        let d32 = core::num::NonZeroU32::new(d32)?;
+        let hi = (n >> 32) as u32;
+        let (q_hi, r_hi) = (hi / d32, hi % d32);
+        // r_hi < d: the quotient of `r_hi 2^32 + lo` fits 32 bits.
+        let (q_lo, r) = div_u64_by_u32(u64::from(r_hi) << 32 | (n & 0xFFFF_FFFF), d32.get())?;
+        return Some((u64::from(q_hi) << 32 | u64::from(q_lo), u64::from(r)));
+    }
+    // d >= 2^32: q < 2^32. Align d's top bit with n's, then one quotient bit per step.
+    if n < d {
+        return Some((0, n));
+    }
+    let shift = d.leading_zeros() - n.leading_zeros(); // <= 31: d has a bit at 2^32 or above
+    let (mut q, mut r) = (0u64, n);
+    let mut i = shift;
+    loop {
+        let step = d << i; // no bit lost: i <= leading_zeros(d)
+        if r >= step {
+            r -= step;
+            q |= 1 << i;
+        }
+        if i == 0 {
+            break;
+        }
+        i -= 1;
+    }
+    Some((q, r))
+}
+
+/// `(floor(x / p), x mod p)` (so `0 <= x mod p < p`) for `p > 0`; `None` for `p <= 0`. By
+/// [`divrem_u64`] on `|x|`.
+#[inline]
+pub(crate) fn div_euclid_i64(x: i64, p: i64) -> Option<(i64, i64)> {
+    if p <= 0 {
+        return None;
+    }
+    let (q, r) = divrem_u64(x.unsigned_abs(), p as u64)?;
+    // |x| <= 2^63 and p >= 1: q <= 2^63, r < p; both fit i64 except q = 2^63 for x = i64::MIN,
+    // p = 1, where -q is i64::MIN itself.
+    let (q, r) = (q as i64, r as i64);
+    Some(if x >= 0 {
+        (q, r)
+    } else if r == 0 {
+        (q.wrapping_neg(), 0)
+    } else {
+        (q.wrapping_neg().wrapping_sub(1), p - r)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn div_u64_by_u32_is_exact_or_refuses() {
+        let check = |n: u64, d: u32| {
+            let got = div_u64_by_u32(n, d);
+            if d == 0 || n / u64::from(d) > u64::from(u32::MAX) {
+                assert_eq!(got, None, "{n} / {d}");
+            } else {
+                let (q, r) = (n / u64::from(d), n % u64::from(d));
+                assert_eq!(got, Some((q as u32, r as u32)), "{n} / {d}");
+            }
+        };
+        // Exhaustive over small dividends and divisors.
+        for d in 0..=300u32 {
+            for n in 0..=3000u64 {
+                check(n, d);
+            }
+        }
+        // Every normalization shift, the extremes of each digit, and random values.
+        let mut s = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        for shift in 0..32 {
+            for _ in 0..20_000 {
+                let d = ((next() as u32) >> shift).max(1);
+                // A quotient that fits: n < d 2^32.
+                let n = next() % (u64::from(d) << 32);
+                check(n, d);
+                check(u64::from(d) << 32, d); // quotient 2^32: refused
+                check((u64::from(d) << 32) - 1, d); // the largest accepted
+                check(next(), d);
+            }
+        }
+        for d in [1, 2, 0xFFFF, 0x1_0000, 0x1_0001, 0x8000_0000, 0xFFFF_FFFF] {
+            for n in [
+                0,
+                1,
+                u64::from(d) - 1,
+                u64::from(d),
+                u64::MAX,
+                u64::MAX >> 1,
+            ] {
+                check(n, d);
+            }
+        }
+    }
+
+    #[test]
+    fn divrem_u64_matches_native() {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let check = |n: u64, d: u64| {
+            let want = if d == 0 { None } else { Some((n / d, n % d)) };
+            assert_eq!(divrem_u64_narrow(n, d), want, "{n} / {d}");
+        };
+        for n in 0..300u64 {
+            for d in 0..300u64 {
+                check(n, d);
+            }
+        }
+        let edges = [
+            0u64,
+            1,
+            2,
+            u32::MAX as u64 - 1,
+            u32::MAX as u64,
+            1 << 32,
+            (1 << 32) + 1,
+            u64::MAX >> 1,
+            (u64::MAX >> 1) + 1,
+            u64::MAX - 1,
+            u64::MAX,
+        ];
+        for &n in &edges {
+            for &d in &edges {
+                check(n, d);
+            }
+        }
+        for _ in 0..200_000 {
+            let (n, d) = (next() >> (next() % 64), next() >> (next() % 64));
+            check(n, d);
+        }
+    }
+
+    #[test]
+    fn div_euclid_i64_matches_native() {
+        let mut s = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let check = |x: i64, p: i64| {
+            let want = if p <= 0 {
+                None
+            } else {
+                Some((x.div_euclid(p), x.rem_euclid(p)))
+            };
+            assert_eq!(div_euclid_i64(x, p), want, "{x} / {p}");
+        };
+        for x in -300i64..300 {
+            for p in -3i64..300 {
+                check(x, p);
+            }
+        }
+        for &x in &[i64::MIN, i64::MIN + 1, -1, 0, 1, i64::MAX - 1, i64::MAX] {
+            for &p in &[1i64, 2, 3, u32::MAX as i64, 1 << 32, i64::MAX] {
+                check(x, p);
+            }
+        }
+        for _ in 0..200_000 {
+            let x = (next() as i64) >> (next() % 64);
+            let p = ((next() >> 1) >> (next() % 63)).max(1) as i64;
+            check(x, p);
+        }
+    }
+}
