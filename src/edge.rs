@@ -229,22 +229,13 @@ impl AxisPiece {
     }
 }
 
-/// At most three pieces; absent ones have `mult = 0`. Built as one array literal (no pushes,
-/// no length), so the split path makes it in place.
+/// At most three pieces; absent ones have `mult = 0` (the tests' view of a [`Prepared`] axis).
+#[cfg(test)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct AxisPieces([AxisPiece; 3]);
 
+#[cfg(test)]
 impl AxisPieces {
-    /// One piece `[lo, hi)` of multiplicity 1.
-    #[inline(always)]
-    pub(crate) fn one(lo: i64, hi: i64) -> AxisPieces {
-        AxisPieces([
-            AxisPiece::new(lo, hi, 1, false),
-            AxisPiece::default(),
-            AxisPiece::default(),
-        ])
-    }
-
     /// The pieces present.
     #[inline(always)]
     pub(crate) fn iter(&self) -> impl Iterator<Item = &AxisPiece> {
@@ -282,20 +273,102 @@ pub(crate) enum AxisSplit {
 
 impl AxisSplit {
     /// The in-range pieces on an axis of raw length `p = n 2^F`, `F = f`, under the mode `kind`
-    /// that made the split ([`place_axis`]). Matched on the mode as well as the split, so that
-    /// a lookup with a zero-sized mode (a constant `kind`) compiles only its own pieces; a
-    /// split of another mode (never made) has no pieces.
-    #[inline(always)]
+    /// that made the split (the tests' view of [`Prepared::piece`]).
+    #[cfg(test)]
     pub(crate) fn pieces(self, kind: EdgeKind, p: i64, f: u32) -> AxisPieces {
-        match (kind, self) {
-            (EdgeKind::Clamp, AxisSplit::Clamp { lo, hi }) => split_clamp(lo, hi, p, f),
-            (EdgeKind::Repeat, AxisSplit::Periodic { odd, r0, rest, .. }) => {
-                split_periodic(false, odd, r0, rest, p)
+        let prepared = AxisPlan::Split(self).prepare(kind, p);
+        AxisPieces([0, 1, 2].map(|k| prepared.piece(k, p, f)))
+    }
+}
+
+impl AxisPlan {
+    /// The numbers the pieces of this axis follow from, with the one division of a periodic
+    /// split (its whole periods) done, under the mode `kind` that placed it. Matched on the mode
+    /// as well as the split, so that a lookup with a zero-sized mode (a constant `kind`)
+    /// compiles only its own pieces; a split of another mode (never made) has none.
+    #[inline(always)]
+    pub(crate) fn prepare(self, kind: EdgeKind, p: i64) -> Prepared {
+        match self {
+            AxisPlan::Empty => Prepared::Empty,
+            AxisPlan::InRange(lo, hi) => Prepared::One(lo, hi),
+            AxisPlan::Split(s) => match (kind, s) {
+                (EdgeKind::Clamp, AxisSplit::Clamp { lo, hi }) => Prepared::Clamp { lo, hi },
+                (EdgeKind::Repeat, AxisSplit::Periodic { odd, r0, rest, .. }) => {
+                    prepare_periodic(false, odd, r0, rest, p)
+                }
+                (EdgeKind::Mirror, AxisSplit::Periodic { odd, r0, rest, .. }) => {
+                    prepare_periodic(true, odd, r0, rest, p)
+                }
+                _ => Prepared::Empty,
+            },
+        }
+    }
+}
+
+/// A placed axis ready to give its at most three in-range pieces one at a time
+/// ([`Prepared::piece`]): the split path holds these few words per axis, never an array of
+/// pieces (which a Cortex-M4 build zeroes and copies through `memset`/`memcpy`: about 1 KiB of
+/// library code).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Prepared {
+    /// No piece.
+    Empty,
+    /// One piece `[lo, hi)` of multiplicity 1.
+    One(i64, i64),
+    /// [`ClampToEdge`]: the part left of the texture, the part inside, the part right of it.
+    Clamp { lo: i64, hi: i64 },
+    /// [`Repeat`] / [`MirroredRepeat`]: the head of the first period, `whole` whole periods and
+    /// the tail (reflected in the odd halves).
+    Periodic {
+        odd: bool,
+        tail_odd: bool,
+        r0: i64,
+        whole: u64,
+        tail: u64,
+    },
+}
+
+/// The whole periods and the tail of a periodic split (one division).
+#[inline(always)]
+fn prepare_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> Prepared {
+    let (whole, tail) = match div_rem_narrow(rest, p as u64) {
+        Some(qr) if rest > p as u64 => qr,
+        _ => (0, rest),
+    };
+    Prepared::Periodic {
+        odd,
+        // The tail lies in the half (period) after the head and the whole ones.
+        tail_odd: mirror && (odd ^ (whole & 1 == 0)),
+        r0,
+        whole,
+        tail,
+    }
+}
+
+impl Prepared {
+    /// Piece `k` (`0..3`) on an axis of raw length `p = n 2^F`; absent pieces have `mult = 0`.
+    #[inline(always)]
+    pub(crate) fn piece(&self, k: usize, p: i64, f: u32) -> AxisPiece {
+        let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
+        match (*self, k) {
+            (Prepared::One(lo, hi), 0) => AxisPiece::new(lo, hi, 1, false),
+            (Prepared::Clamp { lo, hi }, 0) if lo < 0 => {
+                AxisPiece::new(0, 1i64 << f, width_u64(lo, hi.min(0)), true)
             }
-            (EdgeKind::Mirror, AxisSplit::Periodic { odd, r0, rest, .. }) => {
-                split_periodic(true, odd, r0, rest, p)
+            (Prepared::Clamp { lo, hi }, 1) => AxisPiece::new(lo.max(0), hi.min(p), 1, false),
+            (Prepared::Clamp { lo, hi }, 2) if hi > p => {
+                AxisPiece::new(p - (1i64 << f), p, width_u64(lo.max(p), hi), true)
             }
-            _ => AxisPieces::default(),
+            (Prepared::Periodic { odd, r0, .. }, 0) => {
+                let (a, b) = map(r0, p, odd);
+                AxisPiece::new(a, b, 1, false)
+            }
+            (Prepared::Periodic { whole, .. }, 1) => AxisPiece::new(0, p, whole, false),
+            (Prepared::Periodic { tail_odd, tail, .. }, 2) => {
+                let (a, b) = map(0, tail as i64, tail_odd);
+                AxisPiece::new(a, b, 1, false)
+            }
+            _ => AxisPiece::default(),
         }
     }
 }
@@ -408,43 +481,6 @@ fn place_periodic(mirror: bool, lo: i64, hi: i64, p: i64) -> Result<AxisPlan, Er
         r0,
         rest: end - p as u64,
     }))
-}
-
-/// The part left of the texture (its first texel, once per raw unit), the part inside, the
-/// part right of it (its last texel).
-#[inline(always)]
-fn split_clamp(lo: i64, hi: i64, p: i64, f: u32) -> AxisPieces {
-    let one = 1i64 << f;
-    let left = if lo < 0 {
-        AxisPiece::new(0, one, width_u64(lo, hi.min(0)), true)
-    } else {
-        AxisPiece::default()
-    };
-    let right = if hi > p {
-        AxisPiece::new(p - one, p, width_u64(lo.max(p), hi), true)
-    } else {
-        AxisPiece::default()
-    };
-    AxisPieces([left, AxisPiece::new(lo.max(0), hi.min(p), 1, false), right])
-}
-
-/// The head of the first period, `whole` whole periods and the tail (see the module docs).
-#[inline(always)]
-fn split_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> AxisPieces {
-    let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
-    let (a0, b0) = map(r0, p, odd);
-    let (whole, tail) = match div_rem_narrow(rest, p as u64) {
-        Some(qr) if rest > p as u64 => qr,
-        _ => (0, rest),
-    };
-    // The tail lies in the half (period) after the head and the whole ones.
-    let tail_odd = mirror && (odd ^ (whole & 1 == 0));
-    let (a2, b2) = map(0, tail as i64, tail_odd);
-    AxisPieces([
-        AxisPiece::new(a0, b0, 1, false),
-        AxisPiece::new(0, p, whole, false),
-        AxisPiece::new(a2, b2, 1, false),
-    ])
 }
 
 #[cfg(test)]

@@ -90,6 +90,20 @@ pub const fn worst_case_total(texel_bits: u32, width: usize, height: usize) -> u
 /// Bits of the product `a * b * c` of three `u64`, exactly, from 32-bit limbs (no 128-bit
 /// operation, so it costs a firmware's build and lookups nothing wider than 64 bits).
 pub const fn bits_of_product(a: u64, b: u64, c: u64) -> u32 {
+    // Factors below 2^32 (a texel maximum and two sides, on any target with 32-bit `usize` the
+    // compiler sees it and drops the general path below): `a b` is exact in `u64`, and its
+    // product with `c` is two 32 x 32 -> 64 multiplies: `a b c = hi 2^32 + (lo mod 2^32)`.
+    if a >> 32 == 0 && b >> 32 == 0 && c >> 32 == 0 {
+        let ab = a * b;
+        let lo = (ab & 0xFFFF_FFFF) * c;
+        // (ab >> 32) c < 2^64 - 2^32 and lo >> 32 < 2^32: no overflow.
+        let hi = (ab >> 32) * c + (lo >> 32);
+        return if hi >> 32 != 0 {
+            32 + bits_of_u64(hi)
+        } else {
+            bits_of_u64((hi << 32) | (lo & 0xFFFF_FFFF))
+        };
+    }
     // Six 32-bit limbs, least significant first.
     let mut limbs = [0u64; 6];
     limbs[0] = a & 0xFFFF_FFFF;

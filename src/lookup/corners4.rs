@@ -17,6 +17,8 @@ use crate::texel::{Acc, Entry};
 pub(crate) struct Corners4;
 
 impl FormImpl for Corners4 {
+    // Four reads and three additions: cheaper inline than a call.
+    const OUTLINE: bool = false;
     #[inline(always)]
     fn acc_bits(self, _total_bits: u32, _frac_bits: u32) -> u32 {
         // Computed in the value type, which holds every entry.

@@ -19,7 +19,7 @@
 use super::sealed::FormImpl;
 use super::{in_range_wide, WideOf};
 use crate::cost::Counter;
-use crate::edge::{AxisPieces, AxisPlan, EdgeKind, EdgeMode};
+use crate::edge::{AxisPlan, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
@@ -30,18 +30,6 @@ fn overflow<W: Wide>() -> Error {
         what: Quantity::LookupAccumulator,
         bits_needed: W::BITS + 1,
         bits_available: W::BITS,
-    }
-}
-
-/// The pieces of one axis of raw length `p` (a placed axis is one piece of multiplicity 1),
-/// under the mode `kind` that placed it: with a constant `kind` (a zero-sized mode) only that
-/// mode's pieces are compiled.
-#[inline(always)]
-fn pieces(kind: EdgeKind, plan: AxisPlan, p: i64, f: u32) -> AxisPieces {
-    match plan {
-        AxisPlan::Empty => AxisPieces::default(),
-        AxisPlan::InRange(lo, hi) => AxisPieces::one(lo, hi),
-        AxisPlan::Split(s) => s.pieces(kind, p, f),
     }
 }
 
@@ -59,12 +47,21 @@ pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: 
     k: &mut K,
 ) -> Result<[WideOf<L, C>; C], Error> {
     let kind = mode.kind();
-    let xs = pieces(kind, px, (layout.width() as i64) << f, f);
-    let ys = pieces(kind, py, (layout.height() as i64) << f, f);
+    let (pw, ph) = ((layout.width() as i64) << f, (layout.height() as i64) << f);
+    let xs = px.prepare(kind, pw);
+    let ys = py.prepare(kind, ph);
     let mut acc = [<WideOf<L, C> as Wide>::ZERO; C];
     let mut terms = 0u32;
-    for a in xs.iter() {
-        for b in ys.iter() {
+    for ka in 0..3 {
+        let a = xs.piece(ka, pw, f);
+        if a.mult == 0 {
+            continue;
+        }
+        for kb in 0..3 {
+            let b = ys.piece(kb, ph, f);
+            if b.mult == 0 {
+                continue;
+            }
             let piece = RawBox {
                 x0: a.lo,
                 y0: b.lo,
