@@ -8,6 +8,12 @@
 //!                                          [--out DIR] [--repeats R] [--no-stability]
 //! ```
 //!
+//! An image scene (`--scene FILE`) is read under the `sat` tool's limits: its header first
+//! (decoder limits), then the memory and work the scene will take are estimated and checked
+//! against `--max-memory` (default 1G) and `--max-work` (default 32G texel operations) before the
+//! image is decoded; a file too short for its header, or over budget, is refused with exit status
+//! 1 (see `texsat_tools::budget`).
+//!
 //! Writes `DIR/report.md`, `DIR/report.csv`, `DIR/stability.csv`, `DIR/error_vs_time.png`,
 //! `DIR/error_vs_cost.png`, `DIR/float32_error_vs_size.png` and `DIR/render_<scene>.png`
 //! (default `DIR` = `target/report`). `docs/report.md` explains the numbers.
@@ -16,8 +22,11 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
+use texsat::layouts::TiledSpec;
 use texsat_host_tests::scenes::{builtin_scenes, image_scene, Scene, SceneSize};
 use texsat_host_tests::stability;
+use texsat_tools::budget::{self, Budget, Estimate, Item};
+use texsat_tools::image_file;
 
 #[path = "report/measure.rs"]
 mod measure;
@@ -57,9 +66,83 @@ struct Args {
     /// Skip the float32 stability study.
     #[arg(long)]
     no_stability: bool,
+    /// Memory budget for an image scene, in bytes (suffixes K, M, G, T: powers of 1024).
+    #[arg(long, value_name = "BYTES", default_value = "1G", value_parser = budget::parse_amount)]
+    max_memory: u64,
+    /// Work budget for an image scene, in texel operations (32G is about 15 s of one core).
+    #[arg(long, value_name = "N", default_value = "32G", value_parser = budget::parse_amount)]
+    max_work: u64,
 }
 
-fn pick_scenes(names: &[String], size: SceneSize) -> Result<Vec<Scene>, String> {
+/// Bytes per texel an image scene takes in the host code (`texsat-host-tests`: the decoded
+/// image as luma, the `u32` reference texels, the exact `u128` table, the `f64` reference
+/// pyramids, ripmap and dipmap, the column prefix sums of the ideal), beyond the `texsat`
+/// structures [`image_scene_estimate`] counts from the crate's size functions. Measured (peak
+/// resident memory of `report --scene` on 1024^2 and 2048^2 noise images, about 130 bytes per
+/// texel besides the structures) and rounded up.
+const HOST_BYTES_PER_TEXEL: usize = 144;
+
+/// Texel operations per texel of the host references and the ideal over an image scene
+/// (measured: about 1 us per texel at the default size, 0.5 ns per operation).
+const HOST_WORK_PER_TEXEL: u128 = 2048;
+
+/// What an image scene of `p`'s size takes: the decoded image, the host references, and every
+/// structure `methods::Storage::build` makes (the scene's plan bounded by the flat table, the
+/// modular table by `K = 64`).
+fn image_scene_estimate(p: &image_file::Probe) -> Estimate {
+    let (w, h) = (p.width, p.height);
+    let mut est = Estimate::new(p.subject("report --scene"));
+    est.push(p.image_item());
+    let texels = w as u128 * h as u128;
+    est.push(Item {
+        what: "host references".to_string(),
+        bytes: texels * HOST_BYTES_PER_TEXEL as u128,
+        work: texels * HOST_WORK_PER_TEXEL,
+    });
+    est.push_sized(budget::mip::<u8, 1>(w, h));
+    est.push(budget::rip::<u8, 1>(w, h));
+    est.push(budget::dip::<u8, 1>(w, h));
+    est.push_sized(budget::flat::<u32, 1>(w, h));
+    for spec in [TiledSpec::tiles(8, 8), TiledSpec::square(&[2, 16])]
+        .into_iter()
+        .flatten()
+    {
+        est.push_sized(budget::tiled::<u32, 1>(spec, w, h, 8).map(|mut i| {
+            i.what = format!("tiled table {:?}x{:?}", spec.x.blocks(), spec.y.blocks());
+            i
+        }));
+    }
+    est.push_sized(budget::modular::<u64, 1>(w, h, 64));
+    est.push_sized(budget::flat::<u32, 1>(w, h).map(|mut i| {
+        i.what = "scene plan's table (at most the flat table)".to_string();
+        i
+    }));
+    est.push_sized(budget::tent::<u64, 1>(w, h));
+    est.push_sized(budget::tent_lines::<u32, 1>(w, h));
+    est
+}
+
+/// Reads an image scene's header under the decoder limits, checks its estimate against
+/// `budget` and that the file can hold what its header claims, then builds the scene.
+fn checked_image_scene(
+    path: &std::path::Path,
+    size: SceneSize,
+    budget: &Budget,
+) -> Result<Scene, String> {
+    let probe = image_file::probe(path, budget)?;
+    image_scene_estimate(&probe).check(budget)?;
+    probe.check_size()?;
+    drop(probe);
+    image_scene(path, size)
+}
+
+/// The scenes to run; an error carries the exit status (2: an unknown name; 1: an image file
+/// refused).
+fn pick_scenes(
+    names: &[String],
+    size: SceneSize,
+    budget: &Budget,
+) -> Result<Vec<Scene>, (i32, String)> {
     let builtin = builtin_scenes(size);
     if names.is_empty() {
         return Ok(builtin);
@@ -76,12 +159,15 @@ fn pick_scenes(names: &[String], size: SceneSize) -> Result<Vec<Scene>, String> 
         }
         let path = std::path::Path::new(name);
         if path.is_file() {
-            out.push(image_scene(path, size)?);
+            out.push(checked_image_scene(path, size, budget).map_err(|e| (1, e))?);
             continue;
         }
-        return Err(format!(
-            "unknown scene {name:?}: not a built-in ({}) nor an image file",
-            available.join(", ")
+        return Err((
+            2,
+            format!(
+                "unknown scene {name:?}: not a built-in ({}) nor an image file",
+                available.join(", ")
+            ),
         ));
     }
     Ok(out)
@@ -105,11 +191,15 @@ fn main() {
         repeats,
         time_budget: Duration::from_secs_f64(if args.quick { 0.3 } else { 1.5 }),
     };
-    let scenes = match pick_scenes(&args.scenes, size) {
+    let budget = Budget {
+        max_memory: args.max_memory,
+        max_work: args.max_work,
+    };
+    let scenes = match pick_scenes(&args.scenes, size, &budget) {
         Ok(s) => s,
-        Err(e) => {
+        Err((code, e)) => {
             eprintln!("error: {e}");
-            std::process::exit(2);
+            std::process::exit(code);
         }
     };
     let mut methods: Vec<Method> = if args.methods.is_empty() {

@@ -1,6 +1,8 @@
 //! Host tools for texsat: see `examples/` (`sat`, `report`, `layouts`) and `tests/`.
 //! The package exists so that the tools' dependencies (and the `filters` feature they need) stay
 //! out of the core's own test build. The library holds what the tools share: [`budget`], the
-//! memory and work estimates every command checks before it allocates.
+//! memory and work estimates every command checks before it allocates, and [`image_file`], the
+//! image reading under decoder limits (header first, samples after the budget check).
 
 pub mod budget;
+pub mod image_file;
