@@ -164,7 +164,10 @@ If the entry (value) type is too narrow (the worst case with the default build, 
 with --checked), nothing is printed on stdout; the reason, with the bits needed and available,
 goes to stderr and the exit status is 1. A malformed --layout is refused with a message on
 stderr (exit status 2), as are K < texel bits and --checked with a layout other than flat (exit
-status 1).
+status 1). Before the image's samples are read, the table (or --filter structure) is estimated
+from the header: above --max-memory (default 1G) or --max-work (default 32G texel operations)
+the command is refused on stderr with the need, the budget and the flag that raises it (exit
+status 1); see `sat --help`, RESOURCES.
 
 --filter NAME reports the memory of that filter's structure, built from the image: width,
 height, channels, texel_bits, texel_type, filter, texture_bytes (w x h x channels x texel
@@ -229,10 +232,12 @@ lookup in the chosen --form for every box, integer corners included (as fixed-po
 would), unless --int4 is given.
 
 A line that cannot be answered (wrong number of fields, not a number, not representable at F
-bits, inverted box, too wide for the accumulator, too large for the modular layout, ...) gives
-{\"error\": \"...\", \"line\": N} and the following lines are still answered; the exit status is
-then 1. A table that cannot be built, or a lookup width that the value type (or K) can never
-satisfy, is reported on stderr before any input is read (exit status 1).
+bits, inverted box, too wide for the accumulator, too large for the modular layout, longer than
+4096 bytes, not UTF-8, ...) gives {\"error\": \"...\", \"line\": N} and the following lines are
+still answered; the exit status is then 1. A table that cannot be built, a lookup width that the
+value type (or K) can never satisfy, or an image whose table or filter structure is over
+--max-memory or --max-work (estimated from the header, before the samples are read; see `sat
+--help`, RESOURCES) is reported on stderr before any input is read (exit status 1).
 
 FILTERS: --filter box (the default) is the summed-area table described above. The comparison
 filters (Heckbert 1986, \"Comparison of Prefiltering Methods\"; Du and Wan, \"Dipmap\") read the
