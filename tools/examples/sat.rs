@@ -399,7 +399,8 @@ fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::FAILURE,
         Err(msg) => {
-            eprintln!("sat: {msg}");
+            // A closed stderr cannot be told anything more; the status still says it.
+            let _ = writeln!(std::io::stderr(), "sat: {msg}");
             ExitCode::FAILURE
         }
     }
