@@ -2015,6 +2015,25 @@ fn means_of_hostile_boxes() {
             "g = {g}: {got:?}"
         );
     }
+    // Exact ties round up: means 1/2 and 3/2 at g = 0 give 1 and 2; 3/4 at g = 1 (3/2) gives 2.
+    let tie = [0u8, 1, 2, 0];
+    let ttex = Texture::<u8>::new(&tie, 4, 1).expect("tex");
+    let mut tst = [0u32; 4];
+    let tsat = Sat::build(&ttex, &mut tst).expect("sat");
+    for (r, g, want) in [
+        ([0, 0, 2, 1], 0u32, 1u64),
+        ([1, 0, 3, 1], 0, 2),
+        ([0, 0, 4, 1], 1, 2),
+    ] {
+        let s = tsat
+            .box_sum_int(&Rect::new(r[0], r[1], r[2], r[3]), Border, &mut NoCount)
+            .expect("sum");
+        assert_eq!(
+            s.mean_rounded(0, g, &mut NoCount),
+            Ok(want),
+            "tie {r:?} g={g}"
+        );
+    }
     // A zero sum has mean 0 for any g (it fits every word).
     let zero = sat
         .box_sum_raw(
