@@ -330,6 +330,16 @@ pub struct Structures<'a> {
     pub failures: Vec<(&'static str, Error)>,
 }
 
+/// `n` zeros reserved with `try_reserve_exact`: a failed allocation ends the report with a
+/// message and exit status 1, not an abort. (Image scenes are checked against `--max-memory`
+/// first, in `report.rs`; the built-in scenes are small.)
+fn zeros<T: Clone + Default>(n: usize, what: &str) -> Vec<T> {
+    texsat_tools::budget::zeroed(n, T::default(), what).unwrap_or_else(|e| {
+        eprintln!("error: {e}");
+        std::process::exit(1)
+    })
+}
+
 fn keep<T>(
     r: Result<T, Error>,
     what: &'static str,
@@ -356,8 +366,8 @@ fn build_tiled<'a>(
     let (w, h) = (tex.width(), tex.height());
     let spec = keep(spec, what, f)?;
     let words = keep(Tiled::<u32>::words_needed(spec, w, h, 8), what, f)?;
-    st.0 = vec![0; words];
-    st.1 = vec![0; keep(Tiled::<u32>::scratch_needed(spec, w), what, f)?];
+    st.0 = zeros(words, what);
+    st.1 = zeros(keep(Tiled::<u32>::scratch_needed(spec, w), what, f)?, what);
     keep(Tiled::build(tex, spec, &mut st.0, &mut st.1), what, f)
 }
 
@@ -396,13 +406,13 @@ impl Storage {
         let tex = Texture::<u8>::new(texels, w, h)?;
         let mut failures = Vec::new();
         let f = &mut failures;
-        *mip = vec![0; MipPyramid::<u8>::storage_needed(w, h)?];
+        *mip = zeros(MipPyramid::<u8>::storage_needed(w, h)?, "mip map");
         let mip = keep(MipPyramid::build(&tex, mip), "mip map", f);
-        *rip = vec![0; RipMap::<u8, 1>::storage_needed(w, h)];
+        *rip = zeros(RipMap::<u8, 1>::storage_needed(w, h), "ripmap");
         let rip = keep(RipMap::build(&tex, rip), "ripmap", f);
-        *dip = vec![0; DipMap::<u8, 1>::storage_needed(w, h)];
+        *dip = zeros(DipMap::<u8, 1>::storage_needed(w, h), "dipmap");
         let dip = keep(DipMap::build(&tex, dip), "dipmap", f);
-        *sat = vec![0; w * h];
+        *sat = zeros(Sat::<u32>::entries_needed(w, h)?, "summed-area table");
         let sat = keep(Sat::build(&tex, sat), "summed-area table", f);
         let tiled8 = build_tiled(&tex, TiledSpec::tiles(8, 8), tiled8, "tiled 8x8", f);
         let tiled2_16 = build_tiled(
@@ -412,8 +422,11 @@ impl Storage {
             "tiled 2 in 16",
             f,
         );
-        modular.0 = vec![0; Modular::<u64>::words_needed(w, h, modular_k).unwrap_or(0)];
-        modular.1 = vec![0; w];
+        modular.0 = zeros(
+            Modular::<u64>::words_needed(w, h, modular_k).unwrap_or(0),
+            "modular table",
+        );
+        modular.1 = zeros(w, "modular table");
         let modular = keep(
             Modular::build(&tex, modular_k, &mut modular.0, &mut modular.1),
             "modular table",
@@ -423,7 +436,7 @@ impl Storage {
         let planned = plan.and_then(|p| build_planned(&tex, &p, planned, f));
         let tent = match TentTable::<u64>::storage_needed(w, h) {
             Ok(n) => {
-                *tent = vec![0; n];
+                *tent = zeros(n, "order-2 table");
                 keep(TentTable::build(&tex, tent), "order-2 table", f)
             }
             Err(e) => {
@@ -433,7 +446,7 @@ impl Storage {
         };
         let lines = match TentLines::<u32>::storage_needed(w, h) {
             Ok(n) => {
-                *lines = vec![0; n];
+                *lines = zeros(n, "tent line tables");
                 keep(TentLines::build(&tex, lines), "tent line tables", f)
             }
             Err(e) => {
@@ -486,8 +499,8 @@ fn build_planned<'a>(
     match p.layout() {
         PlanLayout::Flat => Some(Planned::Flat),
         PlanLayout::Modular { k } => {
-            st.0 = vec![0; p.storage_len()];
-            st.1 = vec![0; w];
+            st.0 = zeros(p.storage_len(), "plan's table");
+            st.1 = zeros(w, "plan's table");
             keep(
                 Modular::build(tex, k, &mut st.0, &mut st.1),
                 "plan's table",
@@ -497,8 +510,11 @@ fn build_planned<'a>(
         }
         l => {
             let spec = l.tiled_spec()?;
-            st.0 = vec![0; p.storage_len()];
-            st.1 = vec![0; keep(Tiled::<u32>::scratch_needed(spec, w), "plan's table", f)?];
+            st.0 = zeros(p.storage_len(), "plan's table");
+            st.1 = zeros(
+                keep(Tiled::<u32>::scratch_needed(spec, w), "plan's table", f)?,
+                "plan's table",
+            );
             keep(
                 Tiled::build(tex, spec, &mut st.0, &mut st.1),
                 "plan's table",
@@ -541,9 +557,11 @@ pub fn choose_modular_k<M: texsat::EdgeMode>(
     let max_cells = inputs.iter().map(Input::cells).max().unwrap_or(1).max(1);
     let k0 = texsat::layouts::modulus_bits_for(8, max_cells).clamp(8, 64);
     let refused_at = |k: u32| -> usize {
-        let mut words =
-            vec![0u32; Modular::<u64>::words_needed(tex.width(), tex.height(), k).unwrap_or(0)];
-        let mut row = vec![0u64; tex.width()];
+        let mut words = zeros::<u32>(
+            Modular::<u64>::words_needed(tex.width(), tex.height(), k).unwrap_or(0),
+            "modular table",
+        );
+        let mut row = zeros::<u64>(tex.width(), "modular table");
         let Ok(m) = Modular::build(tex, k, &mut words, &mut row) else {
             return inputs.len();
         };
