@@ -275,25 +275,40 @@ impl Estimate {
     /// budget and the flag that raises it.
     pub fn check(&self, budget: &Budget) -> Result<(), String> {
         let (bytes, work) = (self.bytes(), self.work());
+        // How to raise a budget to `v`, unless no value of the flag is that large.
+        let raise = |flag: &str, value: &str, v: u128, why: &str| {
+            if v > u128::from(u64::MAX) {
+                format!("no {flag} can be that large")
+            } else {
+                format!(
+                    "raise it with {flag} {value} (e.g. {flag} {}){why}",
+                    suggest(v)
+                )
+            }
+        };
         let mut over = Vec::new();
         if bytes > u128::from(budget.max_memory) {
-            let parts = self.parts(|i| i.bytes, show_bytes);
             over.push(format!(
-                "needs about {} of memory ({parts}), above the memory budget of {}; raise it \
-                 with --max-memory BYTES (e.g. --max-memory {}) if the machine has the memory",
+                "needs about {} of memory ({}), above the memory budget of {}; {}",
                 show_bytes(bytes),
+                self.parts(|i| i.bytes, show_bytes),
                 show_bytes(u128::from(budget.max_memory)),
-                suggest(bytes)
+                raise(
+                    "--max-memory",
+                    "BYTES",
+                    bytes,
+                    " if the machine has the memory"
+                )
             ));
         }
         if work > u128::from(budget.max_work) {
-            let parts = self.parts(|i| i.work, show_work);
             over.push(format!(
-                "needs about {} texel operations ({parts}), above the work budget of {} (32G is \
-                 about 15 s of one core); raise it with --max-work N (e.g. --max-work {})",
+                "needs about {} texel operations ({}), above the work budget of {} (32G is \
+                 about 15 s of one core); {}",
                 show_work(work),
+                self.parts(|i| i.work, show_work),
                 show_work(u128::from(budget.max_work)),
-                suggest(work)
+                raise("--max-work", "N", work, "")
             ));
         }
         if over.is_empty() {
@@ -505,6 +520,7 @@ mod tests {
         assert_eq!(suggest((1 << 30) + 1), "2G");
         assert_eq!(suggest(1000), "1000");
         assert_eq!(suggest(5000), "5K");
+        assert_eq!(suggest(u128::from(u64::MAX)), "16777216T");
     }
 
     #[test]
@@ -544,6 +560,16 @@ mod tests {
         };
         let msg = e.check(&memory_only).unwrap_err();
         assert!(msg.contains("--max-memory") && !msg.contains("--max-work"));
+        // A need no flag can express (a saturated size) says so.
+        let mut huge = Estimate::new("huge");
+        huge.push(Item {
+            what: "ripmap".to_string(),
+            bytes: u128::MAX,
+            work: 1,
+        });
+        let msg = huge.check(&Budget::default()).unwrap_err();
+        assert!(msg.contains("more than 2^64 bytes"), "{msg}");
+        assert!(msg.contains("no --max-memory can be that large"), "{msg}");
     }
 
     #[test]
