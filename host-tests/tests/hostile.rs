@@ -3428,3 +3428,32 @@ fn finding_corrupt_storage_too_wide() {
     let failures = corrupt_lent_layouts(false);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// `Layout::corner` (and `quad`, `cell_corners`) on the flat table, far outside `[0, w] x [0, h]`:
+/// the tiled and modular layouts document "corners outside read nothing and give 0", `Sat`'s
+/// reader says "an index outside would read as zero", and no public function may panic. The
+/// flat table's index `((y - 1) w + (x - 1)) C` overflows instead: a panic in debug; in release
+/// it wraps, and `x = 2^63 + 1` with two channels reads entry 0, `S(1, 1)`, not 0.
+#[test]
+#[ignore = "finding: Layout::corner/quad/cell_corners on Sat overflow for x or y near usize::MAX (debug panic, release wrong value)"]
+fn finding_flat_layout_corner_far_outside() {
+    use texsat::Layout;
+    let t = [1u8, 2, 3, 4, 5, 6];
+    let tex = Texture::<u8, 2>::new(&t, 3, 1).expect("tex");
+    let mut st = [0u32; 6];
+    let sat = Sat::build(&tex, &mut st).expect("sat");
+    let zero = [[0u32; 2]; 4];
+    for (x, y) in [
+        ((1usize << 63) + 1, 1usize),
+        (usize::MAX, 1),
+        (1, usize::MAX),
+        (usize::MAX, usize::MAX),
+    ] {
+        let corner = catch_unwind(|| Layout::corner(&sat, x, y, &mut NoCount));
+        assert_eq!(corner.ok(), Some([0, 0]), "corner({x}, {y})");
+        let quad = catch_unwind(|| Layout::quad(&sat, x, x, y, y, &mut NoCount));
+        assert_eq!(quad.ok(), Some(zero), "quad({x}, {y})");
+        let cell = catch_unwind(|| Layout::cell_corners(&sat, x, y, &mut NoCount));
+        assert_eq!(cell.ok(), Some(zero), "cell_corners({x}, {y})");
+    }
+}
