@@ -8,6 +8,7 @@
 //! sat plan --size WxH --texel-bits B --box MIN..MAX [--edge MODE] [--frac-bits F] ...
 //!                                                         the smallest table for a scene, as JSON
 //! sat query IMAGE --plan FILE                             box queries with exactly that plan
+//! sat vectors (--scene NAME | --image FILE) --out DIR ...  golden vectors for an RTL test bench
 //! sat demo                                                a guided tour on a generated texture
 //! ```
 //!
@@ -37,6 +38,8 @@ mod load;
 mod num;
 #[path = "sat/scene.rs"]
 mod scene;
+#[path = "sat/vectors.rs"]
+mod vectors;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use filter::{FilterArg, FilterQuery, ImageTexel};
@@ -124,6 +127,10 @@ enum Command {
     /// facts, with costs and the rejected candidates) as one JSON object.
     #[command(after_long_help = RESOURCES_HELP)]
     Plan(scene::PlanArgs),
+    /// Write golden vectors for a hardware test bench: stimulus, bit-exact expected sums and
+    /// means with their costs, and the table memory image (hex for $readmemh, or JSON).
+    #[command(after_long_help = vectors::VECTORS_HELP)]
+    Vectors(vectors::VectorsArgs),
     /// Build the table of a generated 256 x 256 texture and walk through sizes, lookups and costs.
     #[command(after_long_help = RESOURCES_HELP)]
     Demo,
@@ -393,6 +400,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info(&args, &budget),
         Command::Query(args) => query(&args, &budget),
         Command::Plan(args) => scene::run(&args),
+        Command::Vectors(args) => vectors::run(&args, &budget),
         Command::Demo => demo::run(&budget),
     };
     match result {
