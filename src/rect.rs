@@ -1,4 +1,12 @@
 //! Boxes and their corner coordinates.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::error::Error;
 use fixed::traits::Fixed;
@@ -60,7 +68,7 @@ impl<X: Fixed> Rect<X> {
 
     /// [`Rect::from_f64`] for `f32` corners.
     pub fn from_f32(x0: f32, y0: f32, x1: f32, y1: f32) -> Result<Self, Error> {
-        Self::from_f64(x0 as f64, y0 as f64, x1 as f64, y1 as f64)
+        Self::from_f64(f64::from(x0), f64::from(y0), f64::from(x1), f64::from(y1))
     }
 }
 

@@ -1,4 +1,12 @@
 //! A borrowed view of a texture: texels in rows, `C` interleaved channels, any row stride.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::error::Error;
 use crate::texel::Texel;
@@ -59,8 +67,13 @@ impl<'a, T: Texel, const C: usize> Texture<'a, T, C> {
                 needed: row,
             });
         }
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "check_dimensions above: height >= 1"
+        )]
+        let last_row = height - 1;
         let needed = stride
-            .checked_mul(height - 1)
+            .checked_mul(last_row)
             .and_then(|v| v.checked_add(row))
             .ok_or(Error::TextureDataTooShort {
                 needed: usize::MAX,
@@ -95,7 +108,15 @@ impl<'a, T: Texel, const C: usize> Texture<'a, T, C> {
         if y >= self.height {
             return None;
         }
-        let start = y * self.stride;
-        self.data.get(start..start + self.width * C)
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "y < height and width * C <= stride, so start + width * C <= stride * (height - 1) + width * C, \
+                      which with_stride computed with checked arithmetic (and found <= data.len())"
+        )]
+        let (start, end) = {
+            let start = y * self.stride;
+            (start, start + self.width * C)
+        };
+        self.data.get(start..end)
     }
 }
