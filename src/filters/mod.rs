@@ -79,6 +79,45 @@ pub mod tent;
 #[cfg_attr(docsrs, doc(cfg(feature = "filter-variance")))]
 pub mod variance;
 
+/// `n * channels` as the `u32` a [`crate::Counter`] takes: a per-channel cost, or the bits of a
+/// read of all channels (`n = T::BITS`). Meant for a `const` block at the use
+/// (`const { per_channel(T::BITS, C) }`): the count is then a constant of the compiled sampler
+/// (no run-time work), and a channel count whose product does not fit `u32` (more than `2^27`
+/// channels of 16-bit texels) stops the build instead of wrapping the count.
+#[cfg(feature = "filter-point")]
+#[allow(
+    clippy::panic,
+    reason = "evaluated in const blocks only: a product past u32 is a compile error, not a run-time panic"
+)]
+pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
+    if channels > MAX_COUNT_CHANNELS {
+        panic!("more channels than a u32 cost count holds");
+    }
+    #[allow(
+        clippy::as_conversions,
+        reason = "channels <= u32::MAX (checked above): lossless (u32::try_from is not const)"
+    )]
+    let c = channels as u32;
+    match n.checked_mul(c) {
+        Some(v) => v,
+        None => panic!("a per-channel cost count past u32"),
+    }
+}
+
+/// `u32::MAX` as a `usize` (saturated at `usize::MAX` on a 16-bit target): the most channels
+/// [`per_channel`] converts.
+#[cfg(feature = "filter-point")]
+const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize is wider than u32 in this branch: lossless"
+    )]
+    let m = u32::MAX as usize;
+    m
+} else {
+    usize::MAX
+};
+
 /// Fractional bits of every filter's output value.
 pub const OUT_FRAC_BITS: u32 = 16;
 
@@ -93,8 +132,14 @@ pub struct Sample<const C: usize> {
 impl<const C: usize> Sample<C> {
     /// Channel `c` as `f64` texel units (host-side convenience; `None` past the channels).
     pub fn value_f64(&self, c: usize) -> Option<f64> {
-        self.values
-            .get(c)
-            .map(|&v| v as f64 / (1u64 << OUT_FRAC_BITS) as f64)
+        self.values.get(c).map(|&v| {
+            #[allow(
+                clippy::as_conversions,
+                reason = "u64 -> f64 has no From: rounds to nearest above 2^53, which this \
+                              host-side convenience accepts"
+            )]
+            let v = v as f64;
+            v / f64::from(1u32 << OUT_FRAC_BITS)
+        })
     }
 }

@@ -17,11 +17,19 @@
 //! zero border): the cost is constant, as in the survey's table.
 //!
 //! **Output.** Exact: channel value `v` is returned as `v << OUT_FRAC_BITS`.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::Error;
-use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::filters::{per_channel, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
@@ -64,8 +72,8 @@ pub fn point_raw<T: Texel, const C: usize, M: EdgeMode, K: Counter>(
     }
     let ix = centre_index(x0, x1, f);
     let iy = centre_index(y0, y1, f);
-    k.reads(1, T::BITS * C as u32);
-    k.words((T::BITS * C as u32).div_ceil(32));
+    k.reads(1, const { per_channel(T::BITS, C) });
+    k.words(const { per_channel(T::BITS, C).div_ceil(32) });
     let mut values = [0u64; C];
     if let (Some(x), Some(y)) = (
         mode.kind().texel_index(ix, texture.width()),
@@ -75,7 +83,7 @@ pub fn point_raw<T: Texel, const C: usize, M: EdgeMode, K: Counter>(
         let at = x.wrapping_mul(C);
         if let Some(px) = texture.row(y).and_then(|r| r.get(at..at.wrapping_add(C))) {
             for (v, t) in values.iter_mut().zip(px) {
-                *v = (t.to_u16() as u64) << OUT_FRAC_BITS;
+                *v = u64::from(t.to_u16()) << OUT_FRAC_BITS;
             }
         }
     }
@@ -87,11 +95,24 @@ pub fn point_raw<T: Texel, const C: usize, M: EdgeMode, K: Counter>(
 /// integers), the inner floor exact in `i64`.
 #[inline(always)]
 fn centre_index(lo: i64, hi: i64, f: u32) -> i64 {
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "lo >> 1 and hi >> 1 lie in [-2^62, 2^62 - 1]: their sum in [-2^63, 2^63 - 2], \
+                  plus 0 or 1, stays in i64"
+    )]
     let mid = (lo >> 1) + (hi >> 1) + (lo & hi & 1);
     mid >> f.min(63)
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;
