@@ -10,6 +10,14 @@
 //!
 //! On 64-bit hosts (outside this module's tests) they are the native operations: there `u64 /
 //! u64` is one instruction.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 /// `(n / d, n % d)` for a 64-bit `n` and a 32-bit `d` whose quotient fits 32 bits
 /// (`n >> 32 < d`); `None` otherwise (and for `d = 0`).
@@ -27,6 +35,15 @@
 /// random tests at every normalization shift (tests below).
 #[cfg(any(not(target_pointer_width = "64"), test))]
 #[inline]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "one proof, Knuth's Algorithm D with b = 2^16 (Theorem B), covers the function, step by \
+              step in the comments: n << s loses no bit (n >> 32 < d < 2^(32 - s)); the two casts take \
+              the high and low 32-bit words; q <= hi / vn1 so hi - q vn1 >= 0; q < B and rhat < B where \
+              q vn0 and rhat << 16 are formed (no wrap); q is decremented only while it is too large \
+              (q >= 1), rhat + vn1 < 2^17; digits q1, q0 < 2^16, so q1 << 16 | q0 loses nothing"
+)]
 pub(crate) fn div_u64_by_u32(n: u64, d: u32) -> Option<(u32, u32)> {
     const B: u32 = 1 << 16;
     if d == 0 || (n >> 32) >= u64::from(d) {
@@ -90,6 +107,13 @@ pub(crate) fn divrem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
 /// [`divrem_u64`] as a 32-bit core computes it (also compiled on hosts for the tests).
 #[cfg(any(not(target_pointer_width = "64"), test))]
 #[inline]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "one proof covers the function: the cast takes the high 32-bit word (n >> 32 < 2^32); \
+              lz(d) - lz(n) >= 0 as n >= d; d << i loses no bit (i <= lz(d) - lz(n) <= lz(d)) and \
+              1 << i has i <= 31 (d >= 2^32); r -= step only when r >= step; i -= 1 only when i > 0"
+)]
 fn divrem_u64_narrow(n: u64, d: u64) -> Option<(u64, u64)> {
     if let Ok(d32) = u32::try_from(d) {
         let d32 = core::num::NonZeroU32::new(d32)?;
@@ -127,20 +151,36 @@ pub(crate) fn div_euclid_i64(x: i64, p: i64) -> Option<(i64, i64)> {
     if p <= 0 {
         return None;
     }
-    let (q, r) = divrem_u64(x.unsigned_abs(), p as u64)?;
+    // p > 0: the bit pattern is the value.
+    let (q, r) = divrem_u64(x.unsigned_abs(), p.cast_unsigned())?;
     // |x| <= 2^63 and p >= 1: q <= 2^63, r < p; both fit i64 except q = 2^63 for x = i64::MIN,
-    // p = 1, where -q is i64::MIN itself.
-    let (q, r) = (q as i64, r as i64);
+    // p = 1, where -q is i64::MIN itself (the reinterpretation gives i64::MIN, and its wrapping
+    // negation is i64::MIN again).
+    let (q, r) = (q.cast_signed(), r.cast_signed());
     Some(if x >= 0 {
         (q, r)
     } else if r == 0 {
         (q.wrapping_neg(), 0)
     } else {
-        (q.wrapping_neg().wrapping_sub(1), p - r)
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "0 < r < p: p - r is in (0, p)"
+        )]
+        let rest = p - r;
+        (q.wrapping_neg().wrapping_sub(1), rest)
     })
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests {
     use super::*;
 
@@ -204,7 +244,7 @@ mod tests {
             s
         };
         let check = |n: u64, d: u64| {
-            let want = if d == 0 { None } else { Some((n / d, n % d)) };
+            let want = n.checked_div(d).zip(n.checked_rem(d));
             assert_eq!(divrem_u64_narrow(n, d), want, "{n} / {d}");
         };
         for n in 0..300u64 {

@@ -4,6 +4,14 @@
 //! table stores per channel (`u16`, `u32`, `u64`); each entry type names a signed accumulator
 //! ([`Entry::Acc`]) exactly as wide as the width analysis needs: `i32` for `u16`, `i64` for
 //! `u32`, and `i128` only for `u64` entries.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use core::ops::{Add, Mul, Shl, Sub};
 
@@ -23,11 +31,11 @@ impl Texel for u8 {
     const BITS: u32 = 8;
     #[inline(always)]
     fn to_u16(self) -> u16 {
-        self as u16
+        u16::from(self)
     }
     #[inline(always)]
     fn from_u16_clamped(v: u16) -> Self {
-        v.min(u8::MAX as u16) as u8
+        u8::try_from(v).unwrap_or(u8::MAX)
     }
 }
 
@@ -92,16 +100,19 @@ macro_rules! impl_acc {
             const ZERO: Self = 0;
             type Wide = $wide;
             #[inline(always)]
+            #[allow(
+                clippy::as_conversions,
+                reason = "v <= 2^24 by the trait's contract (a fraction numerator, F <= MAX_FRAC_BITS \
+                          = 24), which i32 holds; lossless into i64 and i128"
+            )]
             fn from_u32(v: u32) -> Self {
                 v as $t
             }
             #[inline(always)]
             fn to_wide(self) -> Option<$wide> {
-                if self < 0 {
-                    None
-                } else {
-                    Some(self as $wide)
-                }
+                // `None` exactly when negative; a non-negative value always fits the unsigned
+                // word of the same or twice the width.
+                <$wide>::try_from(self).ok()
             }
             #[inline(always)]
             fn wrapping_add(self, o: Self) -> Self {
@@ -120,6 +131,11 @@ macro_rules! impl_acc {
                 <$t>::wrapping_shl(self, s)
             }
             #[inline(always)]
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "BITS - 1: BITS >= 32; (1 << k) - 1: k < BITS - 1, so 1 << k is positive and \
+                          in range and subtracting 1 leaves it >= 0"
+            )]
             fn low_bits(self, k: u32) -> Self {
                 if k >= <$t>::BITS - 1 {
                     self
@@ -197,6 +213,10 @@ macro_rules! impl_entry {
                 <$t>::checked_sub(self, other)
             }
             #[inline(always)]
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "texel_bits < BITS here, so 1 << texel_bits is in range and >= 1"
+            )]
             fn max_texel(texel_bits: u32) -> Self {
                 if texel_bits >= <$t>::BITS {
                     <$t>::MAX
@@ -206,19 +226,23 @@ macro_rules! impl_entry {
             }
             #[inline(always)]
             fn to_acc(self) -> $acc {
-                self as $acc
+                <$acc>::from(self)
             }
             #[inline(always)]
             fn to_u128(self) -> u128 {
-                self as u128
+                u128::from(self)
             }
             #[inline(always)]
+            #[allow(
+                clippy::as_conversions,
+                reason = "truncation to the low BITS bits is this function's documented purpose"
+            )]
             fn from_u64_truncating(v: u64) -> Self {
                 v as $t
             }
             #[inline(always)]
             fn to_u64(self) -> u64 {
-                self as u64
+                u64::from(self)
             }
             #[inline(always)]
             fn wrapping_sub(self, o: Self) -> Self {
@@ -229,6 +253,10 @@ macro_rules! impl_entry {
                 <$t>::wrapping_add(self, o)
             }
             #[inline(always)]
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "k < BITS here, so 1 << k is in range and >= 1"
+            )]
             fn low_bits(self, k: u32) -> Self {
                 if k >= <$t>::BITS {
                     self
