@@ -105,6 +105,14 @@
 //! match the bilinear variant's counts. Reads that `Border` resolves to zero outside a level
 //! fetch nothing and are not counted; clamped probes (`hi == lo` at the top level) are fetched
 //! and counted, so the cost is constant per sample as in the survey.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
@@ -115,7 +123,7 @@ use crate::filters::pyramid::{
     axis_total, check_build, check_dims, check_storage, fill_box_level, floor_sample,
     footprint_raw, lerp, level_len, level_split, prefix, truncate, LevelView,
 };
-use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
+use crate::filters::{per_channel, pyramid, u64_from_usize, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
@@ -132,15 +140,21 @@ pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
 /// The arithmetic error bound of both variants in output units:
 /// `|out - 2^16 * exact| < 2^(texel_bits + 1)` (module docs). `exact` is the same filter in real
 /// arithmetic on the stored levels with the same fixed-point level positions.
+///
+/// For texel widths whose bound does not fit `u64` (63 bits and more; every [`Texel`] has at
+/// most 16) the result is `u64::MAX`: the bound never shrinks as the width grows.
 pub const fn arithmetic_error_bound(texel_bits: u32) -> u64 {
-    1u64 << (texel_bits + 1)
+    pyramid::pow2_or_max(texel_bits.saturating_add(1))
 }
 
 /// The extra error of [`DipFilter::Trilinear`], in output units, of the fixed-point level
 /// positions against the exact `log2`: less than `m 2^(1 - LEVEL_FRAC_BITS) * 2^16`,
 /// `m = 2^texel_bits - 1` (module docs). [`DipFilter::Bilinear`] has no such bound.
+///
+/// `u64::MAX` where the bound does not fit `u64` (texel widths of more than 59 bits; every
+/// [`Texel`] has at most 16): the bound never shrinks as the width grows.
 pub const fn level_selection_error_bound(texel_bits: u32) -> u64 {
-    ((1u64 << texel_bits) - 1) << (OUT_FRAC_BITS + 1 - LEVEL_FRAC_BITS)
+    pyramid::mask_shl_or_max(texel_bits, OUT_FRAC_BITS + 1 - LEVEL_FRAC_BITS)
 }
 
 /// Which of the two pyramids.
@@ -334,8 +348,11 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
 
     /// Bits stored: `storage_len() * T::BITS`; against the texture's `w * h * C * T::BITS` this
     /// is the paper's "three times" (module docs).
+    ///
+    /// Saturates at `u64::MAX`, which only a storage of `2^61` bytes of `u8` or `u16` texels
+    /// could reach.
     pub fn storage_bits(&self) -> u64 {
-        self.data.len() as u64 * T::BITS as u64
+        u64_from_usize(self.data.len()).saturating_mul(u64::from(T::BITS))
     }
 
     /// Filters the footprint bounded by `rect` (module docs): a sample of the column pyramid at
@@ -371,14 +388,28 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let fp = footprint_raw(rect, frac_bits)?;
-        let top_x = self.levels(DipPyramid::Column).saturating_sub(1) as u32;
-        let top_y = self.levels(DipPyramid::Row).saturating_sub(1) as u32;
+        #[allow(
+            clippy::as_conversions,
+            reason = "at most MAX_LEVELS = 32 levels per pyramid (prefix's capacity is 33): lossless"
+        )]
+        let (top_x, top_y) = (
+            self.levels(DipPyramid::Column).saturating_sub(1) as u32,
+            self.levels(DipPyramid::Row).saturating_sub(1) as u32,
+        );
         let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, top_x);
         let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, top_y);
+        #[allow(
+            clippy::as_conversions,
+            reason = "l <= top_x or top_y < 32 (level_split): lossless"
+        )]
         let column = |l: u32, k: &mut K| {
             self.view(DipPyramid::Column, l as usize)
                 .bilinear(mode, &fp, l, 0, WEIGHT_BITS, k)
         };
+        #[allow(
+            clippy::as_conversions,
+            reason = "l <= top_x or top_y < 32 (level_split): lossless"
+        )]
         let row = |l: u32, k: &mut K| {
             self.view(DipPyramid::Row, l as usize)
                 .bilinear(mode, &fp, 0, l, WEIGHT_BITS, k)
@@ -399,16 +430,25 @@ impl<'a, T: Texel, const C: usize> DipMap<'a, T, C> {
             }
         };
         // The average (a + b) / 2: one add and a shift.
-        k.adds(C as u32);
+        k.adds(const { per_channel(1, C) });
         // Both below 2^(16 + 32) (bilinear) or 2^(16 + 16 + 12) (trilinear): no wrap.
-        Ok(floor_sample(
-            core::array::from_fn(|c| a[c].wrapping_add(b[c])),
-            shift,
-        ))
+        let mut sum = a;
+        for (s, b) in sum.iter_mut().zip(b) {
+            *s = s.wrapping_add(b);
+        }
+        Ok(floor_sample(sum, shift))
     }
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;
@@ -418,6 +458,25 @@ mod tests {
     use fixed::types::{I24F8, I40F24, I56F8, I64F0};
     use std::vec;
     use std::vec::Vec;
+
+    /// The error bounds are the documented values wherever they fit `u64` and `u64::MAX`
+    /// past that: no panic, no wrap, never smaller for a wider texel.
+    #[test]
+    fn error_bounds_saturate_and_never_shrink() {
+        let want = |exact: Option<u128>| match exact {
+            Some(v) if v <= u64::MAX as u128 => v as u64,
+            _ => u64::MAX,
+        };
+        let mut prev = (0u64, 0u64);
+        for b in (0..=130u32).chain([u32::MAX - 1, u32::MAX]) {
+            let arith = (b < 127).then(|| 1u128 << (b + 1));
+            let level = (b < 128 - 5).then(|| ((1u128 << b) - 1) << 5);
+            let got = (arithmetic_error_bound(b), level_selection_error_bound(b));
+            assert_eq!(got, (want(arith), want(level)), "{b}");
+            assert!(got.0 >= prev.0 && got.1 >= prev.1, "{b}");
+            prev = got;
+        }
+    }
 
     fn lcg(seed: &mut u64) -> u64 {
         *seed = seed

@@ -1,5 +1,13 @@
 //! Level and footprint math in fixed point: `log2` from the leading zeros plus fraction bits by
 //! repeated squaring, no floats, no integer wider than 64 bits.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 /// `log2(raw / 2^f)` as a fixed-point number with `out_frac` fractional bits (`out_frac <= 16`),
 /// or `None` for `raw == 0` (and for `out_frac > 16` or `f > 63`).
@@ -35,12 +43,22 @@
 /// proves that no bit disagreed.
 #[inline]
 pub fn log2_fixed(raw: u64, f: u32, out_frac: u32) -> Option<i32> {
-    if raw == 0 || out_frac > 16 || f > 63 {
+    if out_frac > 16 || f > 63 {
         return None;
     }
-    let e = 63 - raw.leading_zeros(); // raw in [2^e, 2^(e+1))
-    let int_part = e as i32 - f as i32;
+    let e = raw.checked_ilog2()?; // raw in [2^e, 2^(e+1)); None for raw == 0
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "e, f <= 63: the difference is in [-63, 63]"
+    )]
+    let int_part = e.cast_signed() - f.cast_signed();
     // Q1.31: the top 32 significant bits of raw, in [2^31, 2^32).
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "each subtraction is guarded by its branch (e <= 63); raw in [2^e, 2^(e+1)) \
+                  shifted to [2^31, 2^32) fits u32"
+    )]
     let mut m = (if e >= 31 {
         raw >> (e - 31)
     } else {
@@ -53,20 +71,35 @@ pub fn log2_fixed(raw: u64, f: u32, out_frac: u32) -> Option<i32> {
         // below 2^32. (The same truncations as squaring to Q1.31 in `u64` and halving: both
         // are `floor(p / 2^32)` and `floor(p / 2^31)`.) All in 32-bit words: the high word's
         // top bit decides.
+        #[allow(clippy::arithmetic_side_effects, reason = "m < 2^32: m^2 < 2^64")]
         let p = u64::from(m) * u64::from(m);
+        #[allow(clippy::as_conversions, reason = "p >> 32 < 2^32: lossless")]
         let hi = (p >> 32) as u32;
         if hi >> 31 != 0 {
             frac = (frac << 1) | 1;
             m = hi;
         } else {
             frac <<= 1;
-            m = (p >> 31) as u32;
+            #[allow(
+                clippy::as_conversions,
+                reason = "the high word's top bit is clear: p < 2^63, so p >> 31 < 2^32"
+            )]
+            let low = (p >> 31) as u32;
+            m = low;
         }
     }
     if u64::from(m) >= FALLBACK_FROM {
-        frac = frac_q63(raw << (63 - e), out_frac);
+        #[allow(clippy::arithmetic_side_effects, reason = "e <= 63")]
+        let mantissa = raw << (63 - e);
+        frac = frac_q63(mantissa, out_frac);
     }
-    Some((int_part << out_frac) + frac)
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "|int_part| <= 63 and out_frac <= 16: |int_part << out_frac| < 2^22, and \
+                  0 <= frac < 2^16"
+    )]
+    let log = (int_part << out_frac) + frac;
+    Some(log)
 }
 
 /// Final Q1.31 mantissas from `2^32 (1 - 2^-13)` up may hide a bit the Q1.63 squaring sets
@@ -83,9 +116,9 @@ fn frac_q63(mut m: u64, out_frac: u32) -> i32 {
     for _ in 0..out_frac {
         let (hi, lo) = square_u64(m);
         // (m^2) >> 63 has 65 bits: hi << 1 | lo >> 63. Its top bit is hi's top bit.
-        let bit = (hi >> 63) as u32;
-        frac = (frac << 1) | bit as i32;
-        m = if bit == 1 { hi } else { (hi << 1) | (lo >> 63) };
+        let bit = hi >> 63 != 0;
+        frac = (frac << 1) | i32::from(bit);
+        m = if bit { hi } else { (hi << 1) | (lo >> 63) };
     }
     frac
 }
@@ -94,16 +127,27 @@ fn frac_q63(mut m: u64, out_frac: u32) -> i32 {
 #[inline(always)]
 fn square_u64(m: u64) -> (u64, u64) {
     let (mh, ml) = (m >> 32, m & 0xFFFF_FFFF);
-    let hh = mh * mh;
-    let hl = mh * ml; // counted twice: 2 hl 2^32 = (hl >> 31) 2^64 + (hl << 33)
-    let ll = ml * ml;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "mh, ml < 2^32: each product < 2^64"
+    )]
+    let (hh, hl, ll) = (mh * mh, mh * ml, ml * ml);
+    // hl is counted twice: 2 hl 2^32 = (hl >> 31) 2^64 + (hl << 33).
     let (lo, carry) = ll.overflowing_add(hl << 33);
     // m^2 < 2^128: the high word cannot overflow.
-    let hi = hh.wrapping_add(hl >> 31).wrapping_add(carry as u64);
+    let hi = hh.wrapping_add(hl >> 31).wrapping_add(u64::from(carry));
     (hi, lo)
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     use super::*;
 

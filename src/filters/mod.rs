@@ -55,7 +55,7 @@ pub mod level;
 #[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
 pub(crate) mod pyramid;
 
-#[cfg(feature = "filter-point")]
+#[cfg(any(feature = "filter-point", feature = "filter-dip"))]
 #[cfg_attr(docsrs, doc(cfg(feature = "filter-point")))]
 pub mod point;
 
@@ -84,7 +84,7 @@ pub mod variance;
 /// (`const { per_channel(T::BITS, C) }`): the count is then a constant of the compiled sampler
 /// (no run-time work), and a channel count whose product does not fit `u32` (more than `2^27`
 /// channels of 16-bit texels) stops the build instead of wrapping the count.
-#[cfg(feature = "filter-point")]
+#[cfg(any(feature = "filter-point", feature = "filter-dip"))]
 #[allow(
     clippy::panic,
     reason = "evaluated in const blocks only: a product past u32 is a compile error, not a run-time panic"
@@ -106,7 +106,7 @@ pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
 
 /// `u32::MAX` as a `usize` (saturated at `usize::MAX` on a 16-bit target): the most channels
 /// [`per_channel`] converts.
-#[cfg(feature = "filter-point")]
+#[cfg(any(feature = "filter-point", feature = "filter-dip"))]
 const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
     #[allow(
         clippy::as_conversions,
@@ -117,6 +117,20 @@ const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
 } else {
     usize::MAX
 };
+
+/// `n` as a `u64`: lossless, as `usize` is at most 64 bits wide (asserted at compile time
+/// below); `From` does not exist for it and is not `const`.
+#[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
+#[inline(always)]
+pub(crate) const fn u64_from_usize(n: usize) -> u64 {
+    const _: () = assert!(usize::BITS <= u64::BITS);
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize::BITS <= 64 (asserted above): lossless"
+    )]
+    let v = n as u64;
+    v
+}
 
 /// Fractional bits of every filter's output value.
 pub const OUT_FRAC_BITS: u32 = 16;

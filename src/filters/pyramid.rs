@@ -361,6 +361,30 @@ pub(crate) fn axis_total(n: usize) -> usize {
     t
 }
 
+/// `2^e`, or `u64::MAX` for `e >= 64`, where it does not fit: the rip and dip maps' error
+/// bounds, which must only grow with the texel width.
+#[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
+pub(crate) const fn pow2_or_max(e: u32) -> u64 {
+    match 1u64.checked_shl(e) {
+        Some(v) => v,
+        None => u64::MAX,
+    }
+}
+
+/// `(2^bits - 1) 2^s`, or `u64::MAX` where it does not fit `u64` (`bits + s > 64`, `bits > 0`).
+#[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
+pub(crate) const fn mask_shl_or_max(bits: u32, s: u32) -> u64 {
+    let m = match 1u64.checked_shl(bits) {
+        #[allow(clippy::arithmetic_side_effects, reason = "p = 2^bits >= 1")]
+        Some(p) => p - 1,
+        None => u64::MAX,
+    };
+    match u64::MAX.checked_shr(s) {
+        Some(room) if m <= room => m << s,
+        _ => u64::MAX,
+    }
+}
+
 /// Refuses storage shorter than `needed`: [`Error::StorageTooSmall`].
 #[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
 pub(crate) fn check_storage(needed: usize, got: usize) -> Result<(), Error> {

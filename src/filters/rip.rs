@@ -81,6 +81,14 @@
 //! (the arithmetic is). The probe of a clamped level (`hi == lo` at the top, or `f = 0`) is still
 //! fetched and counted: the cost is per sample, constant, as in the survey. The weight and level
 //! computations (shifts, masks, the `log2`) belong to the address unit and are not counted.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
@@ -91,7 +99,7 @@ use crate::filters::pyramid::{
     axis_total, check_build, check_dims, check_storage, fill_box_level, floor_sample,
     footprint_raw, lerp, level_len, level_split, prefix, truncate, LevelView,
 };
-use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
+use crate::filters::{pyramid, u64_from_usize, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
@@ -108,15 +116,21 @@ pub const MAX_LEVELS: usize = pyramid::MAX_LEVELS;
 /// The arithmetic error bound in output units: `|out - 2^16 * exact| < 2^(texel_bits + 1)`
 /// (module docs, "Arithmetic and error bound"). `exact` is the same filter in real arithmetic
 /// on the stored levels with the same fixed-point level positions.
+///
+/// For texel widths whose bound does not fit `u64` (63 bits and more; every [`Texel`] has at
+/// most 16) the result is `u64::MAX`: the bound never shrinks as the width grows.
 pub const fn arithmetic_error_bound(texel_bits: u32) -> u64 {
-    1u64 << (texel_bits + 1)
+    pyramid::pow2_or_max(texel_bits.saturating_add(1))
 }
 
 /// The extra error, in output units, of the fixed-point level positions against the exact
 /// `log2`: less than `m * 2^(2 - LEVEL_FRAC_BITS) * 2^16` with `m = 2^texel_bits - 1` (module
 /// docs); that is exactly `m << (OUT_FRAC_BITS + 2 - LEVEL_FRAC_BITS)`.
+///
+/// `u64::MAX` where the bound does not fit `u64` (texel widths of more than 58 bits; every
+/// [`Texel`] has at most 16): the bound never shrinks as the width grows.
 pub const fn level_selection_error_bound(texel_bits: u32) -> u64 {
-    ((1u64 << texel_bits) - 1) << (OUT_FRAC_BITS + 2 - LEVEL_FRAC_BITS)
+    pyramid::mask_shl_or_max(texel_bits, OUT_FRAC_BITS + 2 - LEVEL_FRAC_BITS)
 }
 
 /// A ripmap over caller storage: every level `(lx, ly)` of the 4-D pyramid (module docs).
@@ -267,8 +281,11 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
 
     /// Bits stored: `storage_len() * T::BITS`. The texture itself is `w * h * C * T::BITS`; the
     /// ratio is the survey's "memory" column (4 for large powers of two).
+    ///
+    /// Saturates at `u64::MAX`, which only a storage of `2^61` bytes of `u8` or `u16` texels
+    /// could reach.
     pub fn storage_bits(&self) -> u64 {
-        self.data.len() as u64 * T::BITS as u64
+        u64_from_usize(self.data.len()).saturating_mul(u64::from(T::BITS))
     }
 
     /// Filters the footprint bounded by `rect` (module docs): 4 bilinear probes at its centre in
@@ -302,12 +319,22 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let fp = footprint_raw(rect, frac_bits)?;
-        let top_x = self.levels_x().saturating_sub(1) as u32;
-        let top_y = self.levels_y().saturating_sub(1) as u32;
+        #[allow(
+            clippy::as_conversions,
+            reason = "at most MAX_LEVELS = 32 levels per axis (prefix's capacity is 33): lossless"
+        )]
+        let (top_x, top_y) = (
+            self.levels_x().saturating_sub(1) as u32,
+            self.levels_y().saturating_sub(1) as u32,
+        );
         let (lox, hix, fx) = level_split(fp.w, fp.f, LEVEL_FRAC_BITS, top_x);
         let (loy, hiy, fy) = level_split(fp.h, fp.f, LEVEL_FRAC_BITS, top_y);
         let shift = 2 * WEIGHT_BITS - OUT_FRAC_BITS;
         let probe = |lx: u32, ly: u32, k: &mut K| -> Result<[u64; C], Error> {
+            #[allow(
+                clippy::as_conversions,
+                reason = "lx <= top_x, ly <= top_y < 32 (level_split): lossless"
+            )]
             let level = self.view(lx as usize, ly as usize);
             Ok(truncate(
                 level.bilinear(mode, &fp, lx, ly, WEIGHT_BITS, k)?,
@@ -326,6 +353,14 @@ impl<'a, T: Texel, const C: usize> RipMap<'a, T, C> {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;
@@ -335,6 +370,25 @@ mod tests {
     use fixed::types::{I24F8, I40F24, I48F16, I56F8, I60F4, I64F0};
     use std::vec;
     use std::vec::Vec;
+
+    /// The error bounds are the documented values wherever they fit `u64` and `u64::MAX`
+    /// past that: no panic, no wrap, never smaller for a wider texel.
+    #[test]
+    fn error_bounds_saturate_and_never_shrink() {
+        let want = |exact: Option<u128>| match exact {
+            Some(v) if v <= u64::MAX as u128 => v as u64,
+            _ => u64::MAX,
+        };
+        let mut prev = (0u64, 0u64);
+        for b in (0..=130u32).chain([u32::MAX - 1, u32::MAX]) {
+            let arith = (b < 127).then(|| 1u128 << (b + 1));
+            let level = (b < 128 - 6).then(|| ((1u128 << b) - 1) << 6);
+            let got = (arithmetic_error_bound(b), level_selection_error_bound(b));
+            assert_eq!(got, (want(arith), want(level)), "{b}");
+            assert!(got.0 >= prev.0 && got.1 >= prev.1, "{b}");
+            prev = got;
+        }
+    }
 
     fn lcg(seed: &mut u64) -> u64 {
         *seed = seed
