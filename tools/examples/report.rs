@@ -28,6 +28,8 @@ use texsat_host_tests::stability;
 use texsat_tools::budget::{self, Budget, Estimate, Item};
 use texsat_tools::image_file;
 
+#[path = "report/dof.rs"]
+mod dof;
 #[path = "report/measure.rs"]
 mod measure;
 #[path = "report/methods.rs"]
@@ -66,6 +68,9 @@ struct Args {
     /// Skip the float32 stability study.
     #[arg(long)]
     no_stability: bool,
+    /// Skip the depth-of-field scene (every pixel its own box).
+    #[arg(long)]
+    no_dof: bool,
     /// Memory budget for an image scene, in bytes (suffixes K, M, G, T: powers of 1024).
     #[arg(long, value_name = "BYTES", default_value = "1G", value_parser = budget::parse_amount)]
     max_memory: u64,
@@ -256,6 +261,20 @@ fn main() {
         (rows, curves, t.elapsed().as_secs_f64())
     };
 
+    let dof = if args.no_dof {
+        None
+    } else {
+        bar.set_message("depth of field");
+        match dof::run(size, repeats) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                bar.finish_and_clear();
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+    };
+
     bar.set_message("writing report");
     let run = output::RunInfo {
         command: std::env::args().collect::<Vec<_>>().join(" "),
@@ -283,10 +302,20 @@ fn main() {
     for (scene, r) in scenes.iter().zip(&results) {
         note(plots::render_strip(&args.out, scene, r));
     }
+    if let Some(d) = &dof {
+        note(dof::render(&args.out, d));
+    }
     let total = started.elapsed().as_secs_f64();
-    note(output::write_markdown(
-        &args.out, &run, &results, &stab_rows, &curves, total,
-    ));
+    let md = output::write_markdown(&args.out, &run, &results, &stab_rows, &curves, total);
+    // The depth-of-field section goes at the end of report.md.
+    let md = match (md, &dof) {
+        (Ok(path), Some(d)) => std::fs::read_to_string(&path)
+            .and_then(|text| std::fs::write(&path, format!("{text}\n{}", dof::markdown(d))))
+            .map(|_| path)
+            .map_err(|e| format!("report.md: {e}")),
+        (md, _) => md,
+    };
+    note(md);
     bar.inc(1);
     bar.finish_and_clear();
 

@@ -297,3 +297,63 @@ fn scene_and_method_selection() {
     let bad = run(&["--quick", "--method", "no-such-method"]);
     assert!(!bad.status.success(), "an unknown method is a usage error");
 }
+
+/// The depth-of-field scene: the SAT's box means are exact up to the mean's rounding to 2^-16
+/// (at most 2^-17 in texel units); trilinear mip mapping, which blurs with the level's texels,
+/// is visibly off; the section and its render are in the report, and `--no-dof` leaves them out.
+#[test]
+fn depth_of_field_scene() {
+    let dir = temp_dir("dof");
+    let d = dir.0.to_str().unwrap();
+    let out = run(&["--quick", "--no-stability", "--scene", "noise", "--out", d]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let md = std::fs::read_to_string(dir.0.join("report.md")).expect("report.md");
+    let section = md
+        .split("## Spatially variant blur (depth of field)")
+        .nth(1)
+        .expect("the depth-of-field section");
+    assert!(is_png(&dir.0.join("render_dof.png")));
+    // | method | mean abs error | RMS error | max abs error | reads | muls | adds | ns / sample |
+    let row = |name: &str| -> Vec<String> {
+        section
+            .lines()
+            .find(|l| l.starts_with(&format!("| {name} |")))
+            .unwrap_or_else(|| panic!("row {name}"))
+            .split('|')
+            .map(|c| c.trim().to_string())
+            .filter(|c| !c.is_empty())
+            .collect()
+    };
+    let sat = row("sat16-stable");
+    let max_err: f64 = sat[3].parse().unwrap();
+    assert!(
+        max_err <= 2f64.powi(-17) * 1.0001,
+        "SAT max error {max_err}"
+    );
+    let reads: f64 = sat[4].parse().unwrap();
+    assert!((16.0..=144.0).contains(&reads), "SAT reads {reads}");
+    let tri = row("trilinear");
+    let tri_mean: f64 = tri[1].parse().unwrap();
+    assert!(tri_mean > 0.1, "trilinear mean error {tri_mean}");
+    assert_eq!(tri[4], "8.0", "trilinear reads");
+
+    let dir2 = temp_dir("no-dof");
+    let d2 = dir2.0.to_str().unwrap();
+    let out = run(&[
+        "--quick",
+        "--no-stability",
+        "--no-dof",
+        "--scene",
+        "noise",
+        "--out",
+        d2,
+    ]);
+    assert!(out.status.success());
+    let md = std::fs::read_to_string(dir2.0.join("report.md")).unwrap();
+    assert!(!md.contains("depth of field"));
+    assert!(!dir2.0.join("render_dof.png").exists());
+}
