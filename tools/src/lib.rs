@@ -2,7 +2,9 @@
 //! The package exists so that the tools' dependencies (and the `filters` feature they need) stay
 //! out of the core's own test build. The library holds what the tools share: [`budget`], the
 //! memory and work estimates every command checks before it allocates, and [`image_file`], the
-//! image reading under decoder limits (header first, samples after the budget check).
+//! image reading under decoder limits (header first, samples after the budget check), and
+//! [`cache`], the memory-traffic and texel-cache models of a hardware texture unit.
 
 pub mod budget;
+pub mod cache;
 pub mod image_file;
