@@ -98,6 +98,14 @@
 //! Costs are constant: a tap outside under [`crate::Border`] is still counted as a read (the unit
 //! issues the fetch slot), and at the top level (or when `L` is clamped there) the trilinear still
 //! evaluates both bilinears, reading the top level twice with `t = 0`: always 8 reads.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::{EdgeKind, EdgeMode};
@@ -106,7 +114,7 @@ use crate::filters::pyramid::{
     check_dims, count_reads, fill_box_level, footprint_raw, lerp, level_count, level_len,
     level_position, split_level, split_position, tap_index, Footprint,
 };
-use crate::filters::{pyramid, Sample, OUT_FRAC_BITS};
+use crate::filters::{pyramid, u64_from_usize, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
@@ -131,7 +139,12 @@ pub const fn weight_bits(texel_bits: u32) -> u32 {
     } else {
         texel_bits
     };
-    (64 - LOD_FRAC_BITS - b) / 2
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "1 <= b <= 16 (clamped above): 64 - 8 - b is in [40, 55]"
+    )]
+    let w = (64 - LOD_FRAC_BITS - b) / 2;
+    w
 }
 
 /// The error bound of [`MipPyramid::trilinear`] in texel units against the same filter computed
@@ -140,9 +153,15 @@ pub const fn weight_bits(texel_bits: u32) -> u32 {
 /// the trilinear"). The bound is strict for the weight part; the rounding part `2^-17` is
 /// reached.
 pub fn trilinear_error_bound(texel_bits: u32) -> f64 {
-    let m = ((1u64 << texel_bits.min(16)) - 1) as f64;
-    let w = weight_bits(texel_bits);
-    m / (1u64 << (w - 1)) as f64 + 1.0 / (1u64 << 17) as f64
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "2^min(b, 16) >= 1; weight_bits is in [20, 27] (its clamp), so w - 1 >= 19"
+    )]
+    let (m, half_step) = (
+        f64::from((1u32 << texel_bits.min(16)) - 1),
+        f64::from(1u32 << (weight_bits(texel_bits) - 1)),
+    );
+    m / half_step + 1.0 / f64::from(1u32 << 17)
 }
 
 /// A box-filtered 2x2 pyramid over a borrowed texture: level 0 is the texture, the coarse levels
@@ -286,7 +305,12 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     /// The top level's index (at most 31).
     #[inline(always)]
     fn top(&self) -> u32 {
-        self.sizes.len().saturating_sub(1) as u32
+        #[allow(
+            clippy::as_conversions,
+            reason = "at most MAX_LEVELS = 32 levels (the heapless capacity): lossless"
+        )]
+        let top = self.sizes.len().saturating_sub(1) as u32;
+        top
     }
 
     /// Texel of `level` at extended index `(i, j)` under the mode `kind`, per channel (0 where
@@ -300,7 +324,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         let mut out = [0u64; C];
         if let Some(px) = px {
             for (o, t) in out.iter_mut().zip(px) {
-                *o = t.to_u16() as u64;
+                *o = u64::from(t.to_u16());
             }
         }
         out
@@ -334,11 +358,21 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let (fp, lod) = self.footprint(rect, frac_bits)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "lod <= 31 * 2^8 (level_position clamps to top <= 31): no overflow"
+        )]
         let l = ((lod + (1 << (LOD_FRAC_BITS - 1))) >> LOD_FRAC_BITS).min(self.top());
-        let i = fp.cx.index(fp.f + l);
-        let j = fp.cy.index(fp.f + l);
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "f <= 24 (FracBits) and l <= top <= 31"
+        )]
+        let s = fp.f + l;
+        let (i, j) = (fp.cx.index(s), fp.cy.index(s));
         count_reads::<T, C, K>(1, k);
-        let px = self.tap(mode.kind(), self.level(l as usize), i, j);
+        #[allow(clippy::as_conversions, reason = "l <= top <= 31: lossless")]
+        let level = self.level(l as usize);
+        let px = self.tap(mode.kind(), level, i, j);
         Ok(Sample {
             values: px.map(|v| v << OUT_FRAC_BITS),
         })
@@ -376,13 +410,14 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         let (fp, lod) = self.footprint(rect, frac_bits)?;
         // lod <= top 2^8, so at the top t = 0.
         let (l0, l1, t) = split_level(lod, LOD_FRAC_BITS, self.top());
-        let wb = weight_bits(T::BITS);
+        let wb = const { weight_bits(T::BITS) };
         let v0 = self.bilinear(mode.kind(), l0, &fp, wb, k)?;
         let v1 = self.bilinear(mode.kind(), l1, &fp, wb, k)?;
         // Level lerp: units 2^-(2W + 8), below 2^(B + 2W + 8) <= 2^64 (module docs).
         let v = lerp(v0, v1, t, LOD_FRAC_BITS, k);
-        let shift = 2 * wb + LOD_FRAC_BITS - OUT_FRAC_BITS;
-        let half = 1u64 << (shift - 1);
+        // Constants of the compiled sampler: W in [20, 27], so shift in [32, 46].
+        let shift = const { 2 * weight_bits(T::BITS) + LOD_FRAC_BITS - OUT_FRAC_BITS };
+        let half = const { 1u64 << (2 * weight_bits(T::BITS) + LOD_FRAC_BITS - OUT_FRAC_BITS - 1) };
         // v <= m 2^(2W + 8), and m 2^(2W + 8) + half < 2^64: no wrap.
         Ok(Sample {
             values: v.map(|v| v.wrapping_add(half) >> shift),
@@ -401,11 +436,17 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         k: &mut K,
     ) -> Result<[u64; C], Error> {
         // Position fraction bits F + 1 + l: at most 24 + 1 + 31 = 56.
-        let (i, a) = split_position(fp.cx, fp.f + l, wb)?;
-        let (j, b) = split_position(fp.cy, fp.f + l, wb)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "f <= 24 (FracBits) and l <= top <= 31 (split_level)"
+        )]
+        let s = fp.f + l;
+        let (i, a) = split_position(fp.cx, s, wb)?;
+        let (j, b) = split_position(fp.cy, s, wb)?;
         // i, j <= 2^63 - 2 (split_position), so + 1 cannot overflow; checked anyway.
         let i1 = i.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         let j1 = j.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
+        #[allow(clippy::as_conversions, reason = "l <= top <= 31: lossless")]
         let level = self.level(l as usize);
         count_reads::<T, C, K>(4, k);
         let p00 = self.tap(kind, level, i, j);
@@ -433,8 +474,14 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         let store = storage
             .get_mut(..needed)
             .ok_or(Error::StorageTooSmall { needed, got })?;
-        // w, h < 2^31: w h < 2^62 in u64.
-        let bits_needed = bits_of_u64(w as u64 * h as u64) + T::BITS + 1;
+        // w, h < 2^31: w h < 2^62 in u64. (Saturating: a texel type claiming nearly 2^32 bits
+        // is refused as TooWide rather than overflowing the count.)
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w, h <= 2^31 - 1 (level_sizes' check_dims): w h < 2^62"
+        )]
+        let area = u64_from_usize(w) * u64_from_usize(h);
+        let bits_needed = bits_of_u64(area).saturating_add(T::BITS).saturating_add(1);
         if bits_needed > 64 {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -471,6 +518,14 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;

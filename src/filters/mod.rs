@@ -120,7 +120,7 @@ const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
 
 /// `n` as a `u64`: lossless, as `usize` is at most 64 bits wide (asserted at compile time
 /// below); `From` does not exist for it and is not `const`.
-#[cfg(any(feature = "filter-rip", feature = "filter-dip"))]
+#[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
 #[inline(always)]
 pub(crate) const fn u64_from_usize(n: usize) -> u64 {
     const _: () = assert!(usize::BITS <= u64::BITS);
