@@ -40,6 +40,35 @@ pub trait Counter {
     }
 }
 
+/// `n * channels` as the `u32` a [`Counter`] takes: a per-channel operation count, or the bits
+/// of a read of all channels (`n` = bits per channel). Meant for a `const` block at the use
+/// (`const { per_channel(3, C) }`): the count is then a constant of the compiled lookup (no
+/// run-time work, the same code as `3 * C as u32`), and a channel count whose product does not
+/// fit `u32` stops the build instead of wrapping the count.
+#[allow(
+    clippy::panic,
+    reason = "evaluated in const blocks only: a product past u32 is a compile error, not a run-time panic"
+)]
+pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
+    const _: () = assert!(usize::BITS <= u64::BITS);
+    #[allow(
+        clippy::as_conversions,
+        reason = "lossless: usize::BITS <= 64 (asserted above); u64::from is not const"
+    )]
+    let (n, c) = (n as u64, channels as u64);
+    match n.checked_mul(c) {
+        Some(v) if v >> u32::BITS == 0 => {
+            #[allow(
+                clippy::as_conversions,
+                reason = "v < 2^32 (checked by the match guard): lossless; u32::try_from is not const"
+            )]
+            let v = v as u32;
+            v
+        }
+        _ => panic!("a per-channel cost count past u32"),
+    }
+}
+
 /// The counter that counts nothing: a zero-sized type that compiles away.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct NoCount;

@@ -1,8 +1,16 @@
 //! The 4-read lookup at integer corners (Crow §2.1): `S(x1,y1) - S(x1,y0) - S(x0,y1) + S(x0,y0)`.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use super::sealed::FormImpl;
 use super::AccOf;
-use crate::cost::Counter;
+use crate::cost::{per_channel, Counter};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
 use crate::texel::{Acc, Entry};
@@ -38,9 +46,14 @@ impl FormImpl for Corners4 {
         _frac_bits: u32,
         k: &mut K,
     ) -> [AccOf<L, C>; C] {
+        #[allow(
+            clippy::as_conversions,
+            reason = "an in-range box at F = 0: 0 <= x0 <= x1 <= w and 0 <= y0 <= y1 <= h, sides at most \
+                      2^31 - 1 (check_dimensions), so each fits usize (at least 32 bits: MAX_DIMENSION)"
+        )]
         let (x0, y0, x1, y1) = (b.x0 as usize, b.y0 as usize, b.x1 as usize, b.y1 as usize);
         let [a, c_, b_, d] = t.quad(x0, x1, y0, y1, k);
-        k.adds(3 * C as u32);
+        k.adds(const { per_channel(3, C) });
         let modulus = t.modulus();
         let mut out = [<AccOf<L, C> as Acc>::ZERO; C];
         for (c, o) in out.iter_mut().enumerate() {

@@ -12,6 +12,14 @@
 //! `2^2F S(x, y) = (2^F - A)(2^F - B) S(i, j) + A (2^F - B) S(i+1, j) + (2^F - A) B S(i, j+1)
 //! + A B S(i+1, j+1)`, an integer. Box sums are therefore returned exactly, scaled by `2^2F`
 //! ([`BoxSum`]); the only rounding is the final division of the mean.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 mod corners4;
 mod paper;
@@ -436,6 +444,13 @@ impl<E: Entry, const C: usize> Sat<'_, E, C> {
 /// Splits an in-range raw coordinate `0 <= x <= n 2^F` into cell `i <= n - 1` and fraction
 /// `a <= 2^F` (the right edge `x = n` is cell `n - 1` with `a = 2^F`, so `i + 1 <= n`).
 #[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "0 <= x <= n 2^F (placed) and f <= MAX_FRAC_BITS = 24: x >> f <= n <= 2^31 - 1 \
+              (check_dimensions) fits usize (at least 32 bits: MAX_DIMENSION); 1 << f >= 1, so \
+              (1 << f) - 1 does not wrap, and x & (2^f - 1) < 2^24 fits u32"
+)]
 pub(crate) fn split_coord(x: i64, n: usize, f: u32) -> (usize, u32) {
     let i = (x >> f) as usize;
     if i >= n {
@@ -448,7 +463,12 @@ pub(crate) fn split_coord(x: i64, n: usize, f: u32) -> (usize, u32) {
 /// Texel cells a raw interval `[lo, hi)` overlaps, `ceil(hi) - floor(lo)`, exact in `u64`.
 #[inline(always)]
 pub(crate) fn cells(lo: i64, hi: i64, f: u32) -> u64 {
-    let frac = (hi & ((1i64 << f) - 1) != 0) as u64;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "f <= MAX_FRAC_BITS = 24: 1 << f >= 1, so subtracting 1 does not wrap"
+    )]
+    let mask = (1i64 << f) - 1;
+    let frac = u64::from(hi & mask != 0);
     width_u64(lo >> f, hi >> f).wrapping_add(frac)
 }
 
@@ -552,21 +572,36 @@ fn sum_int<L: Layout<C>, M: EdgeMode, K: Counter, const C: usize>(
     mode: M,
     k: &mut K,
 ) -> Result<BoxSum<WideOf<L, C>, C>, Error> {
+    // `cast_unsigned` of a non-negative `i32` (checked first: `&&` short-circuits) is its value.
+    #[allow(
+        clippy::as_conversions,
+        reason = "u32 -> usize is lossless: usize has at least 32 bits (MAX_DIMENSION)"
+    )]
     let in_range = r.x0 >= 0
         && r.y0 >= 0
         && r.x1 >= r.x0
         && r.y1 >= r.y0
-        && r.x1 as u32 as usize <= layout.width()
-        && r.y1 as u32 as usize <= layout.height();
+        && r.x1.cast_unsigned() as usize <= layout.width()
+        && r.y1.cast_unsigned() as usize <= layout.height();
     if !in_range {
         return sum_int_general(layout, r, mode, k);
     }
-    let (x0, y0, x1, y1) = (r.x0 as u32, r.y0 as u32, r.x1 as u32, r.y1 as u32);
+    let (x0, y0, x1, y1) = (
+        r.x0.cast_unsigned(),
+        r.y0.cast_unsigned(),
+        r.x1.cast_unsigned(),
+        r.y1.cast_unsigned(),
+    );
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "in range: x1 >= x0 and y1 >= y0 (checked above)"
+    )]
+    let (w, h) = (x1 - x0, y1 - y0);
     let mut out = BoxSum {
         sums: [<WideOf<L, C> as Wide>::ZERO; C],
         frac_bits: 0,
-        width_raw: u64::from(x1 - x0),
-        height_raw: u64::from(y1 - y0),
+        width_raw: u64::from(w),
+        height_raw: u64::from(h),
     };
     if x1 == x0 || y1 == y0 {
         return Ok(out);
@@ -640,4 +675,13 @@ pub(crate) fn sum_raw<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests;

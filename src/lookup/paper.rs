@@ -1,9 +1,17 @@
 //! Crow's 16-read lookup: bilinear interpolation of the table at each corner (§2.1), each lerp
 //! as `b * 2^F + (c - b) * alpha` (§2.2's cheaper form; the scale by `2^F` is a shift).
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use super::sealed::FormImpl;
 use super::{split_coord, AccOf, Paper};
-use crate::cost::Counter;
+use crate::cost::{per_channel, Counter};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
 use crate::texel::{Acc, Entry};
@@ -23,8 +31,8 @@ fn corner<L: Layout<C>, const C: usize, K: Counter>(
     let (i, a) = split_coord(x, t.width(), f);
     let (j, b) = split_coord(y, t.height(), f);
     let [q00, q10, q01, q11] = t.cell_corners(i, j, k);
-    k.muls(3 * C as u32);
-    k.adds(6 * C as u32);
+    k.muls(const { per_channel(3, C) });
+    k.adds(const { per_channel(6, C) });
     let a = AccOf::<L, C>::from_u32(a);
     let b = AccOf::<L, C>::from_u32(b);
     let mut v = [AccOf::<L, C>::ZERO; C];
@@ -73,7 +81,7 @@ impl FormImpl for Paper {
         let v10 = corner(t, b.x1, b.y0, f, k);
         let v01 = corner(t, b.x0, b.y1, f, k);
         let v00 = corner(t, b.x0, b.y0, f, k);
-        k.adds(3 * C as u32);
+        k.adds(const { per_channel(3, C) });
         let modulus = t.modulus();
         let mut out = [AccOf::<L, C>::ZERO; C];
         for ((((o, v11), v10), v01), v00) in out.iter_mut().zip(v11).zip(v10).zip(v01).zip(v00) {

@@ -15,6 +15,14 @@
 //! plus the output rounding of the mean (`2^-(g+1)`). The bound is reached up to a factor
 //! `(s-1)/s`: a box whose four edges all round inward by 1/2 over a texture that is `m` exactly
 //! under the lost strips and 0 elsewhere (tested in `host-tests`).
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use super::corners4::Corners4;
 use super::{sum_raw, Form, WideOf};
@@ -63,6 +71,11 @@ impl Shortcut {
 
     /// The proven bound `m (1/(W-1) + 1/(H-1))` on the shortcut's mean error for a box of sides
     /// `W, H >= 2` texels, as `f64` (for reports and tests).
+    #[allow(
+        clippy::as_conversions,
+        reason = "a float bound for reports: exact for texel widths up to 53 bits (the crate's texels \
+                  have at most 16), rounded to nearest above (no From<u64> for f64)"
+    )]
     pub fn error_bound(texel_bits: u32, w: f64, h: f64) -> f64 {
         max_texel_u64(texel_bits) as f64 * (1.0 / (w - 1.0) + 1.0 / (h - 1.0))
     }
@@ -93,7 +106,9 @@ fn round_raw(x: i64, f: u32) -> Option<i64> {
     if f == 0 {
         Some(x)
     } else {
-        Some(x.checked_add(1i64 << (f - 1))? >> f)
+        #[allow(clippy::arithmetic_side_effects, reason = "f >= 1 in this branch")]
+        let half = 1i64 << (f - 1);
+        Some(x.checked_add(half)? >> f)
     }
 }
 

@@ -15,16 +15,28 @@
 //!
 //! Cost: the pieces' own reads and operations, plus per channel one multiply per multiplicity
 //! other than 1 and one addition per piece after the first.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use super::sealed::FormImpl;
 use super::{in_range_wide, WideOf};
-use crate::cost::Counter;
+use crate::cost::{per_channel, Counter};
 use crate::edge::{AxisPlan, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
 use crate::wide::Wide;
 
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "W::BITS is 64 or 128 (Wide is sealed): + 1 does not wrap"
+)]
 fn overflow<W: Wide>() -> Error {
     Error::TooWide {
         what: Quantity::LookupAccumulator,
@@ -47,11 +59,16 @@ pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: 
     k: &mut K,
 ) -> Result<[WideOf<L, C>; C], Error> {
     let kind = mode.kind();
+    #[allow(
+        clippy::as_conversions,
+        reason = "sides <= 2^31 - 1 (check_dimensions) and f <= MAX_FRAC_BITS = 24: lossless, and the \
+                  shifted values stay below 2^55"
+    )]
     let (pw, ph) = ((layout.width() as i64) << f, (layout.height() as i64) << f);
     let xs = px.prepare(kind, pw);
     let ys = py.prepare(kind, ph);
     let mut acc = [<WideOf<L, C> as Wide>::ZERO; C];
-    let mut terms = 0u32;
+    let mut first = true;
     for ka in 0..3 {
         let a = xs.piece(ka, pw, f);
         if a.mult == 0 {
@@ -69,13 +86,21 @@ pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: 
                 y1: b.hi,
             };
             let v = in_range_wide(layout, &piece, f, form, k)?;
-            let shift = f * (a.unit as u32 + b.unit as u32);
-            let muls = (a.mult != 1) as u32 + (b.mult != 1) as u32;
-            k.muls(muls * C as u32);
-            if terms > 0 {
-                k.adds(C as u32);
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "f <= MAX_FRAC_BITS = 24, times at most 2"
+            )]
+            let shift = f * (u32::from(a.unit) + u32::from(b.unit));
+            // One multiply per multiplicity other than 1, per channel.
+            k.muls(match (a.mult != 1, b.mult != 1) {
+                (false, false) => 0,
+                (true, true) => const { per_channel(2, C) },
+                _ => const { per_channel(1, C) },
+            });
+            if !first {
+                k.adds(const { per_channel(1, C) });
             }
-            terms += 1;
+            first = false;
             for (o, v) in acc.iter_mut().zip(v) {
                 let t = v
                     .shr(shift)

@@ -1,8 +1,16 @@
 //! The differences-first 16-read lookup (see [`Stable`]).
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use super::sealed::FormImpl;
 use super::{split_coord, AccOf, Stable};
-use crate::cost::Counter;
+use crate::cost::{per_channel, Counter};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
 use crate::texel::{Acc, Entry};
@@ -36,7 +44,7 @@ fn corner<L: Layout<C>, const C: usize, K: Counter>(
     let (i, a) = split_coord(x, t.width(), f);
     let (j, b) = split_coord(y, t.height(), f);
     let [q00, q10, q01, q11] = t.cell_corners(i, j, k);
-    k.adds(4 * C as u32);
+    k.adds(const { per_channel(4, C) });
     let z = <L::Value as Entry>::ZERO;
     let mut parts = [Part {
         s: z,
@@ -103,8 +111,8 @@ impl FormImpl for Stable {
         k.muls(4);
         // Per channel: Bint 3, strips 4, edge term 3, corner term 3, total 2 additive; edge 4
         // and corner 4 multiplies.
-        k.adds(15 * C as u32);
-        k.muls(8 * C as u32);
+        k.adds(const { per_channel(15, C) });
+        k.muls(const { per_channel(8, C) });
         let modulus = t.modulus();
         // The box-bounded quantities: exact values on every layout.
         let small = |v: L::Value| -> AccOf<L, C> {
@@ -141,8 +149,13 @@ impl FormImpl for Stable {
                 .wrapping_add(b1.wrapping_mul(bottom).wrapping_sub(b0.wrapping_mul(top)));
             let corners = (w11.wrapping_mul(t11).wrapping_sub(w10.wrapping_mul(t10)))
                 .wrapping_sub(w01.wrapping_mul(t01).wrapping_sub(w00.wrapping_mul(t00)));
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "2 * f: f <= MAX_FRAC_BITS = 24 (FracBits)"
+            )]
+            let two_f = 2 * f;
             *o = bint
-                .wrapping_shl(2 * f)
+                .wrapping_shl(two_f)
                 .wrapping_add(edges.wrapping_shl(f))
                 .wrapping_add(corners);
         }
