@@ -369,7 +369,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         )]
         let s = fp.f + l;
         let (i, j) = (fp.cx.index(s), fp.cy.index(s));
-        count_reads::<T, C, K>(1, k);
+        count_reads::<T, C, 1, K>(k);
         #[allow(clippy::as_conversions, reason = "l <= top <= 31: lossless")]
         let level = self.level(l as usize);
         let px = self.tap(mode.kind(), level, i, j);
@@ -448,7 +448,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         let j1 = j.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         #[allow(clippy::as_conversions, reason = "l <= top <= 31: lossless")]
         let level = self.level(l as usize);
-        count_reads::<T, C, K>(4, k);
+        count_reads::<T, C, 4, K>(k);
         let p00 = self.tap(kind, level, i, j);
         let p10 = self.tap(kind, level, i1, j);
         let p01 = self.tap(kind, level, i, j1);

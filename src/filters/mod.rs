@@ -55,7 +55,7 @@ pub mod level;
 #[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
 pub(crate) mod pyramid;
 
-#[cfg(any(feature = "filter-point", feature = "filter-dip"))]
+#[cfg(feature = "filter-point")]
 #[cfg_attr(docsrs, doc(cfg(feature = "filter-point")))]
 pub mod point;
 
@@ -84,7 +84,12 @@ pub mod variance;
 /// (`const { per_channel(T::BITS, C) }`): the count is then a constant of the compiled sampler
 /// (no run-time work), and a channel count whose product does not fit `u32` (more than `2^27`
 /// channels of 16-bit texels) stops the build instead of wrapping the count.
-#[cfg(any(feature = "filter-point", feature = "filter-dip"))]
+#[cfg(any(
+    feature = "filter-point",
+    feature = "filter-mip",
+    feature = "filter-rip",
+    feature = "filter-dip"
+))]
 #[allow(
     clippy::panic,
     reason = "evaluated in const blocks only: a product past u32 is a compile error, not a run-time panic"
@@ -106,7 +111,12 @@ pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
 
 /// `u32::MAX` as a `usize` (saturated at `usize::MAX` on a 16-bit target): the most channels
 /// [`per_channel`] converts.
-#[cfg(any(feature = "filter-point", feature = "filter-dip"))]
+#[cfg(any(
+    feature = "filter-point",
+    feature = "filter-mip",
+    feature = "filter-rip",
+    feature = "filter-dip"
+))]
 const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
     #[allow(
         clippy::as_conversions,

@@ -35,11 +35,20 @@
 //! at `F = 0`, level 0) is [`Error::CoordinateOutOfRange`]. Level texels are below `2^16` and
 //! every lerp is a convex combination of non-negative values, computed in wrapping `u64`
 //! arithmetic: exact whenever the result is below `2^64` (each filter states its bound).
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::EdgeKind;
 use crate::error::Error;
 use crate::filters::level::log2_fixed;
+use crate::filters::{per_channel, u64_from_usize};
 #[cfg(test)]
 use crate::rect::Coord;
 use crate::rect::{FracBits, Rect};
@@ -59,17 +68,30 @@ const CHUNK: usize = 16;
 /// `ceil(n / 2^l)` for `n >= 1` (1 for `n = 0`, which no texture has).
 #[inline(always)]
 pub(crate) fn level_len(n: usize, l: usize) -> usize {
-    if l >= usize::BITS as usize {
+    #[allow(clippy::as_conversions, reason = "usize::BITS <= 64: lossless")]
+    let bits = usize::BITS as usize;
+    if l >= bits {
         1
     } else {
-        (n.saturating_sub(1) >> l) + 1
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "n.saturating_sub(1) <= usize::MAX - 1, so + 1 cannot overflow"
+        )]
+        let len = (n.saturating_sub(1) >> l) + 1;
+        len
     }
 }
 
 /// Levels of an axis of `n >= 1` texels: `ceil(log2 n) + 1`.
 #[inline(always)]
 pub(crate) fn level_count(n: usize) -> usize {
-    (usize::BITS - n.saturating_sub(1).leading_zeros()) as usize + 1
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "leading_zeros <= usize::BITS <= 64: the difference is in [0, 64], + 1 <= 65"
+    )]
+    let count = (usize::BITS - n.saturating_sub(1).leading_zeros()) as usize + 1;
+    count
 }
 
 /// Refuses dimensions a texture could not have: the crate's one size check
@@ -97,16 +119,24 @@ pub(crate) fn fill_box_level<T: Texel, const C: usize>(
 ) -> Result<(), Error> {
     let (w, h) = (texture.width(), texture.height());
     let (lw, lh) = (level_len(w, sx), level_len(h, sy));
+    #[allow(clippy::as_conversions, reason = "both <= 63: lossless")]
     let (sx, sy) = (sx.min(63) as u32, sy.min(63) as u32);
     // Block bounds in base texels: i < ceil(n / 2^s), so i 2^s < n <= 2^31 and (i + 1) 2^s
     // < 2^33 (s <= 31): all in u64, the clipped ends in usize.
     let span = |i: usize, s: u32, n: usize| -> (usize, usize) {
-        let lo = (i as u64).checked_shl(s).unwrap_or(u64::MAX).min(n as u64);
-        let hi = (i as u64 + 1)
-            .checked_shl(s)
-            .unwrap_or(u64::MAX)
-            .min(n as u64);
-        (lo as usize, hi as usize)
+        let (i, n64) = (u64_from_usize(i), u64_from_usize(n));
+        let lo = i.checked_shl(s).unwrap_or(u64::MAX).min(n64);
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "i < ceil(n / 2^s) <= 2^31 (the level's size): i + 1 <= 2^31"
+        )]
+        let hi = (i + 1).checked_shl(s).unwrap_or(u64::MAX).min(n64);
+        #[allow(
+            clippy::as_conversions,
+            reason = "lo, hi <= n, a usize (the min above): lossless"
+        )]
+        let ends = (lo as usize, hi as usize);
+        ends
     };
     let needed = lw.saturating_mul(lh).saturating_mul(C);
     let got = out.len();
@@ -118,33 +148,61 @@ pub(crate) fn fill_box_level<T: Texel, const C: usize>(
         let (y_lo, y_hi) = span(j, sy, h);
         let dst_row = dst_rows.next().ok_or(Error::EmptyTexture)?;
         let mut i0 = 0;
-        for dst in dst_row.chunks_mut(CHUNK * C) {
+        // (A compile-time constant: a channel count whose chunk overflows usize stops the build.)
+        for dst in dst_row.chunks_mut(const { CHUNK * C }) {
             let mut acc = [[0u64; C]; CHUNK];
             for y in y_lo..y_hi {
                 // y < h and the block columns lie below w: rows and slices always exist (the
                 // errors are unreachable; they stand in for panics).
                 let row = texture.row(y).ok_or(Error::EmptyTexture)?;
-                for (ci, a) in acc.iter_mut().take(dst.len() / C).enumerate() {
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "C >= 1 (a Texture exists: check_dimensions refuses 0 channels)"
+                )]
+                let texels = dst.len() / C;
+                for (ci, a) in acc.iter_mut().take(texels).enumerate() {
+                    #[allow(
+                        clippy::arithmetic_side_effects,
+                        reason = "i0 + ci < lw <= 2^31 (a coarse column of this level)"
+                    )]
                     let (x_lo, x_hi) = span(i0 + ci, sx, w);
+                    #[allow(
+                        clippy::arithmetic_side_effects,
+                        reason = "x_lo <= x_hi <= w and w * C fits (Texture::with_stride's \
+                                  checked_mul)"
+                    )]
                     let px = row.get(x_lo * C..x_hi * C).ok_or(Error::EmptyTexture)?;
                     for texel in px.chunks_exact(C) {
                         for (s, t) in a.iter_mut().zip(texel) {
-                            *s = s.wrapping_add(t.to_u16() as u64);
+                            *s = s.wrapping_add(u64::from(t.to_u16()));
                         }
                     }
                 }
             }
             for (ci, (a, d)) in acc.iter().zip(dst.chunks_exact_mut(C)).enumerate() {
-                let (x_lo, x_hi) = span(i0 + ci, sx, w);
-                let cnt = ((x_hi - x_lo) as u64).wrapping_mul((y_hi - y_lo) as u64);
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "i0 + ci < lw <= 2^31 (a coarse column of this level); span's ends \
+                              are monotone in i, so x_lo <= x_hi and y_lo <= y_hi"
+                )]
+                let cnt = {
+                    let (x_lo, x_hi) = span(i0 + ci, sx, w);
+                    u64_from_usize(x_hi - x_lo).wrapping_mul(u64_from_usize(y_hi - y_lo))
+                };
                 let den = NonZeroU64::new(cnt.wrapping_mul(2)).ok_or(Error::EmptyTexture)?;
                 for (d, &s) in d.iter_mut().zip(a.iter()) {
                     // 2 s + cnt < 2^64 (the caller's proof); the mean is at most m = 2^B - 1.
                     let mean = s.wrapping_mul(2).wrapping_add(cnt) / den;
-                    *d = T::from_u16_clamped(mean.min(u16::MAX as u64) as u16);
+                    *d = T::from_u16_clamped(u16::try_from(mean).unwrap_or(u16::MAX));
                 }
             }
-            i0 += CHUNK;
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "i0 < lw <= 2^31 before the step: i0 + 16 fits usize"
+            )]
+            {
+                i0 += CHUNK;
+            }
         }
     }
     Ok(())
@@ -165,9 +223,15 @@ impl Centre {
     /// The centre of `[lo, hi)`, without overflow.
     #[inline(always)]
     pub(crate) fn of(lo: i64, hi: i64) -> Centre {
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "lo >> 1 and hi >> 1 lie in [-2^62, 2^62 - 1]: their sum in [-2^63, 2^63 - 2], \
+                      plus 0 or 1, stays in i64"
+        )]
+        let mid = (lo >> 1) + (hi >> 1) + (lo & hi & 1);
         Centre {
-            mid: (lo >> 1) + (hi >> 1) + (lo & hi & 1),
-            odd: ((lo ^ hi) & 1) as u64,
+            mid,
+            odd: ((lo ^ hi) & 1).cast_unsigned(),
         }
     }
 
@@ -213,8 +277,8 @@ pub(crate) fn footprint_raw(rect: &Rect<i64>, f: FracBits) -> Result<Footprint, 
     Ok(Footprint {
         cx: Centre::of(x0, x1),
         cy: Centre::of(y0, y1),
-        w: (x1 as u64).wrapping_sub(x0 as u64),
-        h: (y1 as u64).wrapping_sub(y0 as u64),
+        w: x1.cast_unsigned().wrapping_sub(x0.cast_unsigned()),
+        h: y1.cast_unsigned().wrapping_sub(y0.cast_unsigned()),
         f,
     })
 }
@@ -225,8 +289,13 @@ pub(crate) fn footprint_raw(rect: &Rect<i64>, f: FracBits) -> Result<Footprint, 
 /// `frac_bits <= 16`, so the result fits comfortably in 32 bits.
 #[inline(always)]
 pub(crate) fn level_position(side: u64, f: u32, frac_bits: u32, top: u32) -> u32 {
-    let max = (top.min(31) as i32) << frac_bits.min(16);
-    log2_fixed(side, f, frac_bits).unwrap_or(0).max(0).min(max) as u32
+    let max = top.min(31).cast_signed() << frac_bits.min(16);
+    // In [0, max]: non-negative, so the reinterpretation is the value.
+    log2_fixed(side, f, frac_bits)
+        .unwrap_or(0)
+        .max(0)
+        .min(max)
+        .cast_unsigned()
 }
 
 /// Splits a level position `L` (`frac_bits` fraction bits, at most `top 2^frac_bits`) into
@@ -235,8 +304,12 @@ pub(crate) fn level_position(side: u64, f: u32, frac_bits: u32, top: u32) -> u32
 pub(crate) fn split_level(pos: u32, frac_bits: u32, top: u32) -> (u32, u32, u64) {
     let fb = frac_bits.min(31);
     let lo = pos >> fb;
-    let frac = (pos & ((1 << fb) - 1)) as u64;
-    (lo, (lo + 1).min(top), frac)
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "fb <= 31: 2^fb >= 1; pos <= top 2^frac_bits (level_position), so lo <= 31"
+    )]
+    let (mask, hi) = ((1 << fb) - 1, (lo + 1).min(top));
+    (lo, hi, u64::from(pos & mask))
 }
 
 /// Splits the level position `u = c / 2^s - 1/2` of a centre `c` (raw, [`Centre`]; `s = F + l`
@@ -256,28 +329,50 @@ pub(crate) fn split_position(c: Centre, s: u32, weight_bits: u32) -> Result<(i64
     // 2^(s + 1) <= 2^31`; and `weight_bits <= 32`, so the weight, below `2^weight_bits`,
     // is shifted in 32 bits either way. `q - 1` is formed in `i64` (no overflow).
     if let (Ok(mid), true, true) = (i32::try_from(c.mid), s <= 30, weight_bits <= 32) {
-        let q = mid >> s;
-        let r = (mid as u32) & ((1u32 << s) - 1);
-        let twice = 2 * r + c.odd as u32;
-        let half = 1u32 << s;
-        let (i0, frac) = if twice >= half {
-            (i64::from(q), twice - half)
-        } else {
-            (i64::from(q) - 1, twice + half)
-        };
-        let bits = s + 1;
-        let a = if bits >= weight_bits {
-            frac >> (bits - weight_bits).min(31)
-        } else {
-            frac << (weight_bits - bits).min(31)
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "s <= 30: 2^s >= 1, r < 2^30 and odd is 0 or 1 (so its u32 is lossless), \
+                      twice < 2^31 and twice + half < 2^31 + 2^30; twice - half only when \
+                      twice >= half; q - 1 in i64 from an i32; bits = s + 1 <= 31 and each \
+                      difference of bits and weight_bits is taken on the side where it is >= 0"
+        )]
+        let (i0, a) = {
+            let q = mid >> s;
+            let r = mid.cast_unsigned() & ((1u32 << s) - 1);
+            let twice = 2 * r + c.odd as u32;
+            let half = 1u32 << s;
+            let (i0, frac) = if twice >= half {
+                (i64::from(q), twice - half)
+            } else {
+                (i64::from(q) - 1, twice + half)
+            };
+            let bits = s + 1;
+            let a = if bits >= weight_bits {
+                frac >> (bits - weight_bits).min(31)
+            } else {
+                frac << (weight_bits - bits).min(31)
+            };
+            (i0, a)
         };
         return Ok((i0, u64::from(a)));
     }
     let s = s.min(62);
     let q = c.mid >> s;
-    let r = (c.mid & ((1i64 << s) - 1)) as u64;
-    let twice = 2 * r + c.odd; // < 2^(s+1)
-    let half = 1u64 << s;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "s <= 62: 2^s >= 1; r < 2^62 and odd <= 1, so twice < 2^63 + 1 and \
+                  twice + half < 2^63 + 2^62; twice - half only when twice >= half"
+    )]
+    let (twice, half) = {
+        // Masked to s bits: non-negative, so the reinterpretation is the value.
+        let r = (c.mid & ((1i64 << s) - 1)).cast_unsigned();
+        (2 * r + c.odd, 1u64 << s) // twice < 2^(s+1)
+    };
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "twice - half only when twice >= half; twice + half < 2^(s+1) + 2^s <= 2^64"
+    )]
     let (i0, frac) = if twice >= half {
         (q, twice - half)
     } else {
@@ -287,11 +382,17 @@ pub(crate) fn split_position(c: Centre, s: u32, weight_bits: u32) -> Result<(i64
         )
     };
     // frac has s + 1 fraction bits.
-    let bits = s + 1;
-    let a = if bits >= weight_bits {
-        frac >> (bits - weight_bits)
-    } else {
-        frac << (weight_bits - bits)
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "s <= 62: bits <= 63; each difference is taken on the side where it is >= 0"
+    )]
+    let a = {
+        let bits = s + 1;
+        if bits >= weight_bits {
+            frac >> (bits - weight_bits)
+        } else {
+            frac << (weight_bits - bits)
+        }
     };
     Ok((i0, a))
 }
@@ -301,7 +402,11 @@ pub(crate) fn split_position(c: Centre, s: u32, weight_bits: u32) -> Result<(i64
 /// comparison: every mode shows texel `i` for `0 <= i < n`.
 #[inline(always)]
 pub(crate) fn tap_index(kind: EdgeKind, i: i64, n: usize) -> Option<usize> {
-    if (i as u64) < n as u64 {
+    if i.cast_unsigned() < u64_from_usize(n) {
+        #[allow(
+            clippy::as_conversions,
+            reason = "0 <= i < n, a usize (the comparison above): lossless"
+        )]
         Some(i as usize)
     } else {
         kind.texel_index(i, n)
@@ -321,18 +426,23 @@ pub(crate) fn lerp<K: Counter, const C: usize>(
     bits: u32,
     k: &mut K,
 ) -> [u64; C] {
-    k.muls(C as u32);
-    k.adds(2 * C as u32);
+    k.muls(const { per_channel(1, C) });
+    k.adds(const { per_channel(2, C) });
     let bits = bits.min(63);
-    core::array::from_fn(|i| (b[i] << bits).wrapping_add(c[i].wrapping_sub(b[i]).wrapping_mul(a)))
+    let mut out = b;
+    for (o, c) in out.iter_mut().zip(c) {
+        *o = (*o << bits).wrapping_add(c.wrapping_sub(*o).wrapping_mul(a));
+    }
+    out
 }
 
-/// Counts `n` texel reads: all channels of a texel together (`T::BITS * C` bits), and the
-/// 32-bit words they take.
+/// Counts `N` texel reads: all channels of a texel together (`T::BITS * C` bits), and the
+/// 32-bit words they take; all compile-time constants ([`per_channel`]: a product past `u32`
+/// stops the build).
 #[inline(always)]
-pub(crate) fn count_reads<T: Texel, const C: usize, K: Counter>(n: u32, k: &mut K) {
-    k.reads(n, T::BITS * C as u32);
-    k.words(n * (T::BITS * C as u32).div_ceil(32));
+pub(crate) fn count_reads<T: Texel, const C: usize, const N: u32, K: Counter>(k: &mut K) {
+    k.reads(N, const { per_channel(T::BITS, C) });
+    k.words(const { N * per_channel(T::BITS, C).div_ceil(32) });
 }
 
 /// Prefix sums of the level lengths of an axis of `n` texels (`1 <= n <= 2^31 - 1`, so
@@ -408,16 +518,29 @@ pub(crate) fn check_build(
     check_dims(width, height)?;
     // texel_bits <= 16 and w, h < 2^31: (2m + 1) < 2^17 and w h < 2^62, so only the last
     // product can overflow u64.
-    let m = (1u64 << texel_bits.min(16)) - 1;
-    let area = width as u64 * height as u64;
-    let a = 2 * m + 1;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "2^min(bits, 16) >= 1, so m < 2^16 and 2m + 1 < 2^17; w, h < 2^31 \
+                  (check_dims): w h < 2^62"
+    )]
+    let (a, area) = {
+        let m = (1u64 << texel_bits.min(16)) - 1;
+        (2 * m + 1, u64_from_usize(width) * u64_from_usize(height))
+    };
     if a.checked_mul(area).is_none() {
         // The exact bits of a * area (< 2^79) from 32-bit halves of area: no 128-bit product.
-        let lo = a * (area & 0xFFFF_FFFF);
-        let hi = a * (area >> 32) + (lo >> 32);
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "a < 2^17 and area < 2^62: lo < 2^49, hi < 2^47 + 2^17, 32 + bits <= 96"
+        )]
+        let bits_needed = {
+            let lo = a * (area & 0xFFFF_FFFF);
+            let hi = a * (area >> 32) + (lo >> 32);
+            32 + bits_of_u64(hi)
+        };
         return Err(Error::TooWide {
             what: Quantity::Entry,
-            bits_needed: 32 + bits_of_u64(hi),
+            bits_needed,
             bits_available: 64,
         });
     }
@@ -483,8 +606,8 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
         };
         match t {
             Some(texel) => {
-                count_reads::<T, C, K>(1, k);
-                texel.map(|t| t.to_u16() as u64)
+                count_reads::<T, C, 1, K>(k);
+                texel.map(|t| u64::from(t.to_u16()))
             }
             None => [0; C],
         }
@@ -503,8 +626,13 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
         weight_bits: u32,
         k: &mut K,
     ) -> Result<[u64; C], Error> {
-        let (i0, ax) = split_position(fp.cx, fp.f + sx, weight_bits)?;
-        let (j0, ay) = split_position(fp.cy, fp.f + sy, weight_bits)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "f <= 24 (FracBits) and sx, sy <= 31 (a level of an axis below 2^31)"
+        )]
+        let (s_x, s_y) = (fp.f + sx, fp.f + sy);
+        let (i0, ax) = split_position(fp.cx, s_x, weight_bits)?;
+        let (j0, ay) = split_position(fp.cy, s_y, weight_bits)?;
         // i0, j0 <= i64::MAX >> 1 or a left tap of an odd doubled centre: + 1 stays in i64.
         let i1 = i0.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
         let j1 = j0.checked_add(1).ok_or(Error::CoordinateOutOfRange)?;
@@ -519,6 +647,14 @@ impl<T: Texel, const C: usize> LevelView<'_, T, C> {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;
@@ -758,7 +894,7 @@ mod tests {
         let w = lerp([(1u64 << 56) - 1], [3], 1, 8, &mut k);
         assert_eq!(w, [((1u64 << 56) - 1) * 255 + 3]);
         let mut k = Tally::new();
-        count_reads::<u16, 3, _>(4, &mut k);
+        count_reads::<u16, 3, 4, _>(&mut k);
         assert_eq!((k.reads, k.bits_read, k.words), (4, 4 * 48, 8));
     }
 
