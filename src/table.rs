@@ -4,7 +4,16 @@
 //! `i' <= i` and `j' <= j`, per channel. The build keeps a running sum `r` along the row and adds
 //! the entry above: `entry(i, j) = r(i, j) + entry(i, j - 1)`, `r(i, j) = r(i - 1, j) + t(i, j)`:
 //! two additions per entry and channel, as Crow counts.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
+use crate::cost::per_channel;
 use crate::error::{Error, Quantity};
 use crate::rect::Rect;
 use crate::texel::{Entry, Texel};
@@ -27,6 +36,11 @@ pub struct Sat<'a, E: Entry, const C: usize = 1> {
 
 /// One addition of the build: plain where the width proof covers it, checked otherwise.
 #[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "CHECKED = false only after width::check_entry_worst_case proved m w h < 2^BITS for the \
+              texel width: every running sum and entry is the sum of a sub-rectangle, at most that"
+)]
 fn add<E: Entry, const CHECKED: bool>(a: E, b: E) -> Result<E, ()> {
     if CHECKED {
         a.checked_add(b).ok_or(())
@@ -71,6 +85,20 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     Ok(())
 }
 
+/// The error of a build addition that overflows `E`.
+#[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "E::BITS is 16, 32 or 64 (Entry is sealed): + 1 does not wrap"
+)]
+fn entry_overflow<E: Entry>() -> Error {
+    Error::TooWide {
+        what: Quantity::Entry,
+        bits_needed: E::BITS + 1,
+        bits_available: E::BITS,
+    }
+}
+
 /// `w * h * C` entries, or an error if that overflows `usize` (a 32-bit target, a corrupt header).
 pub(crate) const fn entries_needed<const C: usize>(
     width: usize,
@@ -98,7 +126,8 @@ fn actual_total_bits<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> u
                 for ((hi, lo), p) in totals.iter_mut().zip(px) {
                     let (v, carry) = lo.overflowing_add(u64::from(p.to_u16()));
                     *lo = v;
-                    *hi = hi.wrapping_add(carry as u64);
+                    // The total is below 2^78 (above): the high word stays below 2^14.
+                    *hi = hi.wrapping_add(u64::from(carry));
                 }
             }
         }
@@ -107,7 +136,9 @@ fn actual_total_bits<T: Texel, const C: usize>(texture: &Texture<'_, T, C>) -> u
         .iter()
         .map(|&(hi, lo)| {
             if hi != 0 {
-                64 + crate::width::bits_of_u64(hi)
+                #[allow(clippy::arithmetic_side_effects, reason = "bits_of_u64 <= 64")]
+                let bits = 64 + crate::width::bits_of_u64(hi);
+                bits
             } else {
                 crate::width::bits_of_u64(lo)
             }
@@ -154,16 +185,16 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         let needed = entries_needed::<C>(w, h)?;
-        let row_len = w * C; // below `needed`, which did not overflow
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w C <= w h C = needed, which entries_needed computed without overflow"
+        )]
+        let row_len = w * C;
         let got = storage.len();
         let Some(table) = storage.get_mut(..needed) else {
             return Err(Error::StorageTooSmall { needed, got });
         };
-        let overflow = Error::TooWide {
-            what: Quantity::Entry,
-            bits_needed: E::BITS + 1,
-            bits_available: E::BITS,
-        };
+        let overflow = entry_overflow::<E>();
         let mut above: Option<&[E]> = None;
         let mut rest: &mut [E] = table;
         for y in 0..h {
@@ -248,9 +279,19 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         let max = E::max_texel(texel_bits);
         let zero_row = [E::ZERO; 0];
         let mut above: &[E] = &zero_row;
-        for (y, row) in table.chunks_exact((width * C).max(1)).enumerate() {
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w C <= w h C = needed, which entries_needed computed without overflow"
+        )]
+        let row_len = (width * C).max(1);
+        for (y, row) in table.chunks_exact(row_len).enumerate() {
             for x in 0..width {
                 for c in 0..C {
+                    #[allow(
+                        clippy::arithmetic_side_effects,
+                        reason = "x < w <= 2^31 - 1, so x + 1 <= w and, for 1 <= x <= w and c < C, \
+                                  (x - 1) C + c < w C = row_len (entries_needed: no overflow)"
+                    )]
                     let at = |r: &[E], x: usize| -> E {
                         if x == 0 {
                             E::ZERO
@@ -258,6 +299,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
                             r.get((x - 1) * C + c).copied().unwrap_or(E::ZERO)
                         }
                     };
+                    #[allow(clippy::arithmetic_side_effects, reason = "x < w <= 2^31 - 1")]
                     let (s, sl, su, sul) =
                         (at(row, x + 1), at(row, x), at(above, x + 1), at(above, x));
                     let ok = s
@@ -335,6 +377,10 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     /// [`Sat::box_sum_int`] or divide by the area yourself.
     #[inline]
     pub fn box_sum_inside(&self, r: &Rect<u32>) -> Result<[E; C], Error> {
+        #[allow(
+            clippy::as_conversions,
+            reason = "u32 -> usize is lossless: usize has at least 32 bits (MAX_DIMENSION)"
+        )]
         let (x0, y0, x1, y1) = (r.x0 as usize, r.y0 as usize, r.x1 as usize, r.y1 as usize);
         if x0 > x1 || y0 > y1 || x1 > self.width || y1 > self.height {
             return Err(Error::CoordinateOutOfRange);
@@ -360,6 +406,13 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         if x == 0 || y == 0 {
             return [E::ZERO; C];
         }
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "x, y >= 1 here; every crate caller passes x <= w, y <= h, so the index is below \
+                      w h C (entries_needed: no overflow). A direct Layout::corner far outside that \
+                      contract overflows: the known exception finding_flat_layout_corner_far_outside \
+                      (docs/guarantees.md)"
+        )]
         let base = ((y - 1) * self.width + (x - 1)) * C;
         self.table
             .get(base..)
@@ -387,6 +440,10 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         k: &mut K,
     ) -> [[E; C]; 4] {
         let zero = [E::ZERO; C];
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w C <= w h C, which entries_needed computed without overflow"
+        )]
         let row_len = self.width * C;
         let row = |y: usize| -> Option<&[E]> {
             let start = y.wrapping_sub(1).wrapping_mul(row_len);
@@ -397,10 +454,17 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             if x == 0 {
                 return zero;
             }
-            match row.get((x - 1) * C..).and_then(|t| t.first_chunk::<C>()) {
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "x >= 1 here; every crate caller passes x <= w, so (x - 1) C < w C. A direct \
+                          Layout::quad far outside that contract overflows: the known exception \
+                          finding_flat_layout_corner_far_outside (docs/guarantees.md)"
+            )]
+            let start = (x - 1) * C;
+            match row.get(start..).and_then(|t| t.first_chunk::<C>()) {
                 Some(v) => {
-                    k.reads(1, E::BITS * C as u32);
-                    k.words((E::BITS * C as u32).div_ceil(32));
+                    k.reads(1, const { per_channel(E::BITS, C) });
+                    k.words(const { per_channel(E::BITS, C).div_ceil(32) });
                     *v
                 }
                 None => zero,
@@ -414,8 +478,8 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     #[inline(always)]
     pub(crate) fn read<K: crate::Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
         if x != 0 && y != 0 {
-            k.reads(1, E::BITS * C as u32);
-            k.words((E::BITS * C as u32).div_ceil(32));
+            k.reads(1, const { per_channel(E::BITS, C) });
+            k.words(const { per_channel(E::BITS, C).div_ceil(32) });
         }
         self.s(x, y)
     }
@@ -501,11 +565,7 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
         // above[i]. `new` proved the worst case for `texel_bits`; texels of at most that many
         // bits take the plain additions, wider ones (whose values may exceed the proof) the
         // checked ones.
-        let overflow = Error::TooWide {
-            what: Quantity::Entry,
-            bits_needed: E::BITS + 1,
-            bits_available: E::BITS,
-        };
+        let overflow = entry_overflow::<E>();
         let first = self.rows_done == 0;
         if T::BITS <= self.texel_bits {
             build_row_in_place::<T, E, C, false>(texels, self.row, first)
@@ -513,7 +573,13 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             build_row_in_place::<T, E, C, true>(texels, self.row, first)
         }
         .map_err(|_| overflow)?;
-        self.rows_done += 1;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "rows_done < height (checked above)"
+        )]
+        {
+            self.rows_done += 1;
+        }
         Ok(self.row)
     }
 

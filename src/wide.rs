@@ -7,6 +7,14 @@
 //! bits) the same rounded quotient is found by restoring long division on two 64-bit words, so
 //! no 128-bit integer operation is ever emitted for a `u16` or `u32` table (a 128-bit divide is a
 //! software loop of about 1,200 instructions on a Cortex-M4).
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::error::{Error, Quantity};
 
@@ -48,6 +56,10 @@ fn too_wide(bits_needed: u32, bits_available: u32) -> Error {
 
 /// `floor(log2 v) + 1`, 0 for 0.
 #[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "leading_zeros of a u64 is at most 64"
+)]
 const fn bits64(v: u64) -> u32 {
     64 - v.leading_zeros()
 }
@@ -61,6 +73,11 @@ struct Pair {
 
 impl Pair {
     /// The full product `a * b`, from 32-bit halves (no 128-bit operation).
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "schoolbook multiplication on 32-bit halves: each partial product is below 2^64; \
+                  mid is below 3 * 2^32; hi + carries is the high word of a * b < 2^128, so no sum wraps"
+    )]
     fn mul(a: u64, b: u64) -> Pair {
         let (a1, a0) = (a >> 32, a & 0xFFFF_FFFF);
         let (b1, b0) = (b >> 32, b & 0xFFFF_FFFF);
@@ -79,7 +96,7 @@ impl Pair {
     fn sub(self, o: Pair) -> Pair {
         let (lo, borrow) = self.lo.overflowing_sub(o.lo);
         Pair {
-            hi: self.hi.wrapping_sub(o.hi).wrapping_sub(borrow as u64),
+            hi: self.hi.wrapping_sub(o.hi).wrapping_sub(u64::from(borrow)),
             lo,
         }
     }
@@ -90,7 +107,7 @@ impl Pair {
         (
             Pair {
                 hi: (self.hi << 1) | (self.lo >> 63),
-                lo: (self.lo << 1) | bit as u64,
+                lo: (self.lo << 1) | u64::from(bit),
             },
             out,
         )
@@ -99,6 +116,11 @@ impl Pair {
 
 /// `round(num * 2^g / (w * h))` by restoring long division over the bits of `num` followed by
 /// `g` zero bits, against the 128-bit divisor `w * h` (the cold path of the `u64` mean).
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "g <= 128 (the caller refuses more), so total = 64 + g <= 192; 63 - i only for i < 64; \
+              total - i + 64 with i < total is at most 256"
+)]
 fn div_round_long(num: u64, g: u32, w: u64, h: u64) -> Result<u64, Error> {
     let den = Pair::mul(w, h);
     let total = 64 + g;
@@ -150,6 +172,12 @@ impl Wide for u64 {
         u64::checked_add(self, o)
     }
     #[inline]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "w, h < 2^32: the area fits u64; bits64 <= 64 and g < 64 (checked first): their sum \
+                  does not wrap; r < area, so area - r >= 1; rounding up needs 2 r >= area with \
+                  r >= 1, so area >= 2 and q <= n / 2 < 2^63: q + 1 fits"
+    )]
     fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<u64, Error> {
         if self == 0 {
             return Ok(0);
@@ -191,6 +219,10 @@ impl Wide for u128 {
     const BITS: u32 = 128;
     const ZERO: Self = 0;
     #[inline(always)]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "leading_zeros of a u128 is at most 128"
+    )]
     fn bits(self) -> u32 {
         128 - self.leading_zeros()
     }
@@ -200,14 +232,20 @@ impl Wide for u128 {
     }
     #[inline(always)]
     fn checked_mul_u64(self, m: u64) -> Option<Self> {
-        self.checked_mul(m as u128)
+        self.checked_mul(u128::from(m))
     }
     #[inline(always)]
     fn checked_add(self, o: Self) -> Option<Self> {
         u128::checked_add(self, o)
     }
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "w, h < 2^64: the area fits u128; area != 0 (checked) for / and %; r < area, so \
+                  area - r >= 1; rounding up needs 2 r >= area with r >= 1, so area >= 2 and \
+                  q <= n / 2 < 2^127: q + 1 fits"
+    )]
     fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<u128, Error> {
-        let area = w as u128 * h as u128;
+        let area = u128::from(w) * u128::from(h);
         if area == 0 {
             return Err(Error::ZeroArea);
         }
@@ -226,6 +264,14 @@ impl Wide for u128 {
 /// [`Error::ZeroArea`]. The one 128-bit rounded division of the crate, for the quantities that
 /// are 128-bit by nature (the tent filter's order-2 sums, the variance of `u64` tables).
 #[allow(dead_code)] // used only by some filter features
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "restoring division: r < den < 2^127 throughout, so r << 1 loses nothing, r -= den only \
+              when r >= den, and den - r >= 1; q += 1 in the loop follows q * 2 (even, at most \
+              u128::MAX - 1); the final q + 1: q = floor(num 2^s / den) = 2^128 - 1 needs \
+              den <= 2^s (num < 2^128), while rounding up needs den 2^128 - num 2^s, a positive \
+              multiple of 2^s, to be at most den / 2, so den >= 2^(s+1): both cannot hold"
+)]
 pub(crate) fn div_round_shift_u128(num: u128, shift: u32, den: u128) -> Result<u64, Error> {
     let wide = || too_wide(65, 64);
     let Some(den) = core::num::NonZeroU128::new(den) else {
@@ -249,6 +295,15 @@ pub(crate) fn div_round_shift_u128(num: u128, shift: u32, den: u128) -> Result<u
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests {
     use super::*;
 
