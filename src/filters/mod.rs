@@ -88,7 +88,8 @@ pub mod variance;
     feature = "filter-point",
     feature = "filter-mip",
     feature = "filter-rip",
-    feature = "filter-dip"
+    feature = "filter-dip",
+    feature = "filter-variance"
 ))]
 #[allow(
     clippy::panic,
@@ -115,7 +116,8 @@ pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
     feature = "filter-point",
     feature = "filter-mip",
     feature = "filter-rip",
-    feature = "filter-dip"
+    feature = "filter-dip",
+    feature = "filter-variance"
 ))]
 const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
     #[allow(
@@ -130,7 +132,12 @@ const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
 
 /// `n` as a `u64`: lossless, as `usize` is at most 64 bits wide (asserted at compile time
 /// below); `From` does not exist for it and is not `const`.
-#[cfg(any(feature = "filter-mip", feature = "filter-rip", feature = "filter-dip"))]
+#[cfg(any(
+    feature = "filter-mip",
+    feature = "filter-rip",
+    feature = "filter-dip",
+    feature = "filter-variance"
+))]
 #[inline(always)]
 pub(crate) const fn u64_from_usize(n: usize) -> u64 {
     const _: () = assert!(usize::BITS <= u64::BITS);

@@ -60,11 +60,19 @@
 //! [`squares_entry_bits`] `= bits_of(m^2 w h)`, exact by the same argument (the all-`m` texture
 //! reaches it). Both tables use the entry type `E`; 8-bit 256 x 256 needs 32 bits for the
 //! squares (24 for the values); `u32` holds squares up to 257 x 257.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::EdgeMode;
 use crate::error::{Error, Quantity};
-use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::filters::{per_channel, u64_from_usize, Sample, OUT_FRAC_BITS};
 use crate::layouts::Layout;
 use crate::lookup::{BoxLookup, BoxSum, Form};
 use crate::rect::{Coord, FracBits, Rect};
@@ -80,7 +88,11 @@ use core::num::NonZeroU64;
 /// ([`crate::width::bits_of_product`]).
 pub const fn squares_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
     let m = max_texel_u64(texel_bits);
-    crate::width::bits_of_product(m.saturating_mul(m), width as u64, height as u64)
+    crate::width::bits_of_product(
+        m.saturating_mul(m),
+        u64_from_usize(width),
+        u64_from_usize(height),
+    )
 }
 
 /// [`squares_entry_bits`] for what a build sees (`texel_bits <= 16`, sides below `2^31`), in
@@ -88,15 +100,23 @@ pub const fn squares_entry_bits(texel_bits: u32, width: usize, height: usize) ->
 /// below `2^94`; the high half `m^2 floor(w h / 2^32) + carry` stays below `2^64`).
 fn squares_bits_u64(texel_bits: u32, width: usize, height: usize) -> u32 {
     let m = max_texel_u64(texel_bits.min(16));
-    let a = m * m;
-    let b = (width as u64).saturating_mul(height as u64);
-    let lo = a * (b & 0xFFFF_FFFF);
-    let hi = a * (b >> 32) + (lo >> 32);
-    if hi == 0 {
-        bits_of_u64(lo)
-    } else {
-        32 + bits_of_u64(hi)
-    }
+    let b = u64_from_usize(width).saturating_mul(u64_from_usize(height));
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "m < 2^16, so a = m^2 <= 2^32 - 2^17 + 1: lo < 2^64, and a (b >> 32) + (lo >> 32) \
+                  <= (2^32 - 2^17 + 1)(2^32 - 1) + 2^32 - 1 < 2^64 for any b; 32 + bits <= 96"
+    )]
+    let bits = {
+        let a = m * m;
+        let lo = a * (b & 0xFFFF_FFFF);
+        let hi = a * (b >> 32) + (lo >> 32);
+        if hi == 0 {
+            bits_of_u64(lo)
+        } else {
+            32 + bits_of_u64(hi)
+        }
+    };
+    bits
 }
 
 /// A summed-area table of the squared texels (inclusive storage, like [`Sat`]).
@@ -137,13 +157,17 @@ impl<'a, E: Entry, const C: usize> SquaresTable<'a, E, C> {
                 .enumerate()
             {
                 for (c, ((r, t), o)) in run.iter_mut().zip(px).zip(o.iter_mut()).enumerate() {
-                    let t = t.to_u16() as u64;
+                    let t = u64::from(t.to_u16());
                     // t^2 <= m^2 <= the worst-case total, which fits E (check()): no wrap.
-                    *r = r.wrapping_add(E::from_u64_truncating(t * t));
-                    let up = above
-                        .and_then(|a| a.get(xi * C + c))
-                        .copied()
-                        .unwrap_or(E::ZERO);
+                    #[allow(clippy::arithmetic_side_effects, reason = "t < 2^16: t^2 < 2^32")]
+                    let square = t * t;
+                    *r = r.wrapping_add(E::from_u64_truncating(square));
+                    #[allow(
+                        clippy::arithmetic_side_effects,
+                        reason = "xi < w and c < C, and w C fits (check's storage_needed)"
+                    )]
+                    let at = xi * C + c;
+                    let up = above.and_then(|a| a.get(at)).copied().unwrap_or(E::ZERO);
                     *o = r.wrapping_add(up);
                 }
             }
@@ -210,21 +234,32 @@ impl<E: Entry, const C: usize> Layout<C> for SquaresTable<'_, E, C> {
     }
     /// The squares' width: twice the source texel bits (what the shortcut's bound uses).
     fn texel_bits(&self) -> u32 {
-        2 * self.texel_bits
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "texel_bits <= 16 (check's check_texel_bits)"
+        )]
+        let bits = 2 * self.texel_bits;
+        bits
     }
     fn value_bits(&self) -> u32 {
         self.total_bits
     }
+    /// Saturates at `u64::MAX`, which only a table of `2^61` bytes could reach.
     fn storage_bits(&self) -> u64 {
-        self.table_bytes() as u64 * 8
+        u64_from_usize(self.table_bytes()).saturating_mul(8)
     }
     fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
         let mut out = [E::ZERO; C];
         if x != 0 && y != 0 && x <= self.width && y <= self.height {
-            k.reads(1, E::BITS * C as u32);
-            k.words((E::BITS * C as u32).div_ceil(32));
+            k.reads(1, const { per_channel(E::BITS, C) });
+            k.words(const { per_channel(E::BITS, C).div_ceil(32) });
             // x <= w, y <= h and w h C fits (the build's check): no wrap.
-            let base = ((y - 1).wrapping_mul(self.width).wrapping_add(x - 1)).wrapping_mul(C);
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "x != 0 and y != 0 (the test above)"
+            )]
+            let (xm, ym) = (x - 1, y - 1);
+            let base = (ym.wrapping_mul(self.width).wrapping_add(xm)).wrapping_mul(C);
             if let Some(src) = self.table.get(base..base.wrapping_add(C)) {
                 for (o, &e) in out.iter_mut().zip(src) {
                     *o = e;
@@ -284,7 +319,12 @@ impl<'a, E: Entry, const C: usize> VarianceTables<'a, E, C> {
 
     /// Bytes of both tables.
     pub fn table_bytes(&self) -> usize {
-        self.values.table_bytes() + self.squares.table_bytes()
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "each is the size of a slice, at most isize::MAX: the sum is below usize::MAX"
+        )]
+        let bytes = self.values.table_bytes() + self.squares.table_bytes();
+        bytes
     }
 
     /// The variance over the box `[x0, x1) x [y0, y1)` with integer corners under mode `M`:
@@ -367,7 +407,13 @@ fn finish<W: Wide, const C: usize, K: Counter>(
 #[inline(always)]
 fn low_u64<W: Wide>(v: W) -> u64 {
     let v: u128 = v.into();
-    v as u64
+    #[allow(
+        clippy::as_conversions,
+        reason = "callers take this branch only for W::BITS <= 64: v < 2^64, lossless (the \
+                  truncating cast folds the round trip away, where try_from would leave a test)"
+    )]
+    let low = v as u64;
+    low
 }
 
 fn mean_too_wide(needed: u32, available: u32) -> Error {
@@ -390,10 +436,14 @@ fn variance_u64(s: u64, q: u64, wr: u64, hr: u64, c: usize) -> Result<u64, Error
         y: 0,
         channel: c,
     };
-    let n = wr.checked_mul(hr).ok_or(mean_too_wide(
-        bits_of_u64(wr) + bits_of_u64(hr) - 1,
-        AREA_LIMIT_BITS,
-    ))?;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "wr, hr >= 1: each has 1 to 64 bits, so the sum is in [2, 128]"
+    )]
+    let product_bits = bits_of_u64(wr) + bits_of_u64(hr) - 1;
+    let n = wr
+        .checked_mul(hr)
+        .ok_or(mean_too_wide(product_bits, AREA_LIMIT_BITS))?;
     if bits_of_u64(n) > AREA_LIMIT_BITS {
         return Err(mean_too_wide(bits_of_u64(n), AREA_LIMIT_BITS));
     }
@@ -408,17 +458,27 @@ fn variance_u64(s: u64, q: u64, wr: u64, hr: u64, c: usize) -> Result<u64, Error
     let (b, t) = (qp / nz, qp % nz);
     let (e, f) = square_div_rem(r, nz);
     // σ^2 = b + (g n - f) / n^2 with g = t - e in (-n, n): as B + (h + φ / n) / n.
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "each difference is taken on the side where it is >= 0"
+    )]
     let (g_neg, g_abs) = if t >= e {
         (false, t - e)
     } else {
         (true, e - t)
     };
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "t, e < n, so |g| < n: g_abs - 1 only for g_abs >= 1, g_abs + 1 <= n; f = r^2 \
+                  mod n < n"
+    )]
     let (h0_neg, h0_abs, phi) = match (f == 0, g_neg) {
         (true, _) => (g_neg, g_abs, 0),
         // g - 1 for g >= 1; -1 for g = 0; -(|g| + 1) for g < 0.
         (false, false) if g_abs >= 1 => (false, g_abs - 1, n - f),
         (false, _) => (true, g_abs + 1, n - f),
     };
+    #[allow(clippy::arithmetic_side_effects, reason = "h0 in [-n, 0): h0_abs <= n")]
     let (big_b, h) = if h0_neg && h0_abs > 0 {
         // h0 in [-n, 0): borrow one from b.
         (b.checked_sub(1).ok_or(invalid)?, n - h0_abs)
@@ -427,10 +487,21 @@ fn variance_u64(s: u64, q: u64, wr: u64, hr: u64, c: usize) -> Result<u64, Error
     };
     // round(2^16 (h + φ/n) / n) = floor((2^17 h + floor(2^17 φ / n) + n) / (2n)).
     let (phi2, _) = shl_div_rem(phi, 17, nz);
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "n < 2^62 (AREA_LIMIT_BITS above): 2n < 2^63"
+    )]
     let d = NonZeroU64::new(2 * n).ok_or(Error::ZeroArea)?;
     let (mut quot, rem) = shl_div_rem(h, 17, d);
     // rem < 2n, phi2 < 2^17, n < 2^62: the sum is below 2^64.
-    quot += (rem + phi2 + n) / d;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "rem < 2n, phi2 < 2^17 and n < 2^62: the sum is below 2^64; the total is \
+                  round(2^16 (h + φ/n) / n) with 0 <= h, φ < n, at most 2^16"
+    )]
+    {
+        quot += (rem + phi2 + n) / d;
+    }
     big_b
         .checked_mul(1 << OUT_FRAC_BITS)
         .and_then(|v| v.checked_add(quot))
@@ -441,6 +512,10 @@ fn variance_u64(s: u64, q: u64, wr: u64, hr: u64, c: usize) -> Result<u64, Error
 /// 64 bits, else `k` steps of restoring division (the remainder stays below `d`, its double
 /// below `2^63`).
 #[inline]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "rem -= d only when rem >= d (restoring division): rem stays below d"
+)]
 fn shl_div_rem(x: u64, k: u32, d: NonZeroU64) -> (u64, u64) {
     if x.leading_zeros() >= k {
         let v = x << k;
@@ -463,6 +538,11 @@ fn shl_div_rem(x: u64, k: u32, d: NonZeroU64) -> (u64, u64) {
 /// shift-and-add over the bits of `r` keeping `r^2 = q n + rem` with `rem < n` (every
 /// intermediate below `2n < 2^63`; `q <= r`).
 #[inline]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "r < 2^32 on the first path: r^2 < 2^64; then leading_zeros <= 64, rem -= n only \
+              when rem >= n, rem < n before rem += r (so below 2n < 2^63), q <= r"
+)]
 fn square_div_rem(r: u64, n: NonZeroU64) -> (u64, u64) {
     if r >> 32 == 0 {
         let v = r * r;
@@ -490,6 +570,11 @@ fn square_div_rem(r: u64, n: NonZeroU64) -> (u64, u64) {
 
 /// The `u128` formulation, for the `u128` sums of `u64` tables: `round((n Q - S^2) 2^16 / n^2)`
 /// with `n Q` in `u128` and `n^2 < 2^127` (module docs: those sums are 128-bit words already).
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "the products are checked_mul; the plain arithmetic is on bit counts of u128 \
+              values (each <= 128), whose sums and doubles are at most 256"
+)]
 fn variance_u128(sc: u128, qc: u128, wr: u64, hr: u64, c: usize) -> Result<u64, Error> {
     let (wr, hr) = (u128::from(wr), u128::from(hr));
     // wr, hr < 2^64: the product fits u128.
@@ -518,6 +603,14 @@ fn variance_u128(sc: u128, qc: u128, wr: u64, hr: u64, c: usize) -> Result<u64, 
 pub(crate) use crate::wide::div_round_shift_u128 as div_round_shift;
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;
