@@ -37,6 +37,14 @@
 //! A box's sum is then the sum over the product of both axes' pieces of `mult_x mult_y` times an
 //! ordinary in-range lookup: every quantity stays a sum over (part of) the box, so the same narrow
 //! accumulator and the same modular bound serve, and nothing needs 128 bits.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::error::Error;
 
@@ -83,6 +91,14 @@ impl EdgeKind {
     /// The texel index the extended texture shows at integer position `i` of an axis of `n`
     /// texels, or `None` where it is zero ([`Border`] outside the texture) or the axis is empty
     /// (`n = 0`). No division when `i` lies in `[0, n)` (or `[0, 2n)` for the mirror).
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "one proof for the function (const: no From/TryFrom): the bound is i64::MAX / 2 where \
+                  usize has 64 bits and 2^31 - 1 where it has 32 (the cast truncates to usize::MAX), \
+                  so after the check n as i64 is lossless and 2 n does not wrap; n - 1 >= 0 as \
+                  n >= 1; 2 n - 1 - r >= 0 as n <= r < 2 n; k lies in [0, n), so k as usize is exact"
+    )]
     pub const fn texel_index(self, i: i64, n: usize) -> Option<usize> {
         if n == 0 || n > i64::MAX as usize / 2 {
             return None;
@@ -138,6 +154,13 @@ impl EdgeKind {
 
 /// `x mod p` (in `[0, p)`) for `p > 0`, in 32 bits when `|x|` and `p` fit (one hardware `udiv` on
 /// the Cortex-M4 instead of a software 64-bit division), else in 64. `None` for `p <= 0`.
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "one proof for the function (const: no From/TryFrom): the casts to u32 follow the \
+              checks |x| <= u32::MAX and 0 < p <= u32::MAX (so they are exact), u32 -> i64 and \
+              u32::MAX -> u64/i64 are lossless, and p - r with 0 < r < p is in (0, p)"
+)]
 const fn rem_euclid_narrow(x: i64, p: i64) -> Option<i64> {
     if p <= 0 {
         return None;
@@ -331,8 +354,10 @@ pub(crate) enum Prepared {
 /// The whole periods and the tail of a periodic split (one division).
 #[inline(always)]
 fn prepare_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> Prepared {
-    let (whole, tail) = match div_rem_narrow(rest, p as u64) {
-        Some(qr) if rest > p as u64 => qr,
+    // p = n 2^F is in [1, 2^55] (place_axis): its bit pattern is its value.
+    let pu = p.cast_unsigned();
+    let (whole, tail) = match div_rem_narrow(rest, pu) {
+        Some(qr) if rest > pu => qr,
         _ => (0, rest),
     };
     Prepared::Periodic {
@@ -348,6 +373,11 @@ fn prepare_periodic(mirror: bool, odd: bool, r0: i64, rest: u64, p: i64) -> Prep
 impl Prepared {
     /// Piece `k` (`0..3`) on an axis of raw length `p = n 2^F`; absent pieces have `mult = 0`.
     #[inline(always)]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "p = n 2^F in [2^F, 2^55] (place_axis, n >= 1): the head [r0, p) and the tail \
+                  [0, tail) lie in [0, p], so p - a and p - b are in [0, p]; p - 2^F >= 0"
+    )]
     pub(crate) fn piece(&self, k: usize, p: i64, f: u32) -> AxisPiece {
         let map = |a: i64, b: i64, odd: bool| if odd { (p - b, p - a) } else { (a, b) };
         match (*self, k) {
@@ -365,7 +395,8 @@ impl Prepared {
             }
             (Prepared::Periodic { whole, .. }, 1) => AxisPiece::new(0, p, whole, false),
             (Prepared::Periodic { tail_odd, tail, .. }, 2) => {
-                let (a, b) = map(0, tail as i64, tail_odd);
+                // tail <= p <= 2^55 (prepare_periodic): its bit pattern is its value.
+                let (a, b) = map(0, tail.cast_signed(), tail_odd);
                 AxisPiece::new(a, b, 1, false)
             }
             _ => AxisPiece::default(),
@@ -376,13 +407,19 @@ impl Prepared {
 /// The width `hi - lo` of an interval with `hi >= lo`, exact in `u64`.
 #[inline(always)]
 pub(crate) fn width_u64(lo: i64, hi: i64) -> u64 {
-    (hi as u64).wrapping_sub(lo as u64)
+    // Two's complement: the difference of the bit patterns modulo 2^64 is hi - lo, which lies in
+    // [0, 2^64) for hi >= lo.
+    hi.cast_unsigned().wrapping_sub(lo.cast_unsigned())
 }
 
 /// `(q, r)` with `x = q p + r`, `0 <= r < p`, for `p > 0`: comparisons only when `x` lies in
 /// `[0, p)` or `[p, 2p)`, else one division (checked: `None` only for `p <= 0`, which the
 /// layouts' size check rules out; no panic path either way).
 #[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "p > 0 (n >= 1, place_axis) and x >= p where x - p is formed: it lies in [0, x]"
+)]
 fn periods(x: i64, p: i64) -> Option<(i64, i64)> {
     if x >= 0 && x < p {
         Some((0, x))
@@ -404,6 +441,10 @@ fn div_euclid_narrow(x: i64, p: i64) -> Option<(i64, i64)> {
     if let (Ok(a), Ok(d)) = (u32::try_from(x.unsigned_abs()), u32::try_from(p)) {
         let d = core::num::NonZeroU32::new(d)?;
         let (q0, r0) = (i64::from(a / d), i64::from(a % d));
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "q0 <= u32::MAX, so -q0 - 1 does not wrap; 0 < r0 < p where p - r0 is formed"
+        )]
         return Some(if x >= 0 {
             (q0, r0)
         } else if r0 == 0 {
@@ -436,6 +477,11 @@ pub(crate) fn place_axis(
     n: usize,
     f: u32,
 ) -> Result<AxisPlan, Error> {
+    #[allow(
+        clippy::as_conversions,
+        reason = "n <= 2^31 - 1 (check_dimensions) and f <= MAX_FRAC_BITS = 24: lossless, and \
+                  n 2^F <= 2^55"
+    )]
     let p = (n as i64) << f;
     if lo >= 0 && hi <= p {
         return Ok(AxisPlan::InRange(lo, hi));
@@ -463,27 +509,39 @@ fn place_periodic(mirror: bool, lo: i64, hi: i64, p: i64) -> Result<AxisPlan, Er
     let (q0, r0) = periods(lo, p).ok_or(Error::CoordinateOutOfRange)?;
     let odd = mirror && q0 & 1 != 0;
     let d = width_u64(lo, hi);
-    let end = (r0 as u64)
-        .checked_add(d)
-        .ok_or(Error::CoordinateOutOfRange)?;
-    if end <= p as u64 {
-        // Reflection of [a, b) inside an odd half: [p - b, p - a).
-        let (a, b) = if odd {
-            (p - end as i64, p - r0)
-        } else {
-            (r0, end as i64)
-        };
+    // 0 <= r0 < p <= 2^55 (periods, place_axis): their bit patterns are their values.
+    let (r0u, pu) = (r0.cast_unsigned(), p.cast_unsigned());
+    let end = r0u.checked_add(d).ok_or(Error::CoordinateOutOfRange)?;
+    if end <= pu {
+        // Reflection of [a, b) inside an odd half: [p - b, p - a). end <= p <= 2^55: exact.
+        let end = end.cast_signed();
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "0 <= r0 <= end <= p: p - end and p - r0 are in [0, p]"
+        )]
+        let (a, b) = if odd { (p - end, p - r0) } else { (r0, end) };
         return Ok(AxisPlan::InRange(a, b));
     }
+    #[allow(clippy::arithmetic_side_effects, reason = "end > p here")]
+    let rest = end - pu;
     Ok(AxisPlan::Split(AxisSplit::Periodic {
         mirror,
         odd,
         r0,
-        rest: end - p as u64,
+        rest,
     }))
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests {
     extern crate std;
     use super::*;
