@@ -26,15 +26,34 @@
 //! With `F` fractional corner bits the box integral is a multiple of `2^-2F`; lookups compute it
 //! scaled by `2^2F`. See [`paper_acc_bits`], [`stable_acc_bits`], and `docs/design.md` for the
 //! multiplier operand widths of each formulation.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::error::{Error, Quantity};
 
+// The `usize as u64` / `usize as u128` casts below are lossless (no From in a `const fn`).
+const _: () = assert!(usize::BITS <= u64::BITS);
+
 /// Number of bits needed to hold `v`: `0` for `0`, else `floor(log2(v)) + 1`.
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "leading_zeros is at most the width"
+)]
 pub const fn bits_of(v: u128) -> u32 {
     128 - v.leading_zeros()
 }
 
 /// [`bits_of`] for `u64` (what the lookups' paths use: no 128-bit operation).
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "leading_zeros is at most the width"
+)]
 pub const fn bits_of_u64(v: u64) -> u32 {
     64 - v.leading_zeros()
 }
@@ -44,7 +63,9 @@ pub const fn ceil_log2(v: u128) -> u32 {
     if v <= 1 {
         0
     } else {
-        bits_of(v - 1)
+        #[allow(clippy::arithmetic_side_effects, reason = "v > 1 here")]
+        let below = v - 1;
+        bits_of(below)
     }
 }
 
@@ -53,7 +74,12 @@ pub const fn max_texel(texel_bits: u32) -> u128 {
     if texel_bits >= 128 {
         u128::MAX
     } else {
-        (1u128 << texel_bits) - 1
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "texel_bits < 128: 1 << texel_bits >= 1"
+        )]
+        let m = (1u128 << texel_bits) - 1;
+        m
     }
 }
 
@@ -62,7 +88,12 @@ pub const fn max_texel_u64(texel_bits: u32) -> u64 {
     if texel_bits >= 64 {
         u64::MAX
     } else {
-        (1u64 << texel_bits) - 1
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "texel_bits < 64: 1 << texel_bits >= 1"
+        )]
+        let m = (1u64 << texel_bits) - 1;
+        m
     }
 }
 
@@ -81,6 +112,10 @@ pub const fn check_texel_bits(texel_bits: u32) -> Result<(), Error> {
 /// The largest possible whole-table sum: `(2^b - 1) * w * h` (saturating at `u128::MAX`, which
 /// no entry type holds, so a saturated value is still refused). A host-side convenience; the
 /// checks below compute the bits without 128-bit arithmetic.
+#[allow(
+    clippy::as_conversions,
+    reason = "usize has at most 64 bits (asserted at the top): lossless"
+)]
 pub const fn worst_case_total(texel_bits: u32, width: usize, height: usize) -> u128 {
     max_texel(texel_bits)
         .saturating_mul(width as u128)
@@ -89,6 +124,15 @@ pub const fn worst_case_total(texel_bits: u32, width: usize, height: usize) -> u
 
 /// Bits of the product `a * b * c` of three `u64`, exactly, from 32-bit limbs (no 128-bit
 /// operation, so it costs a firmware's build and lookups nothing wider than 64 bits).
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::indexing_slicing,
+    clippy::as_conversions,
+    reason = "one proof for the function (const: no iterators, no From), in its comments: the fast \
+              path multiplies factors below 2^32 and (ab >> 32) c + (lo >> 32) < 2^64; 32 + bits <= \
+              96. The limb loop indexes with f < 2, i < 6 and k < 6 (loop bounds), multiplies limbs \
+              below 2^32, and each limb plus a carry stays below 2^33; 32 i + bits <= 224"
+)]
 pub const fn bits_of_product(a: u64, b: u64, c: u64) -> u32 {
     // Factors below 2^32 (a texel maximum and two sides, on any target with 32-bit `usize` the
     // compiler sees it and drops the general path below): `a b` is exact in `u64`, and its
@@ -152,12 +196,20 @@ pub const fn bits_of_product(a: u64, b: u64, c: u64) -> u32 {
 
 /// Exact bits per entry (and channel) the worst case needs: `bits_of((2^b - 1) * w * h)`
 /// (texel widths above 64 bits, which no texel has, saturate at `2^64 - 1`).
+#[allow(
+    clippy::as_conversions,
+    reason = "usize has at most 64 bits (asserted at the top): lossless"
+)]
 pub const fn entry_bits_worst_case(texel_bits: u32, width: usize, height: usize) -> u32 {
     bits_of_product(max_texel_u64(texel_bits), width as u64, height as u64)
 }
 
 /// The conservative textbook bound `b + ceil(log2(w * h))`. Never smaller than
 /// [`entry_bits_worst_case`], sometimes one larger; kept to document the difference.
+#[allow(
+    clippy::as_conversions,
+    reason = "usize has at most 64 bits (asserted at the top): lossless"
+)]
 pub const fn entry_bits_naive(texel_bits: u32, width: usize, height: usize) -> u32 {
     texel_bits.saturating_add(ceil_log2((width as u128).saturating_mul(height as u128)))
 }
@@ -244,10 +296,21 @@ pub const fn max_frac_bits(
         crate::FormKind::Paper => 0,
         crate::FormKind::Stable => 1,
     };
-    if total_bits + extra > acc_value_bits {
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "known exception (docs/guarantees.md, hostile::finding_max_frac_bits_overflow): \
+                  total_bits + extra wraps for total_bits = u32::MAX (a table's total has at \
+                  most 128 bits; the crate itself never calls this)"
+    )]
+    let needed = total_bits + extra;
+    if needed > acc_value_bits {
         return None;
     }
-    let f = (acc_value_bits - total_bits - extra) / 2;
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "total_bits + extra <= acc_value_bits (checked above)"
+    )]
+    let f = (acc_value_bits - needed) / 2;
     Some(if f > MAX_FRAC_BITS { MAX_FRAC_BITS } else { f })
 }
 
@@ -290,6 +353,10 @@ impl MulShape {
 /// The multiplies of [`crate::Paper`] for a `w x h` table of `b`-bit texels at `F` bits:
 /// the first lerps multiply a column strip `S(i+1, j) - S(i, j) <= m h` by `A`; the second lerp
 /// multiplies `r1 - r0 = 2^F (row strip) + A t <= m w 2^F` by `B`. Both grow with the *table*.
+#[allow(
+    clippy::as_conversions,
+    reason = "usize has at most 64 bits (asserted at the top): lossless"
+)]
 pub const fn paper_multiplies(
     texel_bits: u32,
     width: usize,
@@ -312,6 +379,10 @@ pub const fn paper_multiplies(
 /// The multiplies of [`crate::Stable`] for boxes of at most `max_side` texels per side: edge
 /// strips `<= m (max_side + 1)` times one fraction, corner texels (`b` bits) times a product of
 /// two fractions, and the fraction products themselves. All bounded by the *box*.
+#[allow(
+    clippy::as_conversions,
+    reason = "usize has at most 64 bits (asserted at the top): lossless"
+)]
 pub const fn stable_multiplies(texel_bits: u32, max_side: usize, frac_bits: u32) -> [MulShape; 3] {
     let f1 = frac_bits.saturating_add(1);
     [
@@ -335,6 +406,15 @@ pub const fn stable_multiplies(texel_bits: u32, max_side: usize, frac_bits: u32)
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests {
     use super::*;
 
