@@ -1,4 +1,12 @@
 //! The one error type of the crate: every refusal says what was wrong, with the numbers.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use core::fmt;
 
