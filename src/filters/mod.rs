@@ -89,6 +89,7 @@ pub mod variance;
     feature = "filter-mip",
     feature = "filter-rip",
     feature = "filter-dip",
+    feature = "filter-tent",
     feature = "filter-variance"
 ))]
 #[allow(
@@ -117,6 +118,7 @@ pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
     feature = "filter-mip",
     feature = "filter-rip",
     feature = "filter-dip",
+    feature = "filter-tent",
     feature = "filter-variance"
 ))]
 const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
@@ -136,6 +138,7 @@ const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
     feature = "filter-mip",
     feature = "filter-rip",
     feature = "filter-dip",
+    feature = "filter-tent",
     feature = "filter-variance"
 ))]
 #[inline(always)]

@@ -106,11 +106,19 @@
 //! 41 bits; the survey says 2-6x). The exact variant adds [`TentLines`] (`w (h+1) + (w+1) h`
 //! entries of [`tent_line_bits`] bits, its own entry type: 25 bits at 256 x 256, so `u32`,
 //! another 8.03x) and reads the texture itself.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::cost::Counter;
 use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
-use crate::filters::{Sample, OUT_FRAC_BITS};
+use crate::filters::{per_channel, u64_from_usize, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
@@ -138,14 +146,14 @@ pub trait TentEntry: Copy + Default + PartialEq + core::fmt::Debug + 'static {
 }
 
 macro_rules! impl_tent_entry {
-    ($t:ty, $vb:expr) => {
+    ($t:ty, $vb:expr, $v:ident => $to_i128:expr) => {
         impl TentEntry for $t {
             const BITS: u32 = <$t>::BITS;
             const VALUE_BITS: u32 = $vb;
             const ZERO: Self = 0;
             #[inline(always)]
             fn from_u16(v: u16) -> Self {
-                v as $t
+                <$t>::from(v)
             }
             #[inline(always)]
             fn plus(self, o: Self) -> Self {
@@ -153,15 +161,24 @@ macro_rules! impl_tent_entry {
             }
             #[inline(always)]
             fn to_i128(self) -> i128 {
-                self as i128
+                let $v = self;
+                $to_i128
             }
         }
     };
 }
 
-impl_tent_entry!(u32, 32);
-impl_tent_entry!(u64, 64);
-impl_tent_entry!(u128, 127);
+impl_tent_entry!(u32, 32, v => i128::from(v));
+impl_tent_entry!(u64, 64, v => i128::from(v));
+impl_tent_entry!(u128, 127, v => {
+    #[allow(
+        clippy::as_conversions,
+        reason = "VALUE_BITS = 127: the builds' width proofs keep every entry below 2^127, \
+                  where the cast is lossless (documented on to_i128)"
+    )]
+    let i = v as i128;
+    i
+});
 
 /// Exact bits of the largest `Q` entry of a `w x h` texture of `b`-bit texels:
 /// `bits_of((2^b - 1) * w (w + 2) * h (h + 2))` (saturating at 128 bits, which no entry holds).
@@ -171,16 +188,26 @@ impl_tent_entry!(u128, 127);
 /// corner) of the all-`m` texture, and each axis sums `sum_{i<w} (2w + 1 - 2i) = w (w + 2)`.
 /// Every intermediate of the build is bounded by an entry (see [`TentTable::build`]).
 pub const fn tent_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
-    let wx = (width as u128).saturating_mul(width as u128 + 2);
-    let hy = (height as u128).saturating_mul(height as u128 + 2);
+    let (wx, hy) = (side_product(width), side_product(height));
     bits_of(max_texel(texel_bits).saturating_mul(wx).saturating_mul(hy))
+}
+
+/// `n (n + 2)` in `u128`, saturating (it never does: `n < 2^64`).
+const fn side_product(n: usize) -> u128 {
+    #[allow(
+        clippy::as_conversions,
+        clippy::arithmetic_side_effects,
+        reason = "usize -> u128 is lossless (usize has at most 64 bits; From is not const), and \
+                  n + 2 < 2^65"
+    )]
+    let (n, n2) = (u64_from_usize(n) as u128, u64_from_usize(n) as u128 + 2);
+    n.saturating_mul(n2)
 }
 
 /// Exact bits of the largest entry of the per-line order-2 integrals of [`TentLines`] for lines
 /// of `n` texels: `bits_of((2^b - 1) * n (n + 2))`.
 pub const fn tent_line_bits(texel_bits: u32, n: usize) -> u32 {
-    let nn = (n as u128).saturating_mul(n as u128 + 2);
-    bits_of(max_texel(texel_bits).saturating_mul(nn))
+    bits_of(max_texel(texel_bits).saturating_mul(side_product(n)))
 }
 
 /// The error bound of [`TentTable::sample`] (bilinear interpolation of `T2`, the survey's
@@ -196,6 +223,11 @@ pub const fn tent_line_bits(texel_bits: u32, n: usize) -> u32 {
 /// in `[-m/2, m/2]`. Divided by `4 a^2 b^2`. The first term alone reaches `m / (4 a^2)`: columns
 /// `i_{-1}`, `i_1` full, column `i_0` empty, all fractions `1/2`.
 pub fn paper_error_bound(texel_bits: u32, a: f64, b: f64) -> f64 {
+    #[allow(
+        clippy::as_conversions,
+        reason = "u128 -> f64 has no From: exact up to 53-bit texels, nearest above (a bound in \
+                  f64 either way)"
+    )]
     let m = max_texel(texel_bits.min(64)) as f64;
     m / 4.0 * (1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (2.0 * a * a * b * b))
 }
@@ -267,11 +299,15 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             });
         }
         // (w + 1)(h + 1) C fits (storage_needed): none of these products overflow.
-        let row_len = (w + 1) * C;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "(w + 1)(h + 1) C fits usize (storage_needed succeeded)"
+        )]
+        let (row_len, body_len) = ((w + 1) * C, h * (w + 1) * C);
         let got = storage.len();
         let (body, last) = storage
             .get_mut(..needed)
-            .and_then(|t| t.split_at_mut_checked(h * row_len))
+            .and_then(|t| t.split_at_mut_checked(body_len))
             .ok_or(Error::StorageTooSmall { needed, got })?;
         last.fill(E::ZERO);
         for y in 0..=h {
@@ -283,27 +319,36 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             let mut v = [E::ZERO; C];
             let mut wx = [E::ZERO; C];
             for xi in 0..=w {
-                for c in 0..C {
-                    let idx = xi * C + c;
+                for (c, (wxc, vc)) in wx.iter_mut().zip(v.iter_mut()).enumerate() {
+                    #[allow(
+                        clippy::arithmetic_side_effects,
+                        reason = "xi <= w, y <= h and c < C: below (w + 1)(h + 1) C, which fits \
+                                  usize (storage_needed)"
+                    )]
+                    let (idx, above_at, at) = {
+                        let idx = xi * C + c;
+                        let above_at = y.checked_sub(1).map(|ya| ya * row_len + idx);
+                        (idx, above_at, y * row_len + idx)
+                    };
                     let t = match texels {
                         Some(r) if xi < w => {
                             r.get(idx).map_or(E::ZERO, |t| E::from_u16(t.to_u16()))
                         }
                         _ => E::ZERO,
                     };
-                    wx[c] = wx[c].plus(v[c].plus(v[c])).plus(t);
-                    v[c] = v[c].plus(t);
-                    let above = match y.checked_sub(1) {
-                        Some(ya) => body.get(ya * row_len + idx).copied().unwrap_or(E::ZERO),
+                    *wxc = wxc.plus(vc.plus(*vc)).plus(t);
+                    *vc = vc.plus(t);
+                    let above = match above_at {
+                        Some(i) => body.get(i).copied().unwrap_or(E::ZERO),
                         None => E::ZERO,
                     };
                     let Some(vy) = last.get_mut(idx) else {
                         continue;
                     };
-                    let q = above.plus(vy.plus(*vy)).plus(wx[c]);
+                    let q = above.plus(vy.plus(*vy)).plus(*wxc);
                     if y < h {
-                        *vy = vy.plus(wx[c]);
-                        if let Some(b) = body.get_mut(y * row_len + idx) {
+                        *vy = vy.plus(*wxc);
+                        if let Some(b) = body.get_mut(at) {
                             *b = q;
                         }
                     } else {
@@ -350,31 +395,50 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     /// `Q(X, Y) = 4 T2(X, Y)` for `X <= w + 1`, `Y <= h + 1` (`None` outside); zero on `X = 0`
     /// and `Y = 0`.
     pub fn corner(&self, x: usize, y: usize) -> Option<[E; C]> {
-        if x > self.width + 1 || y > self.height + 1 {
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w, h < 2^31 (the texture's)"
+        )]
+        let (xmax, ymax) = (self.width + 1, self.height + 1);
+        if x > xmax || y > ymax {
             return None;
         }
         let mut out = [E::ZERO; C];
         if x != 0 && y != 0 {
-            let base = ((y - 1) * (self.width + 1) + (x - 1)) * C;
-            for (o, &e) in out.iter_mut().zip(self.table.get(base..base + C)?) {
+            let (at, end) = self.entry_range(x, y);
+            for (o, &e) in out.iter_mut().zip(self.table.get(at..end)?) {
                 *o = e;
             }
         }
         Some(out)
     }
 
+    /// The element range of `Q(x, y)`, `1 <= x <= w + 1`, `1 <= y <= h + 1`.
+    #[inline(always)]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "callers check 1 <= x <= w + 1 and 1 <= y <= h + 1: inside the (w + 1)(h + 1) C \
+                  entries, a count that fits usize (storage_needed); w < 2^31"
+    )]
+    fn entry_range(&self, x: usize, y: usize) -> (usize, usize) {
+        let at = ((y - 1) * (self.width + 1) + (x - 1)) * C;
+        (at, at + C)
+    }
+
     /// `Q(x, y)` as `i128`, with the read counted (free on the zero row and column).
     fn read<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [i128; C] {
         let mut out = [0i128; C];
-        if x != 0 && y != 0 && x <= self.width + 1 && y <= self.height + 1 {
-            k.reads(1, E::BITS * C as u32);
-            k.words((E::BITS * C as u32).div_ceil(32));
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w, h < 2^31 (the texture's)"
+        )]
+        let (xmax, ymax) = (self.width + 1, self.height + 1);
+        if x != 0 && y != 0 && x <= xmax && y <= ymax {
+            k.reads(1, const { per_channel(E::BITS, C) });
+            k.words(const { per_channel(E::BITS, C).div_ceil(32) });
             // x <= w + 1, y <= h + 1: inside the (w + 1)(h + 1) C entries, no overflow.
-            let base = ((y - 1) * (self.width + 1) + (x - 1)) * C;
-            for (o, e) in out
-                .iter_mut()
-                .zip(self.table.get(base..base + C).unwrap_or(&[]))
-            {
+            let (at, end) = self.entry_range(x, y);
+            for (o, e) in out.iter_mut().zip(self.table.get(at..end).unwrap_or(&[])) {
                 *o = e.to_i128();
             }
         }
@@ -400,23 +464,35 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         if a == 0 || b == 0 {
             return Err(Error::ZeroArea);
         }
-        let (a, b) = (a as i128, b as i128);
-        let Some(cx) = canonical_centre(kind, cx as i128, a, self.width, 0) else {
+        let (a, b) = (i128::from(a), i128::from(b));
+        let Some(cx) = canonical_centre(kind, i128::from(cx), a, self.width, 0) else {
             return Ok(Sample { values: [0; C] });
         };
-        let Some(cy) = canonical_centre(kind, cy as i128, b, self.height, 0) else {
+        let Some(cy) = canonical_centre(kind, i128::from(cy), b, self.height, 0) else {
             return Ok(Sample { values: [0; C] });
         };
         let mut ax = [Axis::Zero, Axis::Zero, Axis::Zero];
         let mut ay = [Axis::Zero, Axis::Zero, Axis::Zero];
-        for (p, (axp, ayp)) in ax.iter_mut().zip(ay.iter_mut()).enumerate() {
-            let d = p as i128 - 1;
-            *axp = Axis::Terms(s2_terms(kind, cx + d * a, self.width)?);
-            *ayp = Axis::Terms(s2_terms(kind, cy + d * b, self.height)?);
+        for ((axp, ayp), d) in ax.iter_mut().zip(ay.iter_mut()).zip([-1i128, 0, 1]) {
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "|cx|, |cy| < 2^34 (an i32 moved by canonical_centre by less than a \
+                          period or the half-width) and a, b < 2^32: far inside i128"
+            )]
+            let (x, y) = (cx + d * a, cy + d * b);
+            *axp = Axis::Terms(s2_terms(kind, x, self.width)?);
+            *ayp = Axis::Terms(s2_terms(kind, y, self.height)?);
         }
         let n = self.paper_numerator(&ax, &ay, 1, k)?;
         // value = N / (4 a^2 b^2); output = round(N 2^(16 - 2) / (a^2 b^2)).
-        finish(&n, a as u128, b as u128, OUT_FRAC_BITS - 2, k)
+        // a, b >= 1 (from u32): the reinterpretations are the values.
+        finish(
+            &n,
+            a.cast_unsigned(),
+            b.cast_unsigned(),
+            OUT_FRAC_BITS - 2,
+            k,
+        )
     }
 
     /// The paper-faithful triangle filter over the footprint rectangle `r` (fixed-point corners,
@@ -450,13 +526,13 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         };
         let n = self.paper_numerator(&fp.ax, &fp.ay, fp.s, k)?;
         // value = N 2^2G / (4 a^2 b^2) (N scaled by s^2, a and b in units 2^-G).
-        finish(
-            &n,
-            fp.a as u128,
-            fp.b as u128,
-            2 * fp.g + OUT_FRAC_BITS - 2,
-            k,
-        )
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "g = F + 1 <= 25 (FracBits): the shift is at most 64"
+        )]
+        let shift = 2 * fp.g + OUT_FRAC_BITS - 2;
+        // a, b >= 1 (footprint refuses empty sides): the reinterpretations are the values.
+        finish(&n, fp.a.cast_unsigned(), fp.b.cast_unsigned(), shift, k)
     }
 
     /// The exact triangle filter over the footprint rectangle `r` (fixed-point corners,
@@ -493,12 +569,19 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         k: &mut K,
     ) -> Result<Sample<C>, Error> {
         let kind = mode.kind();
-        for (got, expected) in [
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "each width is a texture's (or a table built from one), whose width * C \
+                      fits usize (Texture::with_stride's checked_mul)"
+        )]
+        let widths = [
             (lines.width * C, self.width * C),
             (texture.width() * C, self.width * C),
-            (lines.height, self.height),
-            (texture.height(), self.height),
-        ] {
+        ];
+        for (got, expected) in widths
+            .into_iter()
+            .chain([(lines.height, self.height), (texture.height(), self.height)])
+        {
             if got != expected {
                 return Err(Error::RowLength { expected, got });
             }
@@ -510,93 +593,120 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         let g = fp.g;
         let paper = self.paper_numerator(&fp.ax, &fp.ay, s, k)?;
         let w = [1i128, -2, 1];
-        // Cells and fraction products α(1-α) (scaled by s^2) of the three x and y positions.
-        let mut ix = [0i128; 3];
-        let mut iy = [0i128; 3];
-        let mut pa = [0i128; 3];
-        let mut pb = [0i128; 3];
-        for p in 0..3 {
-            ix[p] = fp.px[p] >> g;
-            iy[p] = fp.py[p] >> g;
-            let fa = fp.px[p] - (ix[p] << g);
-            let fb = fp.py[p] - (iy[p] << g);
-            pa[p] = fa * (s - fa);
-            pb[p] = fb * (s - fb);
-        }
+        // Cells and fraction products α(1-α) (scaled by s^2) of the three x and y positions:
+        // the fraction x - (i << g) is in [0, s) with s = 2^g <= 2^25, so the product is at
+        // most s^2 / 4 <= 2^48.
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "0 <= fa < s <= 2^25: s - fa in (0, s] and fa (s - fa) <= 2^48"
+        )]
+        let frac_product = |x: i128| {
+            let fa = x - ((x >> g) << g);
+            fa * (s - fa)
+        };
+        let (ix, iy) = (fp.px.map(|x| x >> g), fp.py.map(|y| y >> g));
+        let (pa, pb) = (fp.px.map(frac_product), fp.py.map(frac_product));
         k.muls(6);
         let cols: [Option<usize>; 3] = ix.map(|i| texel_at(kind, i, self.width));
         let rows: [Option<usize>; 3] = iy.map(|i| texel_at(kind, i, self.height));
-        let cu = C as u32;
+        // Per-channel counts: compile-time constants.
+        let (c1, c2, c3) = (
+            const { per_channel(1, C) },
+            const { per_channel(2, C) },
+            const { per_channel(3, C) },
+        );
         // sX = sum_p w_p pa_p sum_q w_q L_y Cy(col_p)(y_q)   (scale s^3)
         let mut sx = [0i128; C];
-        for p in 0..3 {
+        for ((&col, &pa_p), &w_p) in cols.iter().zip(&pa).zip(&w) {
             let mut xp = [0i128; C];
-            if let Some(col) = cols[p] {
+            if let Some(col) = col {
                 for (ayq, &wq) in fp.ay.iter().zip(&w) {
                     let v = eval1::<C, K>(ayq, s, &mut |iyy, k| Ok(lines.col(col, iyy, k)), k)?;
-                    for c in 0..C {
-                        xp[c] = ck(xp[c].checked_add(ck(v[c].checked_mul(wq))?))?;
+                    for (x, v) in xp.iter_mut().zip(v) {
+                        *x = ck(x.checked_add(ck(v.checked_mul(wq))?))?;
                     }
                 }
             }
-            k.adds(2 * cu);
-            k.muls(cu);
-            k.adds(cu);
-            for c in 0..C {
-                let t = ck(ck(xp[c].checked_mul(pa[p]))?.checked_mul(w[p]))?;
-                sx[c] = ck(sx[c].checked_add(t))?;
+            k.adds(c2);
+            k.muls(c1);
+            k.adds(c1);
+            for (sxc, x) in sx.iter_mut().zip(xp) {
+                let t = ck(ck(x.checked_mul(pa_p))?.checked_mul(w_p))?;
+                *sxc = ck(sxc.checked_add(t))?;
             }
         }
         let mut sy = [0i128; C];
-        for q in 0..3 {
+        for ((&row, &pb_q), &w_q) in rows.iter().zip(&pb).zip(&w) {
             let mut yq = [0i128; C];
-            if let Some(row) = rows[q] {
+            if let Some(row) = row {
                 for (axp, &wp) in fp.ax.iter().zip(&w) {
                     let v = eval1::<C, K>(axp, s, &mut |ixx, k| Ok(lines.row(ixx, row, k)), k)?;
-                    for c in 0..C {
-                        yq[c] = ck(yq[c].checked_add(ck(v[c].checked_mul(wp))?))?;
+                    for (y, v) in yq.iter_mut().zip(v) {
+                        *y = ck(y.checked_add(ck(v.checked_mul(wp))?))?;
                     }
                 }
             }
-            k.adds(2 * cu);
-            k.muls(cu);
-            k.adds(cu);
-            for c in 0..C {
-                let t = ck(ck(yq[c].checked_mul(pb[q]))?.checked_mul(w[q]))?;
-                sy[c] = ck(sy[c].checked_add(t))?;
+            k.adds(c2);
+            k.muls(c1);
+            k.adds(c1);
+            for (syc, y) in sy.iter_mut().zip(yq) {
+                let t = ck(ck(y.checked_mul(pb_q))?.checked_mul(w_q))?;
+                *syc = ck(syc.checked_add(t))?;
             }
         }
         // Texel term: sum_p w_p pa_p sum_q w_q pb_q t(i_p, j_q)   (scale s^4)
         let mut st = [0i128; C];
-        for p in 0..3 {
+        for ((&col, &pa_p), &w_p) in cols.iter().zip(&pa).zip(&w) {
             let mut inner = [0i128; C];
-            for q in 0..3 {
-                if let (Some(col), Some(row)) = (cols[p], rows[q]) {
-                    k.reads(1, T::BITS * cu);
+            for ((&row, &pb_q), &w_q) in rows.iter().zip(&pb).zip(&w) {
+                if let (Some(col), Some(row)) = (col, row) {
+                    k.reads(1, const { per_channel(T::BITS, C) });
                     let texels = texture.row(row).ok_or(Error::EmptyTexture)?;
                     for (c, inner) in inner.iter_mut().enumerate() {
-                        let t = texels.get(col * C + c).map_or(0, |t| t.to_u16() as i128);
-                        *inner = ck(inner.checked_add(ck((t * pb[q]).checked_mul(w[q]))?))?;
+                        #[allow(
+                            clippy::arithmetic_side_effects,
+                            reason = "col < w (texel_at), c < C, and w C fits usize (the \
+                                      texture's checked width * C); t < 2^16 and pb_q <= 2^48"
+                        )]
+                        let term = {
+                            let t = texels
+                                .get(col * C + c)
+                                .map_or(0, |t| i128::from(t.to_u16()));
+                            t * pb_q
+                        };
+                        *inner = ck(inner.checked_add(ck(term.checked_mul(w_q))?))?;
                     }
                 }
-                k.muls(cu);
+                k.muls(c1);
             }
-            k.adds(2 * cu + cu);
-            k.muls(cu);
-            for c in 0..C {
-                let t = ck(ck(inner[c].checked_mul(pa[p]))?.checked_mul(w[p]))?;
-                st[c] = ck(st[c].checked_add(t))?;
+            k.adds(c3);
+            k.muls(c1);
+            for (stc, inner) in st.iter_mut().zip(inner) {
+                let t = ck(ck(inner.checked_mul(pa_p))?.checked_mul(w_p))?;
+                *stc = ck(stc.checked_add(t))?;
             }
         }
-        k.adds(3 * cu);
+        k.adds(c3);
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "s = 2^g <= 2^25: s^2 <= 2^50"
+        )]
+        let s2 = s * s;
         let mut n = [0i128; C];
-        for c in 0..C {
-            let hi = ck(paper[c].checked_mul(s * s))?;
-            let mid = ck(ck(sx[c].checked_add(sy[c]))?.checked_mul(s))?;
-            n[c] = ck(ck(hi.checked_sub(mid))?.checked_add(st[c]))?;
+        for ((((nc, p), x), y), t) in n.iter_mut().zip(paper).zip(sx).zip(sy).zip(st) {
+            let hi = ck(p.checked_mul(s2))?;
+            let mid = ck(ck(x.checked_add(y))?.checked_mul(s))?;
+            *nc = ck(ck(hi.checked_sub(mid))?.checked_add(t))?;
         }
         // value = N / (4 a^2 b^2) (N scaled by s^4).
-        finish(&n, fp.a as u128, fp.b as u128, OUT_FRAC_BITS - 2, k)
+        // a, b >= 1 (footprint refuses empty sides): the reinterpretations are the values.
+        finish(
+            &n,
+            fp.a.cast_unsigned(),
+            fp.b.cast_unsigned(),
+            OUT_FRAC_BITS - 2,
+            k,
+        )
     }
 
     /// Validates a fixed-point footprint and places its three x and y positions (`None`: a
@@ -608,29 +718,41 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         kind: EdgeKind,
     ) -> Result<Option<Footprint>, Error> {
         let f = frac_bits.get();
-        let (x0, y0, x1, y1) = (r.x0 as i128, r.y0 as i128, r.x1 as i128, r.y1 as i128);
+        let (x0, y0, x1, y1) = (
+            i128::from(r.x0),
+            i128::from(r.y0),
+            i128::from(r.x1),
+            i128::from(r.y1),
+        );
         if x1 < x0 || y1 < y0 {
             return Err(Error::InvertedBox);
         }
         if x1 == x0 || y1 == y0 {
             return Err(Error::ZeroArea);
         }
-        let g = f + 1;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "f <= 24 (FracBits); i64 corners: sums and differences below 2^64 in i128"
+        )]
+        let (g, a, b, sx, sy) = (f + 1, x1 - x0, y1 - y0, x0 + x1, y0 + y1);
         let s = 1i128 << g;
-        let (a, b) = (x1 - x0, y1 - y0);
-        let Some(cx) = canonical_centre(kind, x0 + x1, a, self.width, g) else {
+        let Some(cx) = canonical_centre(kind, sx, a, self.width, g) else {
             return Ok(None);
         };
-        let Some(cy) = canonical_centre(kind, y0 + y1, b, self.height, g) else {
+        let Some(cy) = canonical_centre(kind, sy, b, self.height, g) else {
             return Ok(None);
         };
-        let px = [cx - a, cx, cx + a];
-        let py = [cy - b, cy, cy + b];
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "|cx|, |cy| < 2^65 (canonical_centre of a sum of i64 corners) and \
+                      a, b < 2^64: below 2^66 in i128"
+        )]
+        let (px, py) = ([cx - a, cx, cx + a], [cy - b, cy, cy + b]);
         let mut ax = [Axis::Zero, Axis::Zero, Axis::Zero];
         let mut ay = [Axis::Zero, Axis::Zero, Axis::Zero];
-        for p in 0..3 {
-            ax[p] = axis_paper(kind, px[p], self.width, g)?;
-            ay[p] = axis_paper(kind, py[p], self.height, g)?;
+        for ((axp, ayp), (&x, &y)) in ax.iter_mut().zip(ay.iter_mut()).zip(px.iter().zip(&py)) {
+            *axp = axis_paper(kind, x, self.width, g)?;
+            *ayp = axis_paper(kind, y, self.height, g)?;
         }
         Ok(Some(Footprint {
             ax,
@@ -674,7 +796,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
                 *n = ck(n.checked_add(ck(r.checked_mul(wq))?))?;
             }
         }
-        k.adds(8 * C as u32);
+        k.adds(const { per_channel(8, C) });
         Ok(n)
     }
 }
@@ -725,16 +847,19 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
             });
         }
         // w (h + 1) C + (w + 1) h C fits (storage_needed): none of these products overflow.
-        let ncols = w * (h + 1) * C;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w (h + 1) C + (w + 1) h C fits usize (storage_needed succeeded)"
+        )]
+        let (ncols, row_len, body_len, rlen) = (w * (h + 1) * C, w * C, h * w * C, (w + 1) * C);
         let got = storage.len();
         let (cols, rest) = storage
             .get_mut(..needed)
             .and_then(|t| t.split_at_mut_checked(ncols))
             .ok_or(Error::StorageTooSmall { needed, got })?;
         // Columns: row Y-1 of `cols` is Y; the last row holds the running sums V until written.
-        let row_len = w * C;
         let (body, last) = cols
-            .split_at_mut_checked(h * row_len)
+            .split_at_mut_checked(body_len)
             .ok_or(Error::StorageTooSmall { needed, got })?;
         last.fill(E::ZERO);
         for y in 0..=h {
@@ -748,14 +873,23 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
                     Some(r) => r.get(idx).map_or(E::ZERO, |t| E::from_u16(t.to_u16())),
                     None => E::ZERO,
                 };
-                let above = match y.checked_sub(1) {
-                    Some(ya) => body.get(ya * row_len + idx).copied().unwrap_or(E::ZERO),
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "y <= h and idx < w C: below (h + 1) w C, which fits usize \
+                              (storage_needed)"
+                )]
+                let (above_at, at) = (
+                    y.checked_sub(1).map(|ya| ya * row_len + idx),
+                    y * row_len + idx,
+                );
+                let above = match above_at {
+                    Some(i) => body.get(i).copied().unwrap_or(E::ZERO),
                     None => E::ZERO,
                 };
                 let q = above.plus(v.plus(*v)).plus(t);
                 if y < h {
                     *v = v.plus(t);
-                    if let Some(b) = body.get_mut(y * row_len + idx) {
+                    if let Some(b) = body.get_mut(at) {
                         *b = q;
                     }
                 } else {
@@ -764,23 +898,26 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
             }
         }
         // Rows.
-        let rlen = (w + 1) * C;
         for (y, out) in rest.chunks_exact_mut(rlen.max(1)).take(h).enumerate() {
             let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
             let mut v = [E::ZERO; C];
             let mut acc = [E::ZERO; C];
             for (xi, o) in out.chunks_exact_mut(C).enumerate() {
-                for (c, o) in o.iter_mut().enumerate() {
+                for (c, ((o, a), v)) in o.iter_mut().zip(&mut acc).zip(&mut v).enumerate() {
                     let t = if xi < w {
-                        texels
-                            .get(xi * C + c)
-                            .map_or(E::ZERO, |t| E::from_u16(t.to_u16()))
+                        #[allow(
+                            clippy::arithmetic_side_effects,
+                            reason = "xi < w and c < C: below w C, which fits usize (the \
+                                      texture's checked width * C)"
+                        )]
+                        let at = xi * C + c;
+                        texels.get(at).map_or(E::ZERO, |t| E::from_u16(t.to_u16()))
                     } else {
                         E::ZERO
                     };
-                    acc[c] = acc[c].plus(v[c].plus(v[c])).plus(t);
-                    v[c] = v[c].plus(t);
-                    *o = acc[c];
+                    *a = a.plus(v.plus(*v)).plus(t);
+                    *v = v.plus(t);
+                    *o = *a;
                 }
             }
         }
@@ -799,21 +936,33 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
 
     /// Table bytes as stored (both line tables).
     pub fn table_bytes(&self) -> usize {
-        core::mem::size_of_val(self.cols) + core::mem::size_of_val(self.rows)
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "each is the size of a slice, at most isize::MAX: the sum is below usize::MAX"
+        )]
+        let bytes = core::mem::size_of_val(self.cols) + core::mem::size_of_val(self.rows);
+        bytes
     }
 
     /// Column `i`'s `2 S2` at `Y` (`Y <= h + 1`; 0 at `Y = 0`), read counted.
     fn col<K: Counter>(&self, i: usize, y: usize, k: &mut K) -> [i128; C] {
         let mut out = [0i128; C];
-        if y != 0 && y <= self.height + 1 && i < self.width {
-            k.reads(1, E::BITS * C as u32);
-            k.words((E::BITS * C as u32).div_ceil(32));
+        #[allow(clippy::arithmetic_side_effects, reason = "h < 2^31 (the texture's)")]
+        let ymax = self.height + 1;
+        if y != 0 && y <= ymax && i < self.width {
+            k.reads(1, const { per_channel(E::BITS, C) });
+            k.words(const { per_channel(E::BITS, C).div_ceil(32) });
             // i < w, y <= h + 1: inside the table, no overflow.
-            let base = ((y - 1) * self.width + i) * C;
-            for (o, e) in out
-                .iter_mut()
-                .zip(self.cols.get(base..base + C).unwrap_or(&[]))
-            {
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "1 <= y <= h + 1 and i < w: inside the w (h + 1) C entries, a count that \
+                          fits usize (storage_needed)"
+            )]
+            let (at, end) = {
+                let base = ((y - 1) * self.width + i) * C;
+                (base, base + C)
+            };
+            for (o, e) in out.iter_mut().zip(self.cols.get(at..end).unwrap_or(&[])) {
                 *o = e.to_i128();
             }
         }
@@ -823,15 +972,22 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
     /// Row `j`'s `2 S2` at `X` (`X <= w + 1`; 0 at `X = 0`), read counted.
     fn row<K: Counter>(&self, x: usize, j: usize, k: &mut K) -> [i128; C] {
         let mut out = [0i128; C];
-        if x != 0 && x <= self.width + 1 && j < self.height {
-            k.reads(1, E::BITS * C as u32);
-            k.words((E::BITS * C as u32).div_ceil(32));
+        #[allow(clippy::arithmetic_side_effects, reason = "w < 2^31 (the texture's)")]
+        let xmax = self.width + 1;
+        if x != 0 && x <= xmax && j < self.height {
+            k.reads(1, const { per_channel(E::BITS, C) });
+            k.words(const { per_channel(E::BITS, C).div_ceil(32) });
             // j < h, x <= w + 1: inside the table, no overflow.
-            let base = (j * (self.width + 1) + x - 1) * C;
-            for (o, e) in out
-                .iter_mut()
-                .zip(self.rows.get(base..base + C).unwrap_or(&[]))
-            {
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "j < h and 1 <= x <= w + 1: inside the (w + 1) h C entries, a count that \
+                          fits usize (storage_needed)"
+            )]
+            let (at, end) = {
+                let base = (j * (self.width + 1) + x - 1) * C;
+                (base, base + C)
+            };
+            for (o, e) in out.iter_mut().zip(self.rows.get(at..end).unwrap_or(&[])) {
                 *o = e.to_i128();
             }
         }
@@ -907,7 +1063,7 @@ fn eval1<const C: usize, K: Counter>(
     f: &mut LineFn<'_, K, C>,
     k: &mut K,
 ) -> Result<[i128; C], Error> {
-    let cu = C as u32;
+    let cu = const { per_channel(1, C) };
     let mut out = [0i128; C];
     match ax {
         Axis::Zero => {}
@@ -915,13 +1071,16 @@ fn eval1<const C: usize, K: Counter>(
             let v0 = f(i, k)?;
             let v1 = f(i.wrapping_add(1), k)?;
             k.muls(cu);
-            k.adds(2 * cu);
-            for c in 0..C {
-                let d = ck(v1[c].checked_sub(v0[c]))?;
-                out[c] = ck(ck(v0[c].checked_mul(s))?.checked_add(ck(d.checked_mul(a))?))?;
+            k.adds(const { per_channel(2, C) });
+            for ((o, v0), v1) in out.iter_mut().zip(v0).zip(v1) {
+                let d = ck(v1.checked_sub(v0))?;
+                *o = ck(ck(v0.checked_mul(s))?.checked_add(ck(d.checked_mul(a))?))?;
             }
         }
         Axis::Terms(t) => {
+            // A Terms holds at most 6 terms: the adds below are at most 5 C, a compile-time
+            // constant that fits u32.
+            let _ = const { per_channel(5, C) };
             let mut used = 0u32;
             for &(idx, w) in &t.t {
                 if w == 0 {
@@ -931,13 +1090,25 @@ fn eval1<const C: usize, K: Counter>(
                 if !w.unsigned_abs().is_power_of_two() {
                     k.muls(cu);
                 }
-                used += 1;
-                for c in 0..C {
-                    out[c] = ck(out[c].checked_add(ck(v[c].checked_mul(w))?))?;
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "at most 6 terms (the heapless capacity)"
+                )]
+                {
+                    used += 1;
+                }
+                for (o, v) in out.iter_mut().zip(v) {
+                    *o = ck(o.checked_add(ck(v.checked_mul(w))?))?;
                 }
             }
             if used > 1 {
-                k.adds((used - 1) * cu);
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "2 <= used <= 6: (used - 1) C <= 5 C, which fits u32 (the \
+                              compile-time per_channel(5, C) above)"
+                )]
+                let adds = (used - 1) * cu;
+                k.adds(adds);
             }
         }
     }
@@ -951,27 +1122,44 @@ fn s2_terms(kind: EdgeKind, x: i128, n: usize) -> Result<Terms, Error> {
         // No table has an empty axis; an empty line sums to zero.
         return Ok(Terms::default());
     }
-    let nn = n as i128;
+    let nn = i128::from(u64_from_usize(n));
+    // n <= 2^31 - 1 (a texture's side), and every x here is below 2^67 in magnitude (a
+    // position from i64 corners, or an i32 centre and u32 half-width): the plain operations
+    // below stay far inside i128 and usize; the products are checked.
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "n < 2^31 (a texture's side)"
+    )]
+    let (n1, nn1) = (n + 1, nn + 1);
     let mut t = Terms::default();
     match kind {
         EdgeKind::Border => {
             if x <= 0 {
-            } else if x <= nn + 1 {
-                t.push(x as usize, 1)?;
+            } else if x <= nn1 {
+                t.push(index(x), 1)?;
             } else {
-                t.push(n, nn + 1 - x)?;
-                t.push(n + 1, x - nn)?;
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "|x| < 2^67, n < 2^31: far inside i128"
+                )]
+                let (w0, w1) = (nn1 - x, x - nn);
+                t.push(n, w0)?;
+                t.push(n1, w1)?;
             }
         }
         EdgeKind::Clamp => {
             if x <= 0 {
                 t.push(1, ck(x.checked_mul(x))?)?;
             } else if x <= nn {
-                t.push(x as usize, 1)?;
+                t.push(index(x), 1)?;
             } else {
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "|x| < 2^67, n < 2^31: far inside i128"
+                )]
                 let d = x - nn;
                 let d2 = ck(d.checked_mul(d))?;
-                t.push(n + 1, ck(d.checked_add(d2))?)?;
+                t.push(n1, ck(d.checked_add(d2))?)?;
                 t.push(
                     n,
                     ck(ck(1i128.checked_sub(d))?.checked_sub(ck(d2.checked_mul(2))?))?,
@@ -984,26 +1172,44 @@ fn s2_terms(kind: EdgeKind, x: i128, n: usize) -> Result<Terms, Error> {
             let q = x.checked_div_euclid(nn).ok_or_else(acc_overflow)?;
             let r = x.checked_rem_euclid(nn).ok_or_else(acc_overflow)?;
             // q (n (q - 1) + 2 r) is even: n q (q - 1) and 2 q r are.
-            let c1 = ck(q.checked_mul(ck(ck(nn.checked_mul(q - 1))?.checked_add(2 * r))?))? / 2;
-            t.push(n + 1, c1)?;
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "|q| <= |x| < 2^67 and 0 <= r < n < 2^31: q - 1 and 2 r fit i128"
+            )]
+            let (q1, r2) = (q - 1, 2 * r);
+            let c1 = ck(q.checked_mul(ck(ck(nn.checked_mul(q1))?.checked_add(r2))?))? / 2;
+            t.push(n1, c1)?;
             t.push(n, ck(q.checked_sub(c1))?)?;
-            t.push(r as usize, 1)?;
+            t.push(index(r), 1)?;
         }
         EdgeKind::Mirror => {
+            #[allow(clippy::arithmetic_side_effects, reason = "n < 2^31")]
             let p = 2 * nn;
             let q = x.checked_div_euclid(p).ok_or_else(acc_overflow)?;
             let r = x.checked_rem_euclid(p).ok_or_else(acc_overflow)?;
             let mut c = ck(ck(p.checked_mul(q))?.checked_mul(q))?;
-            c = ck(c.checked_add(ck((2 * q).checked_mul(r))?))?;
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "|q| <= |x| < 2^67: 2 q fits i128"
+            )]
+            let q2 = 2 * q;
+            c = ck(c.checked_add(ck(q2.checked_mul(r))?))?;
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "0 <= r < p = 2n < 2^32: r - n, 2 (r - n) and p - r are small"
+            )]
             let idx = if r <= nn {
                 r
             } else {
                 c = ck(c.checked_add(2 * (r - nn)))?;
                 p - r
             };
-            t.push(n + 1, c)?;
-            t.push(n, -c)?;
-            t.push(idx as usize, 1)?;
+            // c = p q^2 + 2 q r (+ 2 (r - n)) >= -2 |q| r > -2^100: its negation fits.
+            #[allow(clippy::arithmetic_side_effects, reason = "c > -2^100 (above)")]
+            let neg_c = -c;
+            t.push(n1, c)?;
+            t.push(n, neg_c)?;
+            t.push(index(idx), 1)?;
         }
     }
     Ok(t)
@@ -1011,8 +1217,14 @@ fn s2_terms(kind: EdgeKind, x: i128, n: usize) -> Result<Terms, Error> {
 
 /// Moves the centre `c` (units `2^-g`, half-width `a`) to an equivalent position with small
 /// weights (module docs); `None` for a Border footprint entirely outside `[0, n]`.
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "|c| <= 2^64 (a sum of i64 corners, or an i32), 0 < a < 2^64, n < 2^31 and g <= 25: \
+              every sum, difference and negation below is under 2^66 in magnitude, and 2 end \
+              < 2^57"
+)]
 fn canonical_centre(kind: EdgeKind, c: i128, a: i128, n: usize, g: u32) -> Option<i128> {
-    let end = (n as i128) << g;
+    let end = i128::from(u64_from_usize(n)) << g;
     match kind {
         EdgeKind::Border => {
             if c + a <= 0 || c - a >= end {
@@ -1037,11 +1249,17 @@ fn canonical_centre(kind: EdgeKind, c: i128, a: i128, n: usize, g: u32) -> Optio
 }
 
 /// The paper (bilinear) evaluation of one axis at `x` (units `2^-g`).
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "|x| < 2^66 (a footprint position from i64 corners), n < 2^31 and g <= 25: the \
+              fraction x - (i << g) is in [0, s), and x - (n << g), s - a and i + 1 stay far \
+              inside i128"
+)]
 fn axis_paper(kind: EdgeKind, x: i128, n: usize, g: u32) -> Result<Axis, Error> {
     let s = 1i128 << g;
     let i = x >> g;
     let a = x - (i << g);
-    let nn = n as i128;
+    let nn = i128::from(u64_from_usize(n));
     Ok(match kind {
         EdgeKind::Border => {
             if i < 0 {
@@ -1053,12 +1271,12 @@ fn axis_paper(kind: EdgeKind, x: i128, n: usize, g: u32) -> Result<Axis, Error> 
                     a: x - (nn << g),
                 }
             } else {
-                Axis::Crow { i: i as usize, a }
+                Axis::Crow { i: index(i), a }
             }
         }
         _ => {
             if (0..nn).contains(&i) {
-                Axis::Crow { i: i as usize, a }
+                Axis::Crow { i: index(i), a }
             } else if i == nn && a == 0 {
                 Axis::Crow {
                     i: n.saturating_sub(1),
@@ -1074,6 +1292,18 @@ fn axis_paper(kind: EdgeKind, x: i128, n: usize, g: u32) -> Result<Axis, Error> 
     })
 }
 
+/// A line index `0 <= i <= n + 1` (`n` a texture's side, below `2^31`) as `usize`: every caller
+/// has compared `i` with `0` and `n + 1` (or `n`), so the cast is lossless.
+#[inline(always)]
+fn index(i: i128) -> usize {
+    #[allow(
+        clippy::as_conversions,
+        reason = "0 <= i <= n + 1 < 2^31 (the callers' comparisons): lossless"
+    )]
+    let u = i as usize;
+    u
+}
+
 /// Per channel `round(N * 2^shift / (a^2 b^2))` (negative `N` gives 0), counting `a^2`, `b^2`,
 /// `a^2 b^2` and one divide per channel.
 fn finish<const C: usize, K: Counter>(
@@ -1084,9 +1314,14 @@ fn finish<const C: usize, K: Counter>(
     k: &mut K,
 ) -> Result<Sample<C>, Error> {
     k.muls(3);
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "bits_of is at most 128: the sum is at most 512"
+    )]
+    let bits_needed = 2 * bits_of(a) + 2 * bits_of(b);
     let wide = Error::TooWide {
         what: Quantity::MeanNumerator,
-        bits_needed: 2 * bits_of(a) + 2 * bits_of(b),
+        bits_needed,
         bits_available: 127,
     };
     let d = a
@@ -1097,7 +1332,8 @@ fn finish<const C: usize, K: Counter>(
     let mut out = [0u64; C];
     for (o, &n) in out.iter_mut().zip(n) {
         k.divs(1);
-        *o = div_round_shift(n.max(0) as u128, shift, d)?;
+        // Clamped to >= 0: the reinterpretation is the value.
+        *o = div_round_shift(n.max(0).cast_unsigned(), shift, d)?;
     }
     Ok(Sample { values: out })
 }
@@ -1106,6 +1342,14 @@ fn finish<const C: usize, K: Counter>(
 pub(crate) use crate::wide::div_round_shift_u128 as div_round_shift;
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 mod tests {
     extern crate std;
     use super::*;
