@@ -34,6 +34,20 @@
 //! input, lent storage included: every index is checked (`get`, iterators) or proven in range,
 //! every division is by a value known non-zero, and a result that cannot be represented is a
 //! typed [`crate::Error`].
+//!
+//! The filter modules deny clippy's `indexing_slicing`, `arithmetic_side_effects`,
+//! `unwrap_used`, `expect_used`, `panic` and `as_conversions`: each plain operation or cast left
+//! carries an `allow` whose reason names the check or bound that makes it exact. Per-channel cost
+//! counts are compile-time constants, so a channel count whose count would not fit the
+//! counter's `u32` stops the build instead of wrapping.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 #[cfg(any(
     feature = "filter-mip",
