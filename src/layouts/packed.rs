@@ -10,11 +10,38 @@
 //!
 //! Nothing here panics: reads past the end of the slice give zero bits, writes that do not fit
 //! are refused.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::error::Error;
+use crate::width::bits_of_u64;
 
 /// Bits per storage word.
 pub const WORD_BITS: u32 = 32;
+
+/// [`WORD_BITS`] as a `u64` (bit offsets are `u64`).
+#[allow(
+    clippy::as_conversions,
+    reason = "u32 -> u64 is lossless; u64::from is not const"
+)]
+const WORD_BITS64: u64 = WORD_BITS as u64;
+
+/// `usize::MAX` as a `u64`: `usize` has at most 64 bits on every target Rust supports (asserted
+/// here), so the conversion is lossless.
+#[allow(
+    clippy::as_conversions,
+    reason = "usize::BITS <= 64 (asserted): lossless; u64::try_from is not const"
+)]
+const USIZE_MAX64: u64 = {
+    assert!(usize::BITS <= u64::BITS);
+    usize::MAX as u64
+};
 
 /// Words needed for `count` fields of `bits` bits: `ceil(count * bits / 32)`, saturating at
 /// `usize::MAX` (which no slice holds, so a size check against it still refuses). See
@@ -41,9 +68,16 @@ pub const fn words_for(count: usize, bits: u32) -> usize {
 /// assert_eq!(words_for_checked(usize::MAX, 64), None);
 /// ```
 pub const fn words_for_checked(count: usize, bits: u32) -> Option<usize> {
-    // `usize` has at most 64 bits on every target Rust supports, so `as u64` is lossless.
-    match (count as u64).checked_mul(bits as u64) {
-        Some(total) => words_of_bits(total, usize::MAX as u64),
+    // `usize` has at most 64 bits on every target Rust supports (USIZE_MAX64), so `as u64` is
+    // lossless.
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize::BITS <= 64 (asserted at USIZE_MAX64) and u32 -> u64: lossless; \
+                  From is not const"
+    )]
+    let (count, bits) = (count as u64, bits as u64);
+    match count.checked_mul(bits) {
+        Some(total) => words_of_bits(total, USIZE_MAX64),
         None => None,
     }
 }
@@ -52,7 +86,12 @@ pub const fn words_for_checked(count: usize, bits: u32) -> Option<usize> {
 /// `usize::MAX as u64`; tests pass `u32::MAX as u64` to check a 32-bit target's arithmetic on a
 /// 64-bit host).
 pub(crate) const fn words_of_bits(bits: u64, max_words: u64) -> Option<usize> {
-    let words = bits.div_ceil(WORD_BITS as u64);
+    let words = bits.div_ceil(WORD_BITS64);
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize::MAX -> u64 is lossless (USIZE_MAX64), and words <= usize::MAX where it is \
+                  cast back: lossless; From/TryFrom are not const"
+    )]
     if words > max_words || words > usize::MAX as u64 {
         None
     } else {
@@ -81,11 +120,16 @@ pub(crate) const fn bits_of_mul(a: u64, b: u64) -> u32 {
         .wrapping_add(p01 >> 32)
         .wrapping_add(p10 >> 32)
         .wrapping_add(mid >> 32);
-    if hi == 0 {
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "leading_zeros of a u64 is at most 64"
+    )]
+    let bits = if hi == 0 {
         64 - lo.leading_zeros()
     } else {
         128 - hi.leading_zeros()
-    }
+    };
+    bits
 }
 
 /// The low `len` bits set (`len <= 64`; `0` gives `0`, more than 64 all ones).
@@ -98,12 +142,23 @@ pub(crate) const fn mask(len: u32) -> u64 {
     }
 }
 
+/// The bit position of `offset` inside its 32-bit word: `offset mod 32`.
+#[inline(always)]
+fn word_shift(offset: u64) -> u32 {
+    #[allow(
+        clippy::as_conversions,
+        reason = "offset mod 32 < 32: lossless (a cast, not u32::try_from: no branch on the field reads)"
+    )]
+    let s = (offset % WORD_BITS64) as u32;
+    s
+}
+
 /// Word `first + i` of `words` widened to `u64`, `0` past the end.
 #[inline(always)]
 fn word(words: &[u32], first: usize, i: usize) -> u64 {
     match first.checked_add(i) {
         Some(j) => match words.get(j) {
-            Some(&w) => w as u64,
+            Some(&w) => u64::from(w),
             None => 0,
         },
         None => 0,
@@ -121,19 +176,24 @@ pub(crate) fn read_field(words: &[u32], offset: u64, len: u32) -> u64 {
 /// [`read_field`] with `mask(len)` precomputed.
 #[inline(always)]
 pub(crate) fn read_masked(words: &[u32], offset: u64, len: u32, mask: u64) -> u64 {
-    let shift = (offset % WORD_BITS as u64) as u32;
-    let Ok(first) = usize::try_from(offset / WORD_BITS as u64) else {
+    let shift = word_shift(offset);
+    let Ok(first) = usize::try_from(offset / WORD_BITS64) else {
         return 0;
     };
     // Two words with one range check; at the end of the slice, word by word (0 past it).
     let pair = match words.get(first..first.wrapping_add(2)) {
-        Some(&[a, b]) => a as u64 | (b as u64) << 32,
+        Some(&[a, b]) => u64::from(a) | u64::from(b) << 32,
         _ => word(words, first, 0) | word(words, first, 1) << 32,
     };
     let mut v = pair.wrapping_shr(shift);
     if shift.wrapping_add(len) > 64 {
         // shift is in 1..=31 here: the third word supplies the top `shift + len - 64` bits.
-        v |= word(words, first, 2).wrapping_shl(64 - shift);
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "shift < 32 (word_shift): 64 - shift is in 33..=64"
+        )]
+        let up = 64 - shift;
+        v |= word(words, first, 2).wrapping_shl(up);
     }
     v & mask
 }
@@ -142,6 +202,11 @@ pub(crate) fn read_masked(words: &[u32], offset: u64, len: u32, mask: u64) -> u6
 /// holding its first bit shifted down, or-ed with the next word shifted up (`(w << 1) << (31 -
 /// s)`, which is 0 for `s = 0` without a 32-bit shift); words past the slice read as 0.
 #[inline(always)]
+#[allow(
+    clippy::as_conversions,
+    reason = "u32 -> usize is lossless (usize has at least 32 bits: MAX_DIMENSION); the last cast \
+              keeps the low 32 bits on purpose, which mask (at most 32 bits) then selects"
+)]
 pub(crate) fn read_masked32(words: &[u32], at: u32, mask: u32) -> u32 {
     let i = (at / WORD_BITS) as usize;
     let s = at % WORD_BITS;
@@ -162,11 +227,10 @@ pub fn read_bits(words: &[u32], offset: u64, len: u32) -> (u64, u32) {
         return (0, 0);
     }
     let len = if len > 64 { 64 } else { len };
-    let shift = (offset % WORD_BITS as u64) as u32;
-    (
-        read_field(words, offset, len),
-        (shift + len).div_ceil(WORD_BITS),
-    )
+    let shift = word_shift(offset);
+    #[allow(clippy::arithmetic_side_effects, reason = "shift < 32 and len <= 64")]
+    let end = shift + len;
+    (read_field(words, offset, len), end.div_ceil(WORD_BITS))
 }
 
 /// Writes the low `len <= 64` bits of `value` at bit `offset` (other bits untouched). Returns
@@ -180,9 +244,14 @@ pub fn write_bits(words: &mut [u32], offset: u64, len: u32, value: u64) -> bool 
     if len > 64 || value & !mask(len) != 0 {
         return false;
     }
-    let shift = (offset % WORD_BITS as u64) as u32;
+    let shift = word_shift(offset);
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "shift < 32 and len <= 64: at most 3 words, lossless in usize"
+    )]
     let touched = (shift + len).div_ceil(WORD_BITS) as usize;
-    let Ok(first) = usize::try_from(offset / WORD_BITS as u64) else {
+    let Ok(first) = usize::try_from(offset / WORD_BITS64) else {
         return false;
     };
     let Some(end) = first.checked_add(touched) else {
@@ -195,11 +264,19 @@ pub fn write_bits(words: &mut [u32], offset: u64, len: u32, value: u64) -> bool 
     // The field and its mask moved to `shift`: the low 64 bits, then what spills into a third
     // word (only when shift + len > 64, so shift > 0).
     let (lo_v, lo_m) = (value.wrapping_shl(shift), m.wrapping_shl(shift));
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "shift is in 1..=31 where 64 - shift is formed"
+    )]
     let (hi_v, hi_m) = if shift == 0 {
         (0, 0)
     } else {
         (value.wrapping_shr(64 - shift), m.wrapping_shr(64 - shift))
     };
+    #[allow(
+        clippy::as_conversions,
+        reason = "splitting into 32-bit words: each cast keeps the low 32 bits on purpose"
+    )]
     let parts = [
         (lo_v as u32, lo_m as u32),
         ((lo_v >> 32) as u32, (lo_m >> 32) as u32),
@@ -226,12 +303,12 @@ pub(crate) fn write_field(
     if len > 64 || value & !mask(len) != 0 {
         return Err(Error::TooWide {
             what: crate::error::Quantity::Field,
-            bits_needed: 64 - value.leading_zeros(),
+            bits_needed: bits_of_u64(value),
             bits_available: len,
         });
     }
     Err(Error::StorageTooSmall {
-        needed: match words_of_bits(offset.saturating_add(len as u64), usize::MAX as u64) {
+        needed: match words_of_bits(offset.saturating_add(u64::from(len)), USIZE_MAX64) {
             Some(n) => n,
             None => usize::MAX,
         },
@@ -240,6 +317,15 @@ pub(crate) fn write_field(
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests {
     use super::*;
 
