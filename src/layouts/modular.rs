@@ -14,10 +14,18 @@
 //! Sizes are computed in `u64` with checks ([`Modular::words_needed`] is a `const fn`); a corner
 //! is one read of `k C` bits (two 32-bit words for `k C <= 33`); corrupted words give wrong
 //! sums, never a panic.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_field, read_masked, read_masked32, words_of_bits,
-    write_field, WORD_BITS,
+    bits_of_mul, check_dimensions, mask, read_field, read_masked, read_masked32, word_shift,
+    words_of_bits, write_field, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::Counter;
@@ -45,10 +53,13 @@ pub const fn modulus_bits_for(texel_bits: u32, max_area: u64) -> u32 {
         0
     } else {
         // (2^b - 1) a = a 2^b - a with a < 2^b: bits_of(a) + b, one less if a is a power of two.
-        let a_bits = 64 - max_area.leading_zeros();
-        texel_bits
-            .saturating_add(a_bits)
-            .saturating_sub(max_area.is_power_of_two() as u32)
+        let a_bits = crate::width::bits_of_u64(max_area);
+        #[allow(
+            clippy::as_conversions,
+            reason = "bool -> u32 is 0 or 1; u32::from is not const"
+        )]
+        let pow2 = max_area.is_power_of_two() as u32;
+        texel_bits.saturating_add(a_bits).saturating_sub(pow2)
     }
 }
 
@@ -87,7 +98,7 @@ pub(super) const fn words_for_channels(
     k: u32,
     channels: usize,
 ) -> Result<usize, Error> {
-    match Sizes::new(width, height, k, channels, usize::MAX as u64) {
+    match Sizes::new(width, height, k, channels, USIZE_MAX64) {
         Ok(s) => Ok(s.words),
         Err(e) => Err(e),
     }
@@ -114,13 +125,20 @@ impl Sizes {
             dimension: if width > height { width } else { height },
         };
         // `usize` has at most 64 bits, so `as u64` is lossless.
-        let Some(entry_bits) = (k as u64).checked_mul(channels as u64) else {
+        #[allow(
+            clippy::as_conversions,
+            reason = "u32 -> u64, and usize -> u64 with usize::BITS <= 64 (USIZE_MAX64): lossless; \
+                      From is not const"
+        )]
+        let (k64, channels, width64, height64) =
+            (k as u64, channels as u64, width as u64, height as u64);
+        let Some(entry_bits) = k64.checked_mul(channels) else {
             return Err(too_large);
         };
-        let Some(row_bits) = entry_bits.checked_mul(width as u64) else {
+        let Some(row_bits) = entry_bits.checked_mul(width64) else {
             return Err(too_large);
         };
-        let Some(total_bits) = row_bits.checked_mul(height as u64) else {
+        let Some(total_bits) = row_bits.checked_mul(height64) else {
             return Err(too_large);
         };
         let Some(words) = words_of_bits(total_bits, max_words) else {
@@ -134,7 +152,9 @@ impl Sizes {
             entry_mask: if entry_bits >= 64 {
                 u64::MAX
             } else {
-                mask(entry_bits as u32)
+                #[allow(clippy::as_conversions, reason = "entry_bits < 64 here: lossless")]
+                let bits = entry_bits as u32;
+                mask(bits)
             },
         })
     }
@@ -179,7 +199,7 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
         if k == 0 || k > E::BITS {
             return Err(Error::InvalidModulus { bits: k });
         }
-        match Sizes::new(width, height, k, C, usize::MAX as u64) {
+        match Sizes::new(width, height, k, C, USIZE_MAX64) {
             Ok(s) => Ok(s.words),
             Err(e) => Err(e),
         }
@@ -210,7 +230,7 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
         k: u32,
     ) -> Result<Self, Error> {
         check_k::<E>(texel_bits, k)?;
-        let sizes = Sizes::new(width, height, k, C, usize::MAX as u64)?;
+        let sizes = Sizes::new(width, height, k, C, USIZE_MAX64)?;
         if words.len() < sizes.words {
             return Err(Error::StorageTooSmall {
                 needed: sizes.words,
@@ -270,17 +290,27 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
             return out;
         }
         let s = &self.sizes;
-        if s.total_bits <= u32::MAX as u64 && s.entry_bits <= 32 {
+        if s.total_bits <= u64::from(u32::MAX) && s.entry_bits <= 32 {
             // Offsets below 2^32 and fields of at most 32 bits (the common case on a
             // microcontroller): 32-bit offset arithmetic and one two-word read, as the tiled
             // layout does.
-            let at = ((y - 1) as u32)
-                .wrapping_mul(s.row_bits as u32)
-                .wrapping_add(((x - 1) as u32).wrapping_mul(s.entry_bits as u32));
-            let read = s.entry_bits as u32;
+            #[allow(
+                clippy::arithmetic_side_effects,
+                clippy::as_conversions,
+                reason = "x, y >= 1 (checked above); x - 1 < w, y - 1 < h <= 2^31 - 1, and \
+                          row_bits <= total_bits < 2^32, entry_bits <= 32, entry_mask < 2^32 here: \
+                          every cast is lossless (and the offset below total_bits, Sizes)"
+            )]
+            let (at, read, entry_mask) = (
+                ((y - 1) as u32)
+                    .wrapping_mul(s.row_bits as u32)
+                    .wrapping_add(((x - 1) as u32).wrapping_mul(s.entry_bits as u32)),
+                s.entry_bits as u32,
+                s.entry_mask as u32,
+            );
             k.reads(1, read);
             k.words((at % WORD_BITS).saturating_add(read).div_ceil(WORD_BITS));
-            let v = u64::from(read_masked32(self.words, at, s.entry_mask as u32));
+            let v = u64::from(read_masked32(self.words, at, entry_mask));
             let m = mask(self.k);
             let mut shift = 0u32;
             for o in out.iter_mut() {
@@ -290,19 +320,25 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
             return out;
         }
         // Below total_bits for x <= w, y <= h (checked when the sizes were made): no wrap.
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "x, y >= 1 (checked above); usize -> u64 is lossless (usize::BITS <= 64)"
+        )]
         let offset = ((y - 1) as u64)
             .wrapping_mul(s.row_bits)
             .wrapping_add(((x - 1) as u64).wrapping_mul(s.entry_bits));
         let read = u32::try_from(s.entry_bits).unwrap_or(u32::MAX);
         k.reads(1, read);
-        k.words(
-            ((offset % WORD_BITS as u64) as u32)
-                .saturating_add(read)
-                .div_ceil(WORD_BITS),
-        );
+        k.words(word_shift(offset).saturating_add(read).div_ceil(WORD_BITS));
         if C == 1 || s.entry_bits <= 64 {
             // One read of all channels (k C <= 64 bits; for C = 1, k <= 64).
-            let v = read_masked(self.words, offset, s.entry_bits as u32, s.entry_mask);
+            #[allow(
+                clippy::as_conversions,
+                reason = "entry_bits <= 64 in this branch (for C = 1 it is k <= 64): lossless"
+            )]
+            let bits = s.entry_bits as u32;
+            let v = read_masked(self.words, offset, bits, s.entry_mask);
             if C == 1 {
                 for o in out.iter_mut() {
                     *o = E::from_u64_truncating(v);
@@ -319,7 +355,7 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
             let mut at = offset;
             for o in out.iter_mut() {
                 *o = E::from_u64_truncating(read_field(self.words, at, self.k));
-                at = at.wrapping_add(self.k as u64);
+                at = at.wrapping_add(u64::from(self.k));
             }
         }
         out
@@ -350,7 +386,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         row: &'s mut [E],
     ) -> Result<Self, Error> {
         check_k::<E>(texel_bits, k)?;
-        let sizes = Sizes::new(width, height, k, C, usize::MAX as u64)?;
+        let sizes = Sizes::new(width, height, k, C, USIZE_MAX64)?;
         if words.len() < sizes.words {
             return Err(Error::StorageTooSmall {
                 needed: sizes.words,
@@ -395,7 +431,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             if u64::from(v) > max {
                 return Err(Error::TooWide {
                     what: Quantity::Entry,
-                    bits_needed: u16::BITS - v.leading_zeros(),
+                    bits_needed: crate::width::bits_of_u64(u64::from(v)),
                     bits_available: self.texel_bits,
                 });
             }
@@ -403,16 +439,26 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         let k = self.k;
         let mut run = [E::ZERO; C];
         // rows_done < h: the row's fields end at or before total_bits (no wrap).
+        #[allow(
+            clippy::as_conversions,
+            reason = "usize -> u64 is lossless (usize::BITS <= 64)"
+        )]
         let mut offset = (self.rows_done as u64).wrapping_mul(self.sizes.row_bits);
         for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
             for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
                 *r = r.wrapping_add(E::from(tv.to_u16())).low_bits(k);
                 *ov = ov.wrapping_add(*r).low_bits(k);
                 write_field(self.words, offset, k, ov.to_u64())?;
-                offset = offset.wrapping_add(k as u64);
+                offset = offset.wrapping_add(u64::from(k));
             }
         }
-        self.rows_done += 1;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "rows_done < height (checked above)"
+        )]
+        {
+            self.rows_done += 1;
+        }
         Ok(())
     }
 

@@ -38,7 +38,7 @@ const WORD_BITS64: u64 = WORD_BITS as u64;
     clippy::as_conversions,
     reason = "usize::BITS <= 64 (asserted): lossless; u64::try_from is not const"
 )]
-const USIZE_MAX64: u64 = {
+pub(crate) const USIZE_MAX64: u64 = {
     assert!(usize::BITS <= u64::BITS);
     usize::MAX as u64
 };
@@ -144,7 +144,7 @@ pub(crate) const fn mask(len: u32) -> u64 {
 
 /// The bit position of `offset` inside its 32-bit word: `offset mod 32`.
 #[inline(always)]
-fn word_shift(offset: u64) -> u32 {
+pub(crate) fn word_shift(offset: u64) -> u32 {
     #[allow(
         clippy::as_conversions,
         reason = "offset mod 32 < 32: lossless (a cast, not u32::try_from: no branch on the field reads)"
