@@ -11,6 +11,14 @@
 //! | [`Modular`] | the flat table modulo `2^k`, packed at `k` bits | 1 field |
 //!
 //! See `docs/layouts.md` for the derivations, bits per entry and reads per lookup.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 mod modular;
 pub mod packed;
@@ -100,6 +108,11 @@ pub trait Layout<const C: usize> {
         self.quad(i, i.wrapping_add(1), j, j.wrapping_add(1), k)
     }
     /// Bits per texel and channel: `storage_bits / (w h C)`.
+    #[allow(
+        clippy::as_conversions,
+        reason = "a float ratio for reports: the counts convert to the nearest f64 (exact below 2^53; \
+                  no From<u64> or From<usize> for f64)"
+    )]
     fn bits_per_entry(&self) -> f64 {
         self.storage_bits() as f64 / (self.width() as f64 * self.height() as f64 * C as f64)
     }
@@ -119,6 +132,12 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
     fn value_bits(&self) -> u32 {
         self.total_bits()
     }
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "usize -> u64 is lossless (usize::BITS <= 64); the table's bytes are at most \
+                  isize::MAX < 2^63, so times 8 fits u64"
+    )]
     fn storage_bits(&self) -> u64 {
         self.table_bytes() as u64 * 8
     }
@@ -138,6 +157,12 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
         self.read_quad(xa, xb, ya, yb, k)
     }
     #[inline(always)]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "every crate caller passes a cell i < w, j < h (<= 2^31 - 1). A direct \
+                  Layout::cell_corners at usize::MAX overflows: the known exception \
+                  finding_flat_layout_corner_far_outside (docs/guarantees.md)"
+    )]
     fn cell_corners<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[E; C]; 4] {
         [
             self.read(i, j, k),
@@ -149,4 +174,13 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests;

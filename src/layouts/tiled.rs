@@ -33,15 +33,23 @@
 //! are shifts and masks when every block is a power of two times the one before (8 x 8 tiles,
 //! 2 in 16, ...), divisions by non-zero radices otherwise. Reads go through `get`: a corrupted
 //! layout (from [`Tiled::from_words`]) gives wrong sums, never a panic.
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use core::num::NonZeroU32;
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_masked, read_masked32, words_of_bits, write_field,
-    WORD_BITS,
+    bits_of_mul, check_dimensions, mask, read_masked, read_masked32, word_shift, words_of_bits,
+    write_field, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
-use crate::cost::Counter;
+use crate::cost::{per_channel, Counter};
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
@@ -66,6 +74,12 @@ impl AxisLevels {
     };
 
     /// Block sizes `b_1 < b_2 < ...`, each a multiple of the one before, at least 2.
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects,
+        reason = "const fn (no iterators): i < blocks.len() and i < MAX_LEVELS (the loop \
+                  condition) for both indexings and the increment"
+    )]
     pub const fn new(blocks: &[u32]) -> Result<Self, Error> {
         if blocks.len() > MAX_LEVELS {
             return Err(Error::InvalidLevels);
@@ -94,6 +108,10 @@ impl AxisLevels {
     }
 
     /// Number of components along this axis: levels + 1.
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "len <= MAX_LEVELS (AxisLevels::new, FLAT)"
+    )]
     pub const fn components(&self) -> usize {
         self.len + 1
     }
@@ -166,7 +184,12 @@ const ONE: NonZeroU32 = NonZeroU32::MIN;
 /// `a / b` by a divisor the type proves non-zero (`checked_div` so that it is a `const fn`; the
 /// `None` arm is unreachable).
 const fn div(a: u64, b: NonZeroU32) -> u64 {
-    match a.checked_div(b.get() as u64) {
+    #[allow(
+        clippy::as_conversions,
+        reason = "u32 -> u64 is lossless; u64::from is not const"
+    )]
+    let b = b.get() as u64;
+    match a.checked_div(b) {
         Some(q) => q,
         None => 0,
     }
@@ -208,6 +231,14 @@ pub(super) struct Axis {
 impl Axis {
     /// The axis of `levels` (whose blocks `AxisLevels::new` has checked; a block that would break
     /// the checks ends the levels there, so the divisors are non-zero whatever the input).
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "const fn (no iterators): p < MAX_LEVELS (loop condition), so p and p + 1 < N index \
+                  in bounds and p += 1 stays small; r >= 1 (NonZeroU32): r - 1 does not wrap; the \
+                  quotient b / prev <= b fits u32 and u32 -> u64 is lossless"
+    )]
     pub(super) const fn new(levels: &AxisLevels) -> Axis {
         let mut a = Axis {
             levels: 0,
@@ -260,6 +291,10 @@ impl Axis {
 
     /// Components: levels + 1.
     #[inline(always)]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "levels <= MAX_LEVELS (Axis::new)"
+    )]
     pub(super) const fn components(&self) -> usize {
         self.levels + 1
     }
@@ -306,6 +341,10 @@ impl Axis {
     /// `trunc_p(x)` (meaningful when `d_p != 0`) and `floor(x / b_{p+1})`; `None` past the top
     /// component.
     #[inline(always)]
+    #[allow(
+        clippy::indexing_slicing,
+        reason = "p < MAX_LEVELS is checked first (the compiler elides the bounds checks)"
+    )]
     pub(super) fn step(&self, p: usize, q: u32) -> Option<(u32, u32, u32)> {
         if p < self.levels && p < MAX_LEVELS {
             let low = self.low[p];
@@ -329,6 +368,14 @@ impl Axis {
 
     /// Stored positions of component `p` on an axis of `n` texels: the `X` in `1..=n` that are
     /// multiples of `b_p` with a non-zero digit `d_p`.
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "const fn: p < N, and p + 1 < N where p < MAX_LEVELS (checked); u32 -> u64 is \
+                  lossless; r >= 1; whole = n / b_{p+1}, so whole b_{p+1} <= n and \
+                  whole (r - 1) <= n: nothing wraps"
+    )]
     const fn count(&self, p: usize, n: u64) -> u64 {
         if p >= N {
             return 0;
@@ -345,6 +392,13 @@ impl Axis {
     }
 
     /// The longest interval `d_p b_p` of component `p` on an axis of `n` texels.
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "const fn: p < N, and p + 1 < N where p < MAX_LEVELS (checked); u32 -> u64 is \
+                  lossless; b_{p+1} > b_p (Axis::new); floor(n / b_p) b_p <= n"
+    )]
     const fn max_len(&self, p: usize, n: u64) -> u64 {
         if p >= N {
             return 0;
@@ -396,8 +450,8 @@ impl Component {
     #[inline(always)]
     pub(super) fn offset(&self, ix: u32, iy: u32) -> u64 {
         self.offset_bits
-            .wrapping_add((ix as u64).wrapping_mul(self.row_bits))
-            .wrapping_add((iy as u64).wrapping_mul(self.stride_bits))
+            .wrapping_add(u64::from(ix).wrapping_mul(self.row_bits))
+            .wrapping_add(u64::from(iy).wrapping_mul(self.stride_bits))
     }
 }
 
@@ -508,13 +562,23 @@ impl Geometry {
         texel_bits: u32,
         channels: usize,
     ) -> Result<Self, Error> {
-        Self::new_for(spec, width, height, texel_bits, channels, usize::MAX as u64)
+        Self::new_for(spec, width, height, texel_bits, channels, USIZE_MAX64)
     }
 
     /// The geometry, with every size and offset computed in `u64` with checks, and the word
     /// count refused above `max_words` (this target's `usize::MAX`; tests pass `u32::MAX` to
     /// check a 32-bit target's arithmetic on any host). Overflow anywhere is
     /// [`Error::TextureTooLarge`]: no storage could hold the layout.
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "const fn (no iterators, no From): p, q < N and i < 4 (loop conditions; i / 2 and \
+                  i % 2 < 2) index in bounds and the increments stay small; usize -> u64 is lossless \
+                  (usize::BITS <= 64) and so is bits <= 64 -> u64; lx, ly <= max side < 2^31, so \
+                  lx ly < 2^62; the u32 casts of offsets, rows, strides and masks happen only when \
+                  fields32 holds, i.e. every offset <= total_bits <= u32::MAX and every field <= 32 bits"
+    )]
     pub(super) const fn new_for(
         spec: TiledSpec,
         width: usize,
@@ -751,7 +815,12 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         let Some(row) = w1.checked_mul(C) else {
             return Err(too_large);
         };
-        match row.checked_mul(spec.y.components() + 1) {
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "components() <= MAX_LEVELS + 1"
+        )]
+        let rows = spec.y.components() + 1;
+        match row.checked_mul(rows) {
             Some(n) => Ok(n),
             None => Err(too_large),
         }
@@ -801,6 +870,12 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
 
     /// Adds the `C` fields of entry `(ix, iy)` of `comp` to `out`, counting the read.
     #[inline(always)]
+    #[allow(
+        clippy::as_conversions,
+        reason = "the u32 casts are on the fields32 path only: there every offset (so every row \
+                  and stride) is below 2^32 and every field at most 32 bits, so its mask too \
+                  (Geometry::new_for): lossless"
+    )]
     fn add_entry<K: Counter>(
         &self,
         comp: &Component,
@@ -830,17 +905,13 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         let offset = comp.offset(ix, iy);
         let read = u32::try_from(comp.stride_bits).unwrap_or(u32::MAX);
         k.reads(1, read);
-        k.words(
-            ((offset % WORD_BITS as u64) as u32)
-                .saturating_add(read)
-                .div_ceil(WORD_BITS),
-        );
+        k.words(word_shift(offset).saturating_add(read).div_ceil(WORD_BITS));
         let mut at = offset;
         for o in out.iter_mut() {
             let v = read_masked(self.words, at, comp.bits, comp.mask);
             // Sums of parts of S: no wrap on a valid layout (E holds the total).
             *o = o.wrapping_add(E::from_u64_truncating(v));
-            at = at.wrapping_add(comp.bits as u64);
+            at = at.wrapping_add(u64::from(comp.bits));
         }
     }
 
@@ -1077,9 +1148,10 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         let mut s = [s0, s1, s2, s3];
         // The additions done: 4 for the strips above, 4 for those to the left, 2 for the
         // tile corner (into the two left strips), per channel.
+        #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
         let adds =
-            4 * (y.q != 0) as u32 + 4 * (x.q != 0) as u32 + 2 * (x.q != 0 && y.q != 0) as u32;
-        k.adds(adds.saturating_mul(C as u32));
+            4 * u32::from(y.q != 0) + 4 * u32::from(x.q != 0) + 2 * u32::from(x.q != 0 && y.q != 0);
+        k.adds(adds.saturating_mul(const { per_channel(1, C) }));
         if let Some(m) = self.geo.spec.modulus {
             for v in s.iter_mut().flatten() {
                 *v = v.low_bits(m);
@@ -1119,10 +1191,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
                 self.add_entry(c11, ix1, iy1, out, k);
             }
         }
-        let fields = ((dx != 0) as u32 + (qx != 0) as u32) * ((dy != 0) as u32 + (qy != 0) as u32);
-        if fields > 1 {
-            k.adds((fields - 1).saturating_mul(C as u32));
-        }
+        count_field_adds::<K, C>([dx != 0, qx != 0], [dy != 0, qy != 0], k);
     }
 
     /// Adds `S(x, y)` (`0 < x <= w`, `0 < y <= h`) to `out` for any spec: the digits of both
@@ -1152,11 +1221,21 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
                     continue;
                 }
                 self.add_entry(comp, ix, iy, out, k);
-                fields += 1;
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "at most (MAX_LEVELS + 1)^2 = 25 fields"
+                )]
+                {
+                    fields += 1;
+                }
             }
         }
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "fields - 1 only when fields > 1"
+        )]
         if fields > 1 {
-            k.adds((fields - 1).saturating_mul(C as u32));
+            k.adds((fields - 1).saturating_mul(const { per_channel(1, C) }));
         }
     }
 
@@ -1177,6 +1256,10 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     }
 
     /// The most fields one `S(x, y)` reads: `(Lx + 1)(Ly + 1)`.
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "each at most MAX_LEVELS + 1 = 5"
+    )]
     pub fn max_fields_per_corner(&self) -> usize {
         self.geo.ax.components() * self.geo.ay.components()
     }
@@ -1199,9 +1282,23 @@ fn add_to<E: Entry, const C: usize>(acc: &mut [E; C], v: &[E; C]) {
 /// per channel (as [`Tiled::corner_one_level`] counts them).
 #[inline(always)]
 fn count_corner_adds<K: Counter, const C: usize>(x: &OneDigits, y: &OneDigits, k: &mut K) {
-    let fields = ((x.d != 0) as u32 + (x.q != 0) as u32) * ((y.d != 0) as u32 + (y.q != 0) as u32);
-    if fields > 1 {
-        k.adds((fields - 1).saturating_mul(C as u32));
+    count_field_adds::<K, C>([x.d != 0, x.q != 0], [y.d != 0, y.q != 0], k);
+}
+
+/// The additions of one corner of one level of tiles: one per field read after the first, per
+/// channel, for the non-zero digits `[d, q]` of each axis.
+#[inline(always)]
+fn count_field_adds<K: Counter, const C: usize>(x: [bool; 2], y: [bool; 2], k: &mut K) {
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "(at most 2) * (at most 2) fields; fields - 1 only when fields > 1"
+    )]
+    {
+        let ([xd, xq], [yd, yq]) = (x, y);
+        let fields = (u32::from(xd) + u32::from(xq)) * (u32::from(yd) + u32::from(yq));
+        if fields > 1 {
+            k.adds((fields - 1).saturating_mul(const { per_channel(1, C) }));
+        }
     }
 }
 
@@ -1235,7 +1332,10 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         if x.wrapping_sub(1) >= g.width || y.wrapping_sub(1) >= g.height {
             return out;
         }
-        // x <= w and y <= h are below 2^31: lossless.
+        #[allow(
+            clippy::as_conversions,
+            reason = "x <= w and y <= h (checked above) are below 2^31: lossless"
+        )]
         let (x, y) = (x as u32, y as u32);
         if let Some(o) = &g.one_level {
             return self.corner_fast(o, x, y, k);
@@ -1257,7 +1357,12 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         if let Some(o) = &self.geo.one_level {
             // i + 1 <= w and j + 1 <= h (so both below 2^31) for the fast path.
             if i < self.geo.width && j < self.geo.height {
-                if let Some(v) = self.cell_fast(o, i as u32, j as u32, k) {
+                #[allow(
+                    clippy::as_conversions,
+                    reason = "i < w and j < h (checked above) are below 2^31: lossless"
+                )]
+                let (i, j) = (i as u32, j as u32);
+                if let Some(v) = self.cell_fast(o, i, j, k) {
                     return v;
                 }
             }
@@ -1279,8 +1384,12 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         let g = &self.geo;
         match &g.one_level {
             Some(o) if xa.max(xb) <= g.width && ya.max(yb) <= g.height => {
-                // At most w, h < 2^31: lossless.
-                self.quad_fast(o, [xa as u32, xb as u32, ya as u32, yb as u32], k)
+                #[allow(
+                    clippy::as_conversions,
+                    reason = "at most w, h (the guard) < 2^31: lossless"
+                )]
+                let corners = [xa as u32, xb as u32, ya as u32, yb as u32];
+                self.quad_fast(o, corners, k)
             }
             _ => [
                 self.corner(xa, ya, k),
@@ -1329,7 +1438,14 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             scratch,
             geo,
             // (w + 1) C <= need: no overflow.
-            row_len: (width + 1) * C,
+            row_len: {
+                #[allow(
+                    clippy::arithmetic_side_effects,
+                    reason = "(w + 1) C <= need, which scratch_needed computed with checks"
+                )]
+                let row_len = (width + 1) * C;
+                row_len
+            },
             rows_done: 0,
         })
     }
@@ -1350,9 +1466,14 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         }
         // w C < (w + 1) C = row_len: no overflow.
         let n = g.width;
-        if texels.len() != n * C {
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w C < (w + 1) C = row_len, computed with checks (scratch_needed)"
+        )]
+        let expected = n * C;
+        if texels.len() != expected {
             return Err(Error::RowLength {
-                expected: n * C,
+                expected,
                 got: texels.len(),
             });
         }
@@ -1363,11 +1484,15 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             if u64::from(v) > max {
                 return Err(Error::TooWide {
                     what: Quantity::Entry,
-                    bits_needed: u16::BITS - v.leading_zeros(),
+                    bits_needed: width::bits_of_u64(u64::from(v)),
                     bits_available: g.texel_bits,
                 });
             }
         }
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "E::BITS is 16, 32 or 64 (Entry is sealed): + 1 does not wrap"
+        )]
         let overflow = Error::TooWide {
             what: Quantity::Entry,
             bits_needed: E::BITS + 1,
@@ -1404,9 +1529,13 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         }
         // Row y ends a block of exactly one y component: that of its lowest non-zero digit
         // (a multiple of b_q with d_q != 0). Likewise each x, for the x components.
-        let y = *rows_done + 1;
-        // y <= h < 2^31: lossless.
-        let dy = g.ay.digits(y as u32);
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "rows_done < h (checked above), so y <= h < 2^31: no wrap, lossless"
+        )]
+        let y = (*rows_done + 1) as u32;
+        let dy = g.ay.digits(y);
         let Some(q) = dy
             .digit
             .iter()
@@ -1418,6 +1547,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let iy = dy.index.get(q).copied().unwrap_or(0);
         let acc = accs.chunks_exact(row_len).nth(q).ok_or(short)?;
         for x in 1..=n {
+            #[allow(clippy::as_conversions, reason = "x <= w < 2^31: lossless")]
             let dx = g.ax.digits(x as u32);
             let Some(p) = dx
                 .digit
@@ -1432,11 +1562,21 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 dx.index.get(p).copied().unwrap_or(0),
             );
             // The interval I_p(x) = [x - d_p b_p, x): x is a multiple of b_p here.
-            let lo = x - (d as usize) * (g.ax.block(p) as usize);
+            #[allow(
+                clippy::arithmetic_side_effects,
+                clippy::as_conversions,
+                reason = "u32 -> usize is lossless (usize has at least 32 bits: MAX_DIMENSION); \
+                          x = sum_k d_k b_k >= d_p b_p, so x - d_p b_p >= 0; lo <= x <= w, so \
+                          (x + 1) C <= (w + 1) C = row_len, computed with checks"
+            )]
+            let (hi_range, lo_range) = {
+                let lo = x - (d as usize) * (g.ax.block(p) as usize);
+                (x * C..(x + 1) * C, lo * C..(lo + 1) * C)
+            };
             let comp = g.component(p, q).ok_or(short)?;
             let (hi_v, lo_v) = (
-                acc.get(x * C..(x + 1) * C).ok_or(short)?,
-                acc.get(lo * C..(lo + 1) * C).ok_or(short)?,
+                acc.get(hi_range).ok_or(short)?,
+                acc.get(lo_range).ok_or(short)?,
             );
             let mut at = comp.offset(ix, iy);
             for (&a, &b) in hi_v.iter().zip(lo_v.iter()) {
@@ -1445,7 +1585,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                     v = v.low_bits(m);
                 }
                 write_field(words, at, comp.bits, v.to_u64())?;
-                at = at.wrapping_add(comp.bits as u64);
+                at = at.wrapping_add(u64::from(comp.bits));
             }
         }
         // Reset the accumulators whose super-block ends here: those below q (y is a multiple of
@@ -1453,7 +1593,13 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         for acc in accs.chunks_exact_mut(row_len).take(q) {
             acc.fill(E::ZERO);
         }
-        *rows_done += 1;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "rows_done < h (checked above)"
+        )]
+        {
+            *rows_done += 1;
+        }
         Ok(())
     }
 
