@@ -59,6 +59,14 @@
 //! count them ([`crate::Tally`]), a box crossing an edge counted as its split (at most 2 or 3
 //! pieces per axis), plus the mean: one multiply and one divide per channel. The error is in
 //! units of the mean's last bit: 1/2 for the exact lookups (the mean's rounding).
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use crate::edge::EdgeKind;
 use crate::error::Error;
@@ -111,6 +119,11 @@ impl SceneFacts {
         edge: EdgeKind,
     ) -> SceneFacts {
         let one = if frac_bits < 64 { 1u64 << frac_bits } else { 0 };
+        #[allow(
+            clippy::as_conversions,
+            reason = "usize -> u64 is lossless (usize::BITS <= 64, asserted in width.rs); From is not const"
+        )]
+        let (w, h) = (width as u64, height as u64);
         SceneFacts {
             width,
             height,
@@ -118,10 +131,7 @@ impl SceneFacts {
             channels: 1,
             frac_bits,
             min_box: [one, one],
-            max_box: [
-                (width as u64).saturating_mul(one),
-                (height as u64).saturating_mul(one),
-            ],
+            max_box: [w.saturating_mul(one), h.saturating_mul(one)],
             leaves_texture: false,
             edge,
             mean_frac_bits: 8,
@@ -426,6 +436,13 @@ impl Plan {
     /// [`Error::InvertedBox`] for a smallest box above the largest, [`Error::NoSuchChannel`]
     /// for zero channels), or [`Error::NoPlan`] when no candidate fits a word and the read
     /// bound.
+    #[allow(
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects,
+        reason = "const fn (no iterators): i < MAX_CANDIDATES and n < MAX_CANDIDATES (loop \
+                  conditions) and b < MAX_CANDIDATES (checked before each use) index in bounds, and \
+                  the increments stay at most MAX_CANDIDATES"
+    )]
     pub const fn for_scene(facts: &SceneFacts) -> Result<Plan, Error> {
         if let Err(e) = check_facts(facts) {
             return Err(e);
@@ -557,6 +574,10 @@ impl Plan {
 
     /// Stored bits per texel entry (all channels), `table_bytes * 8 / (w h)`, as a fraction
     /// `(bits, texels)`.
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize -> u64 is lossless (usize::BITS <= 64, asserted in width.rs); From is not const"
+    )]
     pub const fn bits_per_entry(&self) -> (u64, u64) {
         (
             self.table_bytes.saturating_mul(8),
@@ -595,8 +616,10 @@ impl Plan {
             return Err(Error::InvertedBox);
         }
         let f = &self.facts;
-        let w = (r.x1 as u64).wrapping_sub(r.x0 as u64);
-        let h = (r.y1 as u64).wrapping_sub(r.y0 as u64);
+        // Two's complement: the difference of the bit patterns modulo 2^64 is x1 - x0, which
+        // lies in [0, 2^64) for x1 >= x0.
+        let w = r.x1.cast_unsigned().wrapping_sub(r.x0.cast_unsigned());
+        let h = r.y1.cast_unsigned().wrapping_sub(r.y0.cast_unsigned());
         if w < f.min_box[0] || h < f.min_box[1] {
             return Err(Error::OutsidePlan {
                 limit: PlanLimit::BoxTooSmall,
@@ -608,8 +631,17 @@ impl Plan {
             });
         }
         if !f.leaves_texture {
-            let pw = (f.width as i64) << f.frac_bits;
-            let ph = (f.height as i64) << f.frac_bits;
+            #[allow(
+                clippy::as_conversions,
+                reason = "for the sides the crate's tables accept (below 2^31, check_dimensions) and \
+                          F <= 24 (check_facts) the value is exact, below 2^55; a plan for a larger \
+                          side is the known exception finding_plan_for_a_texture_past_the_side_limit \
+                          (docs/guarantees.md), whose table no layout builds"
+            )]
+            let (pw, ph) = (
+                (f.width as i64) << f.frac_bits,
+                (f.height as i64) << f.frac_bits,
+            );
             if r.x0 < 0 || r.y0 < 0 || r.x1 > pw || r.y1 > ph {
                 return Err(Error::OutsidePlan {
                     limit: PlanLimit::LeavesTexture,
@@ -705,6 +737,7 @@ const fn shortcut_error(f: &SceneFacts) -> Option<(u64, u64)> {
     if w < 2 || h < 2 || f.mean_frac_bits > 32 {
         return None;
     }
+    #[allow(clippy::arithmetic_side_effects, reason = "w, h >= 2 (checked above)")]
     let (a, b) = (w - 1, h - 1);
     let m = width::max_texel_u64(f.texel_bits);
     let Some(den) = a.checked_mul(b) else {
@@ -720,7 +753,12 @@ const fn shortcut_error(f: &SceneFacts) -> Option<(u64, u64)> {
     let Some(t) = t.checked_shl(f.mean_frac_bits) else {
         return None;
     };
-    let Some(t) = t.checked_mul(a + b) else {
+    // a + b cannot overflow where this is called (F >= 1, so a, b < 2^63), but checked all the
+    // same: an overflow is the documented None.
+    let Some(sides) = a.checked_add(b) else {
+        return None;
+    };
+    let Some(t) = t.checked_mul(sides) else {
         return None;
     };
     let Some(num) = t.checked_add(den) else {
@@ -744,6 +782,10 @@ const fn pieces_per_axis(f: &SceneFacts, n: usize, max_side: u64) -> u32 {
     if !f.leaves_texture {
         return 1;
     }
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize -> u64 is lossless (usize::BITS <= 64, asserted in width.rs); From is not const"
+    )]
     let p = (n as u64) << f.frac_bits;
     match f.edge {
         EdgeKind::Border => 1,
@@ -771,6 +813,14 @@ const fn reject(layout: PlanLayout, entry: Option<EntryWord>, why: RejectReason)
 }
 
 /// Sizes one candidate, or says why it cannot serve.
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "const fn (no From/TryFrom): u32 -> usize and usize -> u64 are lossless (32 <= \
+              usize::BITS <= 64); n as usize and channels as u32 follow checks that they fit; \
+              bits / 8 by a constant; the cost counts are small: fields is 1 or 4, pieces per axis \
+              1 to 3 (lookups = px py <= 9, >= 1), corner reads and ops below 32"
+)]
 const fn size_candidate(
     f: &SceneFacts,
     lookup: PlanLookup,
@@ -930,6 +980,12 @@ const fn size_candidate(
     })
 }
 
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    reason = "const fn (no iterators): i < MAX_CANDIDATES (loop condition) indexes in bounds and \
+              the increment stays at most MAX_CANDIDATES"
+)]
 const fn duplicate(list: &[Option<Rejection>; MAX_CANDIDATES], n: usize, r: &Rejection) -> bool {
     let mut i = 0;
     while i < n && i < MAX_CANDIDATES {
@@ -965,4 +1021,13 @@ const fn same_layout(a: PlanLayout, b: PlanLayout) -> bool {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests;
