@@ -43,10 +43,11 @@
 /// proves that no bit disagreed.
 #[inline]
 pub fn log2_fixed(raw: u64, f: u32, out_frac: u32) -> Option<i32> {
-    if out_frac > 16 || f > 63 {
+    if raw == 0 || out_frac > 16 || f > 63 {
         return None;
     }
-    let e = raw.checked_ilog2()?; // raw in [2^e, 2^(e+1)); None for raw == 0
+    #[allow(clippy::arithmetic_side_effects, reason = "raw != 0: leading_zeros <= 63")]
+    let e = 63 - raw.leading_zeros(); // raw in [2^e, 2^(e+1))
     #[allow(
         clippy::arithmetic_side_effects,
         reason = "e, f <= 63: the difference is in [-63, 63]"

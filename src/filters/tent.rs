@@ -473,13 +473,18 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         };
         let mut ax = [Axis::Zero, Axis::Zero, Axis::Zero];
         let mut ay = [Axis::Zero, Axis::Zero, Axis::Zero];
-        for ((axp, ayp), d) in ax.iter_mut().zip(ay.iter_mut()).zip([-1i128, 0, 1]) {
+        for (p, (axp, ayp)) in ax.iter_mut().zip(ay.iter_mut()).enumerate() {
             #[allow(
                 clippy::arithmetic_side_effects,
-                reason = "|cx|, |cy| < 2^34 (an i32 moved by canonical_centre by less than a \
-                          period or the half-width) and a, b < 2^32: far inside i128"
+                clippy::as_conversions,
+                reason = "p < 3: d in {-1, 0, 1}; |cx|, |cy| < 2^34 (an i32 moved by \
+                          canonical_centre by less than a period or the half-width) and \
+                          a, b < 2^32: far inside i128"
             )]
-            let (x, y) = (cx + d * a, cy + d * b);
+            let (x, y) = {
+                let d = p as i128 - 1;
+                (cx + d * a, cy + d * b)
+            };
             *axp = Axis::Terms(s2_terms(kind, x, self.width)?);
             *ayp = Axis::Terms(s2_terms(kind, y, self.height)?);
         }
@@ -616,74 +621,88 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             const { per_channel(3, C) },
         );
         // sX = sum_p w_p pa_p sum_q w_q L_y Cy(col_p)(y_q)   (scale s^3)
+        // (Index loops over the three points: the compiler proves every index in range and
+        // emits smaller code for them than for the zipped iterators.)
         let mut sx = [0i128; C];
-        for ((&col, &pa_p), &w_p) in cols.iter().zip(&pa).zip(&w) {
+        #[allow(
+            clippy::indexing_slicing,
+            reason = "p < 3 indexes the [_; 3] arrays, c < C the [_; C] ones"
+        )]
+        for p in 0..3 {
             let mut xp = [0i128; C];
-            if let Some(col) = col {
+            if let Some(col) = cols[p] {
                 for (ayq, &wq) in fp.ay.iter().zip(&w) {
                     let v = eval1::<C, K>(ayq, s, &mut |iyy, k| Ok(lines.col(col, iyy, k)), k)?;
-                    for (x, v) in xp.iter_mut().zip(v) {
-                        *x = ck(x.checked_add(ck(v.checked_mul(wq))?))?;
+                    for c in 0..C {
+                        xp[c] = ck(xp[c].checked_add(ck(v[c].checked_mul(wq))?))?;
                     }
                 }
             }
             k.adds(c2);
             k.muls(c1);
             k.adds(c1);
-            for (sxc, x) in sx.iter_mut().zip(xp) {
-                let t = ck(ck(x.checked_mul(pa_p))?.checked_mul(w_p))?;
-                *sxc = ck(sxc.checked_add(t))?;
+            for c in 0..C {
+                let t = ck(ck(xp[c].checked_mul(pa[p]))?.checked_mul(w[p]))?;
+                sx[c] = ck(sx[c].checked_add(t))?;
             }
         }
         let mut sy = [0i128; C];
-        for ((&row, &pb_q), &w_q) in rows.iter().zip(&pb).zip(&w) {
+        #[allow(
+            clippy::indexing_slicing,
+            reason = "q < 3 indexes the [_; 3] arrays, c < C the [_; C] ones"
+        )]
+        for q in 0..3 {
             let mut yq = [0i128; C];
-            if let Some(row) = row {
+            if let Some(row) = rows[q] {
                 for (axp, &wp) in fp.ax.iter().zip(&w) {
                     let v = eval1::<C, K>(axp, s, &mut |ixx, k| Ok(lines.row(ixx, row, k)), k)?;
-                    for (y, v) in yq.iter_mut().zip(v) {
-                        *y = ck(y.checked_add(ck(v.checked_mul(wp))?))?;
+                    for c in 0..C {
+                        yq[c] = ck(yq[c].checked_add(ck(v[c].checked_mul(wp))?))?;
                     }
                 }
             }
             k.adds(c2);
             k.muls(c1);
             k.adds(c1);
-            for (syc, y) in sy.iter_mut().zip(yq) {
-                let t = ck(ck(y.checked_mul(pb_q))?.checked_mul(w_q))?;
-                *syc = ck(syc.checked_add(t))?;
+            for c in 0..C {
+                let t = ck(ck(yq[c].checked_mul(pb[q]))?.checked_mul(w[q]))?;
+                sy[c] = ck(sy[c].checked_add(t))?;
             }
         }
         // Texel term: sum_p w_p pa_p sum_q w_q pb_q t(i_p, j_q)   (scale s^4)
         let mut st = [0i128; C];
-        for ((&col, &pa_p), &w_p) in cols.iter().zip(&pa).zip(&w) {
+        #[allow(
+            clippy::indexing_slicing,
+            reason = "p, q < 3 index the [_; 3] arrays, c < C the [_; C] ones"
+        )]
+        for p in 0..3 {
             let mut inner = [0i128; C];
-            for ((&row, &pb_q), &w_q) in rows.iter().zip(&pb).zip(&w) {
-                if let (Some(col), Some(row)) = (col, row) {
+            for q in 0..3 {
+                if let (Some(col), Some(row)) = (cols[p], rows[q]) {
                     k.reads(1, const { per_channel(T::BITS, C) });
                     let texels = texture.row(row).ok_or(Error::EmptyTexture)?;
                     for (c, inner) in inner.iter_mut().enumerate() {
                         #[allow(
                             clippy::arithmetic_side_effects,
                             reason = "col < w (texel_at), c < C, and w C fits usize (the \
-                                      texture's checked width * C); t < 2^16 and pb_q <= 2^48"
+                                      texture's checked width * C); t < 2^16 and pb[q] <= 2^48"
                         )]
                         let term = {
                             let t = texels
                                 .get(col * C + c)
                                 .map_or(0, |t| i128::from(t.to_u16()));
-                            t * pb_q
+                            t * pb[q]
                         };
-                        *inner = ck(inner.checked_add(ck(term.checked_mul(w_q))?))?;
+                        *inner = ck(inner.checked_add(ck(term.checked_mul(w[q]))?))?;
                     }
                 }
                 k.muls(c1);
             }
             k.adds(c3);
             k.muls(c1);
-            for (stc, inner) in st.iter_mut().zip(inner) {
-                let t = ck(ck(inner.checked_mul(pa_p))?.checked_mul(w_p))?;
-                *stc = ck(stc.checked_add(t))?;
+            for c in 0..C {
+                let t = ck(ck(inner[c].checked_mul(pa[p]))?.checked_mul(w[p]))?;
+                st[c] = ck(st[c].checked_add(t))?;
             }
         }
         k.adds(c3);
