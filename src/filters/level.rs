@@ -46,7 +46,10 @@ pub fn log2_fixed(raw: u64, f: u32, out_frac: u32) -> Option<i32> {
     if raw == 0 || out_frac > 16 || f > 63 {
         return None;
     }
-    #[allow(clippy::arithmetic_side_effects, reason = "raw != 0: leading_zeros <= 63")]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "raw != 0: leading_zeros <= 63"
+    )]
     let e = 63 - raw.leading_zeros(); // raw in [2^e, 2^(e+1))
     #[allow(
         clippy::arithmetic_side_effects,
