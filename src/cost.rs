@@ -38,6 +38,27 @@ pub trait Counter {
     fn words(&mut self, n: u32) {
         let _ = n;
     }
+    /// Where a read was: `bits` bits (all channels) from bit `offset` of storage `region`
+    /// ([`Region`]). Reported once per read, beside [`Counter::reads`], so that a host-side
+    /// counter can model memory traffic and texel caches; the default ignores it (and
+    /// [`NoCount`] compiles it away).
+    #[inline(always)]
+    fn read_at(&mut self, region: Region, offset: u64, bits: u32) {
+        let _ = (region, offset, bits);
+    }
+}
+
+/// The storage a read comes from ([`Counter::read_at`]): separate memories of a texture unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Region {
+    /// The summed-area table (flat entries, or the 32-bit words of a packed, tiled or modular
+    /// layout); offset = entry index x entry bits x channels, or the field's bit offset.
+    Table,
+    /// The texture itself (texel index x texel bits x channels).
+    Texture,
+    /// A filter's own storage (pyramid levels, ripmap, dipmap, order-2 or squares tables).
+    Filter,
 }
 
 /// `n * channels` as the `u32` a [`Counter`] takes: a per-channel operation count, or the bits
@@ -115,45 +136,37 @@ impl Tally {
         }
     }
 
-    /// Multiplicative operations as Crow counts them: multiplies plus divides.
-    #[allow(
-        clippy::arithmetic_side_effects,
-        reason = "known exception (docs/guarantees.md, hostile::finding_tally_overflow): the u64 counts \
-                  are unchecked; they stay far below 2^63 for any count a lookup reports (at most a few \
-                  hundred operations per lookup), but a caller may feed or set arbitrary counts"
-    )]
+    /// Multiplicative operations as Crow counts them: multiplies plus divides (saturating).
     pub const fn multiplicative(&self) -> u64 {
-        self.muls + self.divs
+        self.muls.saturating_add(self.divs)
     }
 }
 
-#[allow(
-    clippy::arithmetic_side_effects,
-    reason = "known exception (docs/guarantees.md, hostile::finding_tally_overflow): the u64 counts are \
-              unchecked, far below 2^64 for the counts lookups report (a few hundred per lookup) but not \
-              for arbitrary caller counts; n * bits of two u32 is at most (2^32 - 1)^2 < 2^64"
-)]
+/// The counts saturate at `u64::MAX` (no lookup comes near: a few hundred operations each; a
+/// caller feeding arbitrary counts gets `u64::MAX`, never a wrapped or panicking count).
 impl Counter for Tally {
     #[inline]
     fn reads(&mut self, n: u32, bits: u32) {
-        self.reads += u64::from(n);
-        self.bits_read += u64::from(n) * u64::from(bits);
+        self.reads = self.reads.saturating_add(u64::from(n));
+        self.bits_read = self
+            .bits_read
+            .saturating_add(u64::from(n).saturating_mul(u64::from(bits)));
     }
     #[inline]
     fn muls(&mut self, n: u32) {
-        self.muls += u64::from(n);
+        self.muls = self.muls.saturating_add(u64::from(n));
     }
     #[inline]
     fn divs(&mut self, n: u32) {
-        self.divs += u64::from(n);
+        self.divs = self.divs.saturating_add(u64::from(n));
     }
     #[inline]
     fn adds(&mut self, n: u32) {
-        self.adds += u64::from(n);
+        self.adds = self.adds.saturating_add(u64::from(n));
     }
     #[inline]
     fn words(&mut self, n: u32) {
-        self.words += u64::from(n);
+        self.words = self.words.saturating_add(u64::from(n));
     }
 }
 

@@ -90,90 +90,90 @@ impl EdgeKind {
 
     /// The texel index the extended texture shows at integer position `i` of an axis of `n`
     /// texels, or `None` where it is zero ([`Border`] outside the texture) or the axis is empty
-    /// (`n = 0`). No division when `i` lies in `[0, n)` (or `[0, 2n)` for the mirror).
+    /// (`n = 0`). Any `n` (up to `usize::MAX`) and any `i`: computed in `u64` on `|i|`, so no
+    /// intermediate overflows (the mirror's period `2n` may exceed `u64` only when every `i` lies
+    /// within one period). No division when `i` lies in `[0, n)` (or `[0, 2n)` for the mirror);
+    /// otherwise one, in 32 bits when the numbers fit.
     #[allow(
         clippy::arithmetic_side_effects,
         clippy::as_conversions,
-        reason = "one proof for the function (const: no From/TryFrom): the bound is i64::MAX / 2 where \
-                  usize has 64 bits and 2^31 - 1 where it has 32 (the cast truncates to usize::MAX), \
-                  so after the check n as i64 is lossless and 2 n does not wrap; n - 1 >= 0 as \
-                  n >= 1; 2 n - 1 - r >= 0 as n <= r < 2 n; k lies in [0, n), so k as usize is exact"
+        reason = "one proof for the function (const: no From/TryFrom): usize has at most 64 bits, \
+                  so n as u64 and the results (each below n, hence below usize::MAX + 1) as usize \
+                  are exact; a = |i| <= 2^63; each subtraction is of a smaller value (m < p, \
+                  m <= a, r < 2n, a > n where taken), and 2 n is formed with checked_mul"
     )]
     pub const fn texel_index(self, i: i64, n: usize) -> Option<usize> {
-        if n == 0 || n > i64::MAX as usize / 2 {
+        if n == 0 {
             return None;
         }
-        let n = n as i64;
-        let inside = i >= 0 && i < n;
+        let n = n as u64;
+        let neg = i < 0;
+        let a = i.unsigned_abs();
+        if !neg && a < n {
+            return Some(a as usize);
+        }
         let k = match self {
-            EdgeKind::Border => {
-                if inside {
-                    i
-                } else {
-                    return None;
-                }
-            }
+            EdgeKind::Border => return None,
             EdgeKind::Clamp => {
-                if i < 0 {
+                if neg {
                     0
-                } else if i >= n {
-                    n - 1
                 } else {
-                    i
+                    n - 1
                 }
             }
             EdgeKind::Repeat => {
-                if inside {
-                    i
+                let m = rem_narrow(a, n);
+                if neg && m != 0 {
+                    n - m
                 } else {
-                    match rem_euclid_narrow(i, n) {
-                        Some(r) => r,
-                        None => return None,
-                    }
+                    m
                 }
             }
-            EdgeKind::Mirror => {
-                let r = if i >= 0 && i < 2 * n {
-                    i
-                } else {
-                    match rem_euclid_narrow(i, 2 * n) {
-                        Some(r) => r,
-                        None => return None,
+            EdgeKind::Mirror => match n.checked_mul(2) {
+                Some(p) => {
+                    let m = rem_narrow(a, p);
+                    // The index in the period [0, 2n), reflected in its second half.
+                    let r = if neg && m != 0 { p - m } else { m };
+                    if r < n {
+                        r
+                    } else {
+                        p - 1 - r
                     }
-                };
-                if r < n {
-                    r
-                } else {
-                    2 * n - 1 - r
                 }
-            }
+                // 2n > 2^64 > a: i lies in (-2n, 2n). i >= n: r = i < 2n; i < 0: r = 2n - a.
+                None => {
+                    if !neg {
+                        2 * n - 1 - a
+                    } else if a > n {
+                        n - (a - n)
+                    } else {
+                        a - 1
+                    }
+                }
+            },
         };
         Some(k as usize)
     }
 }
 
-/// `x mod p` (in `[0, p)`) for `p > 0`, in 32 bits when `|x|` and `p` fit (one hardware `udiv` on
-/// the Cortex-M4 instead of a software 64-bit division), else in 64. `None` for `p <= 0`.
+/// `a mod p` for `p > 0`, in 32 bits when both fit (one hardware `udiv` on the Cortex-M4 instead
+/// of a software 64-bit division), else in 64; 0 for `p = 0` (never passed).
 #[allow(
-    clippy::arithmetic_side_effects,
     clippy::as_conversions,
-    reason = "one proof for the function (const: no From/TryFrom): the casts to u32 follow the \
-              checks |x| <= u32::MAX and 0 < p <= u32::MAX (so they are exact), u32 -> i64 and \
-              u32::MAX -> u64/i64 are lossless, and p - r with 0 < r < p is in (0, p)"
+    reason = "const fn (no TryFrom): the casts to u32 are taken only when both values are at most \
+              u32::MAX (checked), and u32 -> u64 is lossless"
 )]
-const fn rem_euclid_narrow(x: i64, p: i64) -> Option<i64> {
-    if p <= 0 {
-        return None;
-    }
-    let a = x.unsigned_abs();
-    if a <= u32::MAX as u64 && p <= u32::MAX as i64 {
-        let r = match (a as u32).checked_rem(p as u32) {
-            Some(r) => r as i64,
-            None => return None,
+const fn rem_narrow(a: u64, p: u64) -> u64 {
+    if a <= u32::MAX as u64 && p <= u32::MAX as u64 {
+        return match (a as u32).checked_rem(p as u32) {
+            Some(r) => r as u64,
+            None => 0,
         };
-        return Some(if x >= 0 || r == 0 { r } else { p - r });
     }
-    x.checked_rem_euclid(p)
+    match a.checked_rem(p) {
+        Some(r) => r,
+        None => 0,
+    }
 }
 
 mod sealed {
@@ -617,6 +617,72 @@ mod tests {
         assert_eq!(EdgeKind::Mirror.texel_index(i64::MIN, 3), Some(1));
         assert_eq!(EdgeKind::Repeat.texel_index(i64::MAX, 3), Some(1));
         assert_eq!(EdgeKind::Clamp.texel_index(i64::MIN, 3), Some(0));
+    }
+
+    /// The extended texture's index by its definition, in `i128` (the test's own arithmetic).
+    fn texel_index_ref(kind: EdgeKind, i: i64, n: u128) -> Option<u128> {
+        let (i, n) = (i128::from(i), n as i128);
+        if n == 0 {
+            return None;
+        }
+        let k = match kind {
+            EdgeKind::Border => {
+                if i < 0 || i >= n {
+                    return None;
+                }
+                i
+            }
+            EdgeKind::Clamp => i.clamp(0, n - 1),
+            EdgeKind::Repeat => i.rem_euclid(n),
+            EdgeKind::Mirror => {
+                let r = i.rem_euclid(2 * n);
+                if r < n {
+                    r
+                } else {
+                    2 * n - 1 - r
+                }
+            }
+        };
+        Some(k as u128)
+    }
+
+    #[test]
+    fn texel_index_matches_the_definition_for_every_axis_length() {
+        let mut ns: Vec<usize> = (1..40).collect();
+        ns.extend([
+            255,
+            256,
+            u32::MAX as usize,
+            1 << 32,
+            (1 << 62) - 1,
+            1 << 62,
+            (1 << 62) + 1,
+            i64::MAX as usize,
+            (i64::MAX as usize) + 1,
+            usize::MAX - 1,
+            usize::MAX,
+        ]);
+        let mut is: Vec<i64> = (-100..100).collect();
+        is.extend([
+            i64::MIN,
+            i64::MIN + 1,
+            i64::MAX,
+            i64::MAX - 1,
+            -(1 << 62),
+            1 << 62,
+        ]);
+        is.extend([(1 << 32) - 1, 1 << 32, -(1 << 32), u32::MAX as i64 + 7]);
+        for kind in EdgeKind::ALL {
+            for &n in &ns {
+                for &i in &is {
+                    assert_eq!(
+                        kind.texel_index(i, n).map(|k| k as u128),
+                        texel_index_ref(kind, i, n as u128),
+                        "{kind:?} i = {i} n = {n}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

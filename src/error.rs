@@ -66,7 +66,10 @@ pub enum Error {
     TooWide {
         /// which quantity
         what: Quantity,
-        /// bits the worst case (or the actual data) needs
+        /// bits the worst case (or the actual data) needs; where that number is itself past
+        /// 64-bit arithmetic (the sum of a box over about 2^64 texels on the split path, the
+        /// modular bound of a box of more than 2^64 cells) it is 65: a lower bound, still above
+        /// every word's bits, and enough to refuse
         bits_needed: u32,
         /// bits the chosen type holds
         bits_available: u32,

@@ -68,7 +68,7 @@ mod texture;
 pub mod wide;
 pub mod width;
 
-pub use cost::{Counter, NoCount, Tally};
+pub use cost::{Counter, NoCount, Region, Tally};
 pub use edge::{Border, ClampToEdge, EdgeKind, EdgeMode, MirroredRepeat, Repeat};
 pub use error::{Error, Quantity};
 pub use layouts::Layout;

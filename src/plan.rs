@@ -73,6 +73,7 @@ use crate::error::Error;
 use crate::layouts::{modular_words, modulus_bits_for, tiled_words, TiledSpec};
 use crate::lookup::{FormKind, Shortcut};
 use crate::rect::Rect;
+use crate::texture::check_dimensions;
 use crate::width::{self, MAX_FRAC_BITS};
 
 /// What a scene needs of its table. Build one with [`SceneFacts::new`] and struct update
@@ -434,8 +435,10 @@ impl Plan {
     /// The plan for `facts`, or the reason none exists: invalid facts
     /// ([`Error::EmptyTexture`], [`Error::InvalidTexelBits`], [`Error::FracBitsUnsupported`],
     /// [`Error::InvertedBox`] for a smallest box above the largest, [`Error::NoSuchChannel`]
-    /// for zero channels), or [`Error::NoPlan`] when no candidate fits a word and the read
-    /// bound.
+    /// for zero channels, [`Error::ZeroArea`] for a largest box of zero area: no box to plan
+    /// for), or [`Error::NoPlan`] when no candidate fits a word and the read bound (also for a
+    /// texture no table accepts, a side above `2^31 - 1`: every candidate is then rejected with
+    /// [`Error::TextureTooLarge`]).
     #[allow(
         clippy::indexing_slicing,
         clippy::arithmetic_side_effects,
@@ -633,10 +636,8 @@ impl Plan {
         if !f.leaves_texture {
             #[allow(
                 clippy::as_conversions,
-                reason = "for the sides the crate's tables accept (below 2^31, check_dimensions) and \
-                          F <= 24 (check_facts) the value is exact, below 2^55; a plan for a larger \
-                          side is the known exception finding_plan_for_a_texture_past_the_side_limit \
-                          (docs/guarantees.md), whose table no layout builds"
+                reason = "a plan exists only for sides below 2^31 (every candidate checks \
+                          check_dimensions) and F <= 24 (check_facts): the value is exact, below 2^55"
             )]
             let (pw, ph) = (
                 (f.width as i64) << f.frac_bits,
@@ -913,6 +914,10 @@ const fn size_candidate(
     };
     let (storage_len, bytes) = match words {
         None => {
+            // The flat table's own size check (sides below 2^31, the entry count in usize).
+            if let Err(e) = check_dimensions(f.width, f.height, f.channels) {
+                return Err(reject(layout, Some(entry), RejectReason::Refused(e)));
+            }
             let n = (f.width as u64)
                 .saturating_mul(f.height as u64)
                 .saturating_mul(f.channels as u64);

@@ -15,8 +15,9 @@
 
 use core::ops::{Add, Mul, Shl, Sub};
 
-/// An unsigned texel sample.
-pub trait Texel: Copy + 'static {
+/// An unsigned texel sample: `u8` or `u16`. Sealed: the builds' width proofs rely on every
+/// texel being at most `2^BITS - 1`, which a foreign implementation could break.
+pub trait Texel: Copy + 'static + sealed::TexelSealed {
     /// Bits per texel; the largest texel is `2^BITS - 1`.
     const BITS: u32;
     /// The texel as `u16` (lossless: texels have at most 16 bits).
@@ -26,6 +27,9 @@ pub trait Texel: Copy + 'static {
     /// needs: the inverse of [`Texel::to_u16`] on the texel range.)
     fn from_u16_clamped(v: u16) -> Self;
 }
+
+impl sealed::TexelSealed for u8 {}
+impl sealed::TexelSealed for u16 {}
 
 impl Texel for u8 {
     const BITS: u32 = 8;
@@ -156,6 +160,8 @@ pub use crate::wide::Wide;
 pub(crate) mod sealed {
     /// Keeps the numeric traits closed: the width proofs cover exactly the implemented types.
     pub trait Sealed {}
+    /// Keeps [`super::Texel`] closed.
+    pub trait TexelSealed {}
 }
 
 /// An unsigned table entry.

@@ -245,6 +245,10 @@ impl Wide for u128 {
                   q <= n / 2 < 2^127: q + 1 fits"
     )]
     fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<u128, Error> {
+        // A zero sum has a zero mean at any number of output bits.
+        if self == 0 {
+            return Ok(0);
+        }
         let area = u128::from(w) * u128::from(h);
         if area == 0 {
             return Err(Error::ZeroArea);

@@ -296,13 +296,9 @@ pub const fn max_frac_bits(
         crate::FormKind::Paper => 0,
         crate::FormKind::Stable => 1,
     };
-    #[allow(
-        clippy::arithmetic_side_effects,
-        reason = "known exception (docs/guarantees.md, hostile::finding_max_frac_bits_overflow): \
-                  total_bits + extra wraps for total_bits = u32::MAX (a table's total has at \
-                  most 128 bits; the crate itself never calls this)"
-    )]
-    let needed = total_bits + extra;
+    // Saturating: a `total_bits` near `u32::MAX` (no table has one) needs more than any
+    // accumulator holds, so the answer is `None`, not a wrapped sum.
+    let needed = total_bits.saturating_add(extra);
     if needed > acc_value_bits {
         return None;
     }

@@ -3212,7 +3212,6 @@ fn error_bound_helpers_in_their_domain() {
 /// `u32::MAX` the sum `total_bits + 1` overflows (debug: panic; release: wraps and answers
 /// `Some(24)`).
 #[test]
-#[ignore = "finding: width::max_frac_bits(Stable, u32::MAX, 63) overflows (debug panic, release Some(24)); expected None"]
 fn finding_max_frac_bits_overflow() {
     let got = catch_unwind(|| width::max_frac_bits(FormKind::Stable, u32::MAX, 63));
     assert_eq!(got.ok(), Some(None));
@@ -3223,7 +3222,6 @@ fn finding_max_frac_bits_overflow() {
 /// public function panics on any input" and "nothing wraps silently". A wider texel can only
 /// have a larger bound, so the value must not shrink.
 #[test]
-#[ignore = "finding: rip/dip arithmetic_error_bound(63+) and level_selection_error_bound(64+) panic in debug, wrap in release"]
 fn finding_error_bounds_wrap_for_wide_texels() {
     for b in [17u32, 62, 63, 64, 100, u32::MAX] {
         for (name, f) in [
@@ -3248,7 +3246,6 @@ fn finding_error_bounds_wrap_for_wide_texels() {
 /// `Tally` adds without a check: a caller feeding it large counts panics in debug and wraps in
 /// release.
 #[test]
-#[ignore = "finding: Tally::reads/muls/... overflow u64 (debug panic, release wrap)"]
 fn finding_tally_overflow() {
     use texsat::Counter;
     let got = catch_unwind(|| {
@@ -3269,7 +3266,6 @@ fn finding_tally_overflow() {
 /// `S(x,y) + S(x-1,y-1)` above the word (here 60 000 + 30 000 in `u16`). The table below is
 /// what `Sat::build_checked` itself writes for the 2 x 2 texture [30000, 0; 0, 30000].
 #[test]
-#[ignore = "finding: Sat::from_table refuses a valid u16 SAT ([30000,30000,30000,60000], 16-bit texels) with InvalidTable{1,1,0}"]
 fn finding_from_table_refuses_valid_tables_near_the_word() {
     let texels = [30000u16, 0, 0, 30000];
     let tex = Texture::<u16>::new(&texels, 2, 2).expect("tex");
@@ -3288,7 +3284,6 @@ fn finding_from_table_refuses_valid_tables_near_the_word() {
 /// rejected (`RejectReason::Refused(TextureTooLarge)`) like the packed, tiled and modular ones,
 /// leaving `NoPlan`.
 #[test]
-#[ignore = "finding: Plan::for_scene(2^31 x 1) returns a Flat u64 plan whose table Sat refuses (TextureTooLarge)"]
 fn finding_plan_for_a_texture_past_the_side_limit() {
     let facts = SceneFacts::new(MAX_SIDE + 1, 1, 8, 0, EdgeKind::Border);
     assert_eq!(
@@ -3304,10 +3299,9 @@ fn finding_plan_for_a_texture_past_the_side_limit() {
 }
 
 /// `Plan::for_scene` documents its refusals (EmptyTexture, InvalidTexelBits,
-/// FracBitsUnsupported, InvertedBox, NoSuchChannel, NoPlan); facts with a zero largest box give
-/// the undocumented `ZeroArea`.
+/// FracBitsUnsupported, InvertedBox, NoSuchChannel, ZeroArea for a zero largest box, NoPlan).
+/// (A finding of the catalogue: `ZeroArea` was not documented; it is now.)
 #[test]
-#[ignore = "finding: Plan::for_scene with max_box = [0, 0] returns ZeroArea, not among its documented errors"]
 fn finding_plan_zero_box_error_undocumented() {
     let facts = SceneFacts {
         min_box: [0, 0],
@@ -3324,6 +3318,7 @@ fn finding_plan_zero_box_error_undocumented() {
                     | Error::FracBitsUnsupported { .. }
                     | Error::InvertedBox
                     | Error::NoSuchChannel
+                    | Error::ZeroArea
                     | Error::NoPlan)
         ),
         "{got:?}"
@@ -3333,7 +3328,6 @@ fn finding_plan_zero_box_error_undocumented() {
 /// `EdgeKind::texel_index` documents `None` only for Border outside the texture and an empty
 /// axis; it also answers `None` for any axis longer than `i64::MAX / 2` (64-bit targets).
 #[test]
-#[ignore = "finding: EdgeKind::texel_index(0, 2^62) is None for every mode; docs promise Some(0)"]
 fn finding_texel_index_long_axis() {
     let n = 1usize << 62;
     for kind in MODES {
@@ -3345,7 +3339,6 @@ fn finding_texel_index_long_axis() {
 /// output bits and more ("Refuses a result that does not fit the word"); the `u64` word
 /// answers 0 (see `means_of_hostile_boxes`).
 #[test]
-#[ignore = "finding: u64 tables: mean_rounded of a zero sum with out_frac_bits >= 128 is TooWide, not 0"]
 fn finding_u128_mean_of_zero() {
     let texels = [9u8; 4];
     let tex = Texture::<u8>::new(&texels, 2, 2).expect("tex");
@@ -3365,12 +3358,10 @@ fn finding_u128_mean_of_zero() {
     }
 }
 
-/// `Error::TooWide` carries "bits the worst case (or the actual data) needs"; docs/layouts.md:
-/// the modular refusal is `TooWide { ModularBox, bits_needed, k }` with the bound "m times the
-/// texel cells the box overlaps". Where those numbers leave `u64`, the code reports a floor
-/// instead: `word + 1` (65) on the split path, 65 for the modular bound.
+/// `Error::TooWide` carries "bits the worst case (or the actual data) needs", and, where that
+/// number leaves 64-bit arithmetic, 65 as a documented lower bound (a finding of the catalogue:
+/// the floor was not documented). Here the sum needs 82 bits and the modular bound 72.
 #[test]
-#[ignore = "finding: bits_needed is 65 (a floor) where the sum or the modular bound needs more: 82 / 72 bits here"]
 fn finding_bits_needed_floors_at_65() {
     let texels = [255u8; 4];
     let tex = Texture::<u8>::new(&texels, 2, 2).expect("tex");
@@ -3390,7 +3381,8 @@ fn finding_bits_needed_floors_at_65() {
         ),
         Err(Error::TooWide {
             what: Quantity::LookupAccumulator,
-            bits_needed: sum_bits,
+            // Documented (Error::TooWide): past 64-bit arithmetic, 65, a lower bound.
+            bits_needed: 65,
             bits_available: 64
         }),
         "split path"
@@ -3411,7 +3403,7 @@ fn finding_bits_needed_floors_at_65() {
         ),
         Err(Error::TooWide {
             what: Quantity::ModularBox,
-            bits_needed: bound_bits,
+            bits_needed: 65,
             bits_available: 16
         }),
         "modular bound"
@@ -3423,9 +3415,9 @@ fn finding_bits_needed_floors_at_65() {
 /// their multiplicities can leave the result word: `TooWide { LookupAccumulator }`, where the
 /// valid layout answers. A typed error, not a panic, but not one the docs list for this case.
 #[test]
-#[ignore = "finding: garbage Tiled::from_words / Modular words give TooWide{LookupAccumulator} on split boxes (docs: wrong sum or CorruptStorage)"]
 fn finding_corrupt_storage_too_wide() {
-    let failures = corrupt_lent_layouts(false);
+    // docs/design.md now lists TooWide { LookupAccumulator } on the split path.
+    let failures = corrupt_lent_layouts(true);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
@@ -3435,7 +3427,6 @@ fn finding_corrupt_storage_too_wide() {
 /// flat table's index `((y - 1) w + (x - 1)) C` overflows instead: a panic in debug; in release
 /// it wraps, and `x = 2^63 + 1` with two channels reads entry 0, `S(1, 1)`, not 0.
 #[test]
-#[ignore = "finding: Layout::corner/quad/cell_corners on Sat overflow for x or y near usize::MAX (debug panic, release wrong value)"]
 fn finding_flat_layout_corner_far_outside() {
     use texsat::Layout;
     let t = [1u8, 2, 3, 4, 5, 6];

@@ -107,6 +107,33 @@ pub trait Layout<const C: usize> {
     fn cell_corners<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[Self::Value; C]; 4] {
         self.quad(i, i.wrapping_add(1), j, j.wrapping_add(1), k)
     }
+    /// [`Layout::quad`] for corners the caller has placed in `[0, w] x [0, h]` (the lookups):
+    /// a layout may skip the range check here. Outside that range the values are unspecified
+    /// (never a panic). Hidden: callers outside the crate use [`Layout::quad`].
+    #[doc(hidden)]
+    #[inline(always)]
+    fn quad_placed<K: Counter>(
+        &self,
+        xa: usize,
+        xb: usize,
+        ya: usize,
+        yb: usize,
+        k: &mut K,
+    ) -> [[Self::Value; C]; 4] {
+        self.quad(xa, xb, ya, yb, k)
+    }
+    /// [`Layout::cell_corners`] for a cell the caller has placed (`i < w`, `j < h`: the 16-read
+    /// lookups' `split_coord`), with the same licence as [`Layout::quad_placed`]. Hidden.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn cell_corners_placed<K: Counter>(
+        &self,
+        i: usize,
+        j: usize,
+        k: &mut K,
+    ) -> [[Self::Value; C]; 4] {
+        self.cell_corners(i, j, k)
+    }
     /// Bits per texel and channel: `storage_bits / (w h C)`.
     #[allow(
         clippy::as_conversions,
@@ -141,8 +168,12 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
     fn storage_bits(&self) -> u64 {
         self.table_bytes() as u64 * 8
     }
+    /// Zero outside `[0, w] x [0, h]` (no read), as the other layouts.
     #[inline(always)]
     fn corner<K: Counter>(&self, x: usize, y: usize, k: &mut K) -> [E; C] {
+        if x > Sat::width(self) || y > Sat::height(self) {
+            return [E::ZERO; C];
+        }
         self.read(x, y, k)
     }
     #[inline(always)]
@@ -156,20 +187,36 @@ impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {
     ) -> [[E; C]; 4] {
         self.read_quad(xa, xb, ya, yb, k)
     }
+    /// Zero for a cell outside the table (`i >= w` or `j >= h`: no read).
     #[inline(always)]
-    #[allow(
-        clippy::arithmetic_side_effects,
-        reason = "every crate caller passes a cell i < w, j < h (<= 2^31 - 1). A direct \
-                  Layout::cell_corners at usize::MAX overflows: the known exception \
-                  finding_flat_layout_corner_far_outside (docs/guarantees.md)"
-    )]
     fn cell_corners<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[E; C]; 4] {
+        if i >= Sat::width(self) || j >= Sat::height(self) {
+            return [[E::ZERO; C]; 4];
+        }
+        self.cell_corners_placed(i, j, k)
+    }
+    /// Four reads through [`Sat::read`] (one multiply-add each beats two row slices here);
+    /// wrapping coordinates: for a placed cell they are the plain ones.
+    #[inline(always)]
+    fn cell_corners_placed<K: Counter>(&self, i: usize, j: usize, k: &mut K) -> [[E; C]; 4] {
+        let (i1, j1) = (i.wrapping_add(1), j.wrapping_add(1));
         [
             self.read(i, j, k),
-            self.read(i + 1, j, k),
-            self.read(i, j + 1, k),
-            self.read(i + 1, j + 1, k),
+            self.read(i1, j, k),
+            self.read(i, j1, k),
+            self.read(i1, j1, k),
         ]
+    }
+    #[inline(always)]
+    fn quad_placed<K: Counter>(
+        &self,
+        xa: usize,
+        xb: usize,
+        ya: usize,
+        yb: usize,
+        k: &mut K,
+    ) -> [[E; C]; 4] {
+        self.read_quad_placed(xa, xb, ya, yb, k)
     }
 }
 

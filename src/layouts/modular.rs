@@ -7,9 +7,10 @@
 //!
 //! The lookups know `k` ([`Layout::modulus`]) and refuse, with
 //! `TooWide { what: ModularBox, .. }`, any box whose sum could reach `2^k`: the texel cells the
-//! box overlaps times `m`, plus `2F` bits for [`crate::Paper`] and the edge-mode weighted path,
-//! whose corner values are only known modulo `2^k` (the [`crate::Stable`] form reduces its
-//! box-bounded differences first and needs no headroom).
+//! box overlaps times `m`, plus `2F` bits for [`crate::Paper`], whose interpolated corner values
+//! are only known modulo `2^k` (the [`crate::Stable`] form reduces its box-bounded differences
+//! first and needs no headroom). A box that crosses the texture's edge is split into in-range
+//! pieces, each at most the box's sum: no headroom beyond the form's own.
 //!
 //! Sizes are computed in `u64` with checks ([`Modular::words_needed`] is a `const fn`); a corner
 //! is one read of `k C` bits (two 32-bit words for `k C <= 33`); corrupted words give wrong

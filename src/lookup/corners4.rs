@@ -52,7 +52,7 @@ impl FormImpl for Corners4 {
                       2^31 - 1 (check_dimensions), so each fits usize (at least 32 bits: MAX_DIMENSION)"
         )]
         let (x0, y0, x1, y1) = (b.x0 as usize, b.y0 as usize, b.x1 as usize, b.y1 as usize);
-        let [a, c_, b_, d] = t.quad(x0, x1, y0, y1, k);
+        let [a, c_, b_, d] = t.quad_placed(x0, x1, y0, y1, k);
         k.adds(const { per_channel(3, C) });
         let modulus = t.modulus();
         let mut out = [<AccOf<L, C> as Acc>::ZERO; C];

@@ -30,7 +30,7 @@ fn corner<L: Layout<C>, const C: usize, K: Counter>(
 ) -> [AccOf<L, C>; C] {
     let (i, a) = split_coord(x, t.width(), f);
     let (j, b) = split_coord(y, t.height(), f);
-    let [q00, q10, q01, q11] = t.cell_corners(i, j, k);
+    let [q00, q10, q01, q11] = t.cell_corners_placed(i, j, k);
     k.muls(const { per_channel(3, C) });
     k.adds(const { per_channel(6, C) });
     let a = AccOf::<L, C>::from_u32(a);

@@ -43,7 +43,7 @@ fn corner<L: Layout<C>, const C: usize, K: Counter>(
 ) -> CornerParts<L::Value, AccOf<L, C>, C> {
     let (i, a) = split_coord(x, t.width(), f);
     let (j, b) = split_coord(y, t.height(), f);
-    let [q00, q10, q01, q11] = t.cell_corners(i, j, k);
+    let [q00, q10, q01, q11] = t.cell_corners_placed(i, j, k);
     k.adds(const { per_channel(4, C) });
     let z = <L::Value as Entry>::ZERO;
     let mut parts = [Part {
