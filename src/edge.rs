@@ -90,70 +90,167 @@ impl EdgeKind {
 
     /// The texel index the extended texture shows at integer position `i` of an axis of `n`
     /// texels, or `None` where it is zero ([`Border`] outside the texture) or the axis is empty
-    /// (`n = 0`). Any `n` (up to `usize::MAX`) and any `i`: computed in `u64` on `|i|`, so no
-    /// intermediate overflows (the mirror's period `2n` may exceed `u64` only when every `i` lies
-    /// within one period). No division when `i` lies in `[0, n)` (or `[0, 2n)` for the mirror);
-    /// otherwise one, in 32 bits when the numbers fit.
+    /// (`n = 0`). Any `n` up to `usize::MAX` and any `i`. No division when `i` lies in `[0, n)`
+    /// (or `[0, 2n)` for the mirror); otherwise one, in 32 bits when the numbers fit (one
+    /// hardware `udiv` on a Cortex-M4). Axes longer than `2^62` take an out-of-line path in
+    /// `u64` (so the common one stays small: it is inlined into every tap of the filters).
     #[allow(
         clippy::arithmetic_side_effects,
         clippy::as_conversions,
-        reason = "one proof for the function (const: no From/TryFrom): usize has at most 64 bits, \
-                  so n as u64 and the results (each below n, hence below usize::MAX + 1) as usize \
-                  are exact; a = |i| <= 2^63; each subtraction is of a smaller value (m < p, \
-                  m <= a, r < 2n, a > n where taken), and 2 n is formed with checked_mul"
+        reason = "one proof for the function (const: no From/TryFrom): with a 64-bit usize n is at \
+                  most i64::MAX / 2 past the check (longer axes take texel_index_long), with a \
+                  32-bit one n < 2^32; either way n as i64 is lossless and 2 n does not wrap; \
+                  n - 1 >= 0 as n >= 1; 2 n - 1 - r >= 0 as n <= r < 2 n; k lies in [0, n), so \
+                  k as usize is exact"
     )]
     pub const fn texel_index(self, i: i64, n: usize) -> Option<usize> {
         if n == 0 {
             return None;
         }
-        let n = n as u64;
-        let neg = i < 0;
-        let a = i.unsigned_abs();
-        if !neg && a < n {
-            return Some(a as usize);
+        // An axis longer than 2^62 texels (possible only with a 64-bit usize; no texture has
+        // one): the u64 path. With a 32-bit usize, n < 2^32 and every value below is exact in
+        // i64, so the check does not exist there.
+        #[cfg(target_pointer_width = "64")]
+        if n > i64::MAX as usize / 2 {
+            return texel_index_long(self, i, n);
         }
+        let n = n as i64;
+        let inside = i >= 0 && i < n;
         let k = match self {
-            EdgeKind::Border => return None,
-            EdgeKind::Clamp => {
-                if neg {
-                    0
+            EdgeKind::Border => {
+                if inside {
+                    i
                 } else {
+                    return None;
+                }
+            }
+            EdgeKind::Clamp => {
+                if i < 0 {
+                    0
+                } else if i >= n {
                     n - 1
+                } else {
+                    i
                 }
             }
             EdgeKind::Repeat => {
-                let m = rem_narrow(a, n);
-                if neg && m != 0 {
-                    n - m
+                if inside {
+                    i
                 } else {
-                    m
+                    match rem_euclid_narrow(i, n) {
+                        Some(r) => r,
+                        None => return None,
+                    }
                 }
             }
-            EdgeKind::Mirror => match n.checked_mul(2) {
-                Some(p) => {
-                    let m = rem_narrow(a, p);
-                    // The index in the period [0, 2n), reflected in its second half.
-                    let r = if neg && m != 0 { p - m } else { m };
-                    if r < n {
-                        r
-                    } else {
-                        p - 1 - r
+            EdgeKind::Mirror => {
+                let r = if i >= 0 && i < 2 * n {
+                    i
+                } else {
+                    match rem_euclid_narrow(i, 2 * n) {
+                        Some(r) => r,
+                        None => return None,
                     }
+                };
+                if r < n {
+                    r
+                } else {
+                    2 * n - 1 - r
                 }
-                // 2n > 2^64 > a: i lies in (-2n, 2n). i >= n: r = i < 2n; i < 0: r = 2n - a.
-                None => {
-                    if !neg {
-                        2 * n - 1 - a
-                    } else if a > n {
-                        n - (a - n)
-                    } else {
-                        a - 1
-                    }
-                }
-            },
+            }
         };
         Some(k as usize)
     }
+}
+
+/// `x mod p` (in `[0, p)`) for `p > 0`, in 32 bits when `|x|` and `p` fit (one hardware `udiv` on
+/// the Cortex-M4 instead of a software 64-bit division), else in 64. `None` for `p <= 0`.
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "one proof for the function (const: no From/TryFrom): the casts to u32 follow the \
+              checks |x| <= u32::MAX and 0 < p <= u32::MAX (so they are exact), u32 -> i64 and \
+              u32::MAX -> u64/i64 are lossless, and p - r with 0 < r < p is in (0, p)"
+)]
+const fn rem_euclid_narrow(x: i64, p: i64) -> Option<i64> {
+    if p <= 0 {
+        return None;
+    }
+    let a = x.unsigned_abs();
+    if a <= u32::MAX as u64 && p <= u32::MAX as i64 {
+        let r = match (a as u32).checked_rem(p as u32) {
+            Some(r) => r as i64,
+            None => return None,
+        };
+        return Some(if x >= 0 || r == 0 { r } else { p - r });
+    }
+    x.checked_rem_euclid(p)
+}
+
+/// [`EdgeKind::texel_index`] for an axis longer than `2^62` texels, in `u64` on `|i|` so that no
+/// intermediate overflows (the mirror's period `2n` may exceed `u64` only when every `i` lies
+/// within one period). Compiled on every target (tested on the host); called with a 64-bit usize.
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "one proof for the function (const: no From/TryFrom): usize has at most 64 bits, \
+              so n as u64 and the results (each below n, hence below usize::MAX + 1) as usize \
+              are exact; a = |i| <= 2^63; each subtraction is of a smaller value (m < p, \
+              m <= a, r < 2n, a > n where taken), and 2 n is formed with checked_mul"
+)]
+#[cfg_attr(not(target_pointer_width = "64"), allow(dead_code))]
+#[inline(never)]
+const fn texel_index_long(kind: EdgeKind, i: i64, n: usize) -> Option<usize> {
+    if n == 0 {
+        return None;
+    }
+    let n = n as u64;
+    let neg = i < 0;
+    let a = i.unsigned_abs();
+    if !neg && a < n {
+        return Some(a as usize);
+    }
+    let k = match kind {
+        EdgeKind::Border => return None,
+        EdgeKind::Clamp => {
+            if neg {
+                0
+            } else {
+                n - 1
+            }
+        }
+        EdgeKind::Repeat => {
+            let m = rem_narrow(a, n);
+            if neg && m != 0 {
+                n - m
+            } else {
+                m
+            }
+        }
+        EdgeKind::Mirror => match n.checked_mul(2) {
+            Some(p) => {
+                let m = rem_narrow(a, p);
+                // The index in the period [0, 2n), reflected in its second half.
+                let r = if neg && m != 0 { p - m } else { m };
+                if r < n {
+                    r
+                } else {
+                    p - 1 - r
+                }
+            }
+            // 2n > 2^64 > a: i lies in (-2n, 2n). i >= n: r = i < 2n; i < 0: r = 2n - a.
+            None => {
+                if !neg {
+                    2 * n - 1 - a
+                } else if a > n {
+                    n - (a - n)
+                } else {
+                    a - 1
+                }
+            }
+        },
+    };
+    Some(k as usize)
 }
 
 /// `a mod p` for `p > 0`, in 32 bits when both fit (one hardware `udiv` on the Cortex-M4 instead

@@ -455,7 +455,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             let start = y.checked_sub(1)?.checked_mul(row_len)?;
             self.table.get(start..start.checked_add(row_len)?)
         };
-        let mut at = |row: Option<&[E]>, x: usize| -> [E; C] {
+        let mut at = |row: Option<&[E]>, x: usize, y: usize| -> [E; C] {
             let Some(row) = row else { return zero };
             if x == 0 {
                 return zero;
@@ -469,13 +469,23 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
                 Some(v) => {
                     k.reads(1, const { per_channel(E::BITS, C) });
                     k.words(const { per_channel(E::BITS, C).div_ceil(32) });
+                    k.read_at(
+                        crate::Region::Table,
+                        self.entry_bit_offset(x, y),
+                        const { per_channel(E::BITS, C) },
+                    );
                     *v
                 }
                 None => zero,
             }
         };
         let (ra, rb) = (row(ya), row(yb));
-        [at(ra, xa), at(ra, xb), at(rb, xa), at(rb, xb)]
+        [
+            at(ra, xa, ya),
+            at(ra, xb, ya),
+            at(rb, xa, yb),
+            at(rb, xb, yb),
+        ]
     }
 
     /// [`Sat::read_quad`] for corners placed in `[0, w] x [0, h]` (the lookups): wrapping
@@ -508,7 +518,7 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             let start = y.wrapping_sub(1).wrapping_mul(row_len);
             self.table.get(start..start.wrapping_add(row_len))
         };
-        let mut at = |row: Option<&[E]>, x: usize| -> [E; C] {
+        let mut at = |row: Option<&[E]>, x: usize, y: usize| -> [E; C] {
             let Some(row) = row else { return zero };
             if x == 0 {
                 return zero;
@@ -519,13 +529,38 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
                 Some(v) => {
                     k.reads(1, const { per_channel(E::BITS, C) });
                     k.words(const { per_channel(E::BITS, C).div_ceil(32) });
+                    k.read_at(
+                        crate::Region::Table,
+                        self.entry_bit_offset(x, y),
+                        const { per_channel(E::BITS, C) },
+                    );
                     *v
                 }
                 None => zero,
             }
         };
         let (ra, rb) = (row(ya), row(yb));
-        [at(ra, xa), at(ra, xb), at(rb, xa), at(rb, xb)]
+        [
+            at(ra, xa, ya),
+            at(ra, xb, ya),
+            at(rb, xa, yb),
+            at(rb, xb, yb),
+        ]
+    }
+
+    /// Bit offset of `S(x, y)` (`x, y >= 1`) in the table, for [`crate::Counter::read_at`]:
+    /// `((y - 1) w + (x - 1)) C E::BITS` (wrapping: only a counter that records it computes it).
+    #[inline(always)]
+    #[allow(
+        clippy::as_conversions,
+        reason = "usize -> u64 is lossless (usize::BITS <= 64)"
+    )]
+    fn entry_bit_offset(&self, x: usize, y: usize) -> u64 {
+        (y.wrapping_sub(1) as u64)
+            .wrapping_mul(self.width as u64)
+            .wrapping_add(x.wrapping_sub(1) as u64)
+            .wrapping_mul(C as u64)
+            .wrapping_mul(u64::from(E::BITS))
     }
 
     /// `S(x, y)` with its read counted (reads of the zero row and column are free).
@@ -534,6 +569,11 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         if x != 0 && y != 0 {
             k.reads(1, const { per_channel(E::BITS, C) });
             k.words(const { per_channel(E::BITS, C).div_ceil(32) });
+            k.read_at(
+                crate::Region::Table,
+                self.entry_bit_offset(x, y),
+                const { per_channel(E::BITS, C) },
+            );
         }
         self.s(x, y)
     }

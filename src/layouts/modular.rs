@@ -29,7 +29,7 @@ use super::packed::{
     words_of_bits, write_field, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
-use crate::cost::Counter;
+use crate::cost::{Counter, Region};
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
@@ -310,6 +310,7 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
                 s.entry_mask as u32,
             );
             k.reads(1, read);
+            k.read_at(Region::Table, u64::from(at), read);
             k.words((at % WORD_BITS).saturating_add(read).div_ceil(WORD_BITS));
             let v = u64::from(read_masked32(self.words, at, entry_mask));
             let m = mask(self.k);
@@ -331,6 +332,7 @@ impl<E: Entry, const C: usize> Layout<C> for Modular<'_, E, C> {
             .wrapping_add(((x - 1) as u64).wrapping_mul(s.entry_bits));
         let read = u32::try_from(s.entry_bits).unwrap_or(u32::MAX);
         k.reads(1, read);
+        k.read_at(Region::Table, offset, read);
         k.words(word_shift(offset).saturating_add(read).div_ceil(WORD_BITS));
         if C == 1 || s.entry_bits <= 64 {
             // One read of all channels (k C <= 64 bits; for C = 1, k <= 64).

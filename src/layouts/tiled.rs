@@ -49,7 +49,7 @@ use super::packed::{
     write_field, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
-use crate::cost::{per_channel, Counter};
+use crate::cost::{per_channel, Counter, Region};
 use crate::error::{Error, Quantity};
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
@@ -893,6 +893,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
                 .wrapping_add(iy.wrapping_mul(comp.stride_bits as u32));
             let read = comp.stride_bits as u32;
             k.reads(1, read);
+            k.read_at(Region::Table, u64::from(at), read);
             k.words((at % WORD_BITS).saturating_add(read).div_ceil(WORD_BITS));
             let mut at = at;
             for o in out.iter_mut() {
@@ -905,6 +906,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         let offset = comp.offset(ix, iy);
         let read = u32::try_from(comp.stride_bits).unwrap_or(u32::MAX);
         k.reads(1, read);
+        k.read_at(Region::Table, offset, read);
         k.words(word_shift(offset).saturating_add(read).div_ceil(WORD_BITS));
         let mut at = offset;
         for o in out.iter_mut() {
@@ -923,6 +925,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             .wrapping_add(ix.wrapping_mul(c.row))
             .wrapping_add(iy.wrapping_mul(c.stride));
         k.reads(1, c.stride);
+        k.read_at(Region::Table, u64::from(at), c.stride);
         k.words(
             (at % WORD_BITS)
                 .saturating_add(c.stride)
@@ -1077,6 +1080,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     #[inline(always)]
     fn field_at<K: Counter>(&self, c: &Comp32, mut at: u32, k: &mut K) -> [E; C] {
         k.reads(1, c.stride);
+        k.read_at(Region::Table, u64::from(at), c.stride);
         k.words(
             (at % WORD_BITS)
                 .saturating_add(c.stride)
