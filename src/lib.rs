@@ -52,6 +52,18 @@
 // cargo feature each gated item needs.
 #![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
+// No panic path and no silent arithmetic (docs/guarantees.md): every index, arithmetic
+// operation, unwrap and `as` conversion in the core is either checked, or carries an `allow`
+// whose `reason` states the proof that it cannot panic, wrap or truncate. (Each module also
+// denies them itself; test modules allow them.)
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 pub mod cost;
 mod div;

@@ -93,11 +93,8 @@ pub mod tent;
 #[cfg_attr(docsrs, doc(cfg(feature = "filter-variance")))]
 pub mod variance;
 
-/// `n * channels` as the `u32` a [`crate::Counter`] takes: a per-channel cost, or the bits of a
-/// read of all channels (`n = T::BITS`). Meant for a `const` block at the use
-/// (`const { per_channel(T::BITS, C) }`): the count is then a constant of the compiled sampler
-/// (no run-time work), and a channel count whose product does not fit `u32` (more than `2^27`
-/// channels of 16-bit texels) stops the build instead of wrapping the count.
+/// The per-channel cost counts of the filters: [`crate::cost::per_channel`] (a compile-time
+/// constant at each use; a channel count whose product does not fit `u32` stops the build).
 #[cfg(any(
     feature = "filter-point",
     feature = "filter-mip",
@@ -106,45 +103,7 @@ pub mod variance;
     feature = "filter-tent",
     feature = "filter-variance"
 ))]
-#[allow(
-    clippy::panic,
-    reason = "evaluated in const blocks only: a product past u32 is a compile error, not a run-time panic"
-)]
-pub(crate) const fn per_channel(n: u32, channels: usize) -> u32 {
-    if channels > MAX_COUNT_CHANNELS {
-        panic!("more channels than a u32 cost count holds");
-    }
-    #[allow(
-        clippy::as_conversions,
-        reason = "channels <= u32::MAX (checked above): lossless (u32::try_from is not const)"
-    )]
-    let c = channels as u32;
-    match n.checked_mul(c) {
-        Some(v) => v,
-        None => panic!("a per-channel cost count past u32"),
-    }
-}
-
-/// `u32::MAX` as a `usize` (saturated at `usize::MAX` on a 16-bit target): the most channels
-/// [`per_channel`] converts.
-#[cfg(any(
-    feature = "filter-point",
-    feature = "filter-mip",
-    feature = "filter-rip",
-    feature = "filter-dip",
-    feature = "filter-tent",
-    feature = "filter-variance"
-))]
-const MAX_COUNT_CHANNELS: usize = if usize::BITS > u32::BITS {
-    #[allow(
-        clippy::as_conversions,
-        reason = "usize is wider than u32 in this branch: lossless"
-    )]
-    let m = u32::MAX as usize;
-    m
-} else {
-    usize::MAX
-};
+pub(crate) use crate::cost::per_channel;
 
 /// `n` as a `u64`: lossless, as `usize` is at most 64 bits wide (asserted at compile time
 /// below); `From` does not exist for it and is not `const`.
