@@ -107,7 +107,7 @@
     clippy::as_conversions
 )]
 
-use crate::cost::Counter;
+use crate::cost::{per_channel, Counter, Region};
 use crate::edge::{EdgeKind, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::filters::pyramid::{
@@ -195,6 +195,8 @@ struct LevelRef<'a, T> {
     coarse: Option<&'a [T]>,
     w: usize,
     h: usize,
+    /// Index of the level's first texel in the pyramid's storage (0 for level 0, the texture).
+    first: usize,
 }
 
 impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
@@ -248,13 +250,18 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     #[inline(always)]
     fn level(&self, l: usize) -> LevelRef<'a, T> {
         let (w, h) = self.sizes.get(l).copied().unwrap_or((0, 0));
-        let coarse = if l == 0 {
-            None
+        let (coarse, first) = if l == 0 {
+            (None, 0)
         } else {
             let at = self.offsets.get(l).copied().unwrap_or(usize::MAX);
-            Some(self.coarse.get(at..).unwrap_or(&[]))
+            (Some(self.coarse.get(at..).unwrap_or(&[])), at)
         };
-        LevelRef { coarse, w, h }
+        LevelRef {
+            coarse,
+            w,
+            h,
+            first,
+        }
     }
 
     /// Texel `(x, y)` (all channels) of `level`, `x < w`, `y < h`, or `None` if the storage does
@@ -316,9 +323,33 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
     /// Texel of `level` at extended index `(i, j)` under the mode `kind`, per channel (0 where
     /// the mode gives no texel).
     #[inline(always)]
-    fn tap(&self, kind: EdgeKind, level: LevelRef<'a, T>, i: i64, j: i64) -> [u64; C] {
+    fn tap<K: Counter>(
+        &self,
+        kind: EdgeKind,
+        level: LevelRef<'a, T>,
+        i: i64,
+        j: i64,
+        k: &mut K,
+    ) -> [u64; C] {
         let px = match (tap_index(kind, i, level.w), tap_index(kind, j, level.h)) {
-            (Some(x), Some(y)) => self.texel_in(level, x, y),
+            (Some(x), Some(y)) => {
+                // Where the read is, for traffic and cache models (dead code under NoCount):
+                // level 0 in the texture (tightly packed rows), the others in the pyramid.
+                let (region, index) = match level.coarse {
+                    Some(_) => (
+                        Region::Filter,
+                        level.first.wrapping_add(y.wrapping_mul(level.w).wrapping_add(x)),
+                    ),
+                    None => (Region::Texture, y.wrapping_mul(level.w).wrapping_add(x)),
+                };
+                let bits = const { per_channel(T::BITS, C) };
+                k.read_at(
+                    region,
+                    u64_from_usize(index).wrapping_mul(u64::from(bits)),
+                    bits,
+                );
+                self.texel_in(level, x, y)
+            }
             _ => None,
         };
         let mut out = [0u64; C];
@@ -372,7 +403,7 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         count_reads::<T, C, 1, K>(k);
         #[allow(clippy::as_conversions, reason = "l <= top <= 31: lossless")]
         let level = self.level(l as usize);
-        let px = self.tap(mode.kind(), level, i, j);
+        let px = self.tap(mode.kind(), level, i, j, k);
         Ok(Sample {
             values: px.map(|v| v << OUT_FRAC_BITS),
         })
@@ -449,10 +480,10 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
         #[allow(clippy::as_conversions, reason = "l <= top <= 31: lossless")]
         let level = self.level(l as usize);
         count_reads::<T, C, 4, K>(k);
-        let p00 = self.tap(kind, level, i, j);
-        let p10 = self.tap(kind, level, i1, j);
-        let p01 = self.tap(kind, level, i, j1);
-        let p11 = self.tap(kind, level, i1, j1);
+        let p00 = self.tap(kind, level, i, j, k);
+        let p10 = self.tap(kind, level, i1, j, k);
+        let p01 = self.tap(kind, level, i, j1, k);
+        let p11 = self.tap(kind, level, i1, j1, k);
         // Row lerps, units 2^-W: below 2^(B + W).
         let r0 = lerp(p00, p10, a, wb, k);
         let r1 = lerp(p01, p11, a, wb, k);

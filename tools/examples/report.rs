@@ -38,6 +38,8 @@ mod methods;
 mod output;
 #[path = "report/plots.rs"]
 mod plots;
+#[path = "report/traffic.rs"]
+mod traffic;
 
 use methods::Method;
 
@@ -71,6 +73,9 @@ struct Args {
     /// Skip the depth-of-field scene (every pixel its own box).
     #[arg(long)]
     no_dof: bool,
+    /// Skip the memory-traffic and texel-cache section.
+    #[arg(long)]
+    no_traffic: bool,
     /// Memory budget for an image scene, in bytes (suffixes K, M, G, T: powers of 1024).
     #[arg(long, value_name = "BYTES", default_value = "1G", value_parser = budget::parse_amount)]
     max_memory: u64,
@@ -275,6 +280,22 @@ fn main() {
         }
     };
 
+    // Memory traffic and the texel cache, on the first scene.
+    let traffic = match (args.no_traffic, scenes.first()) {
+        (false, Some(scene)) => {
+            bar.set_message("memory traffic and texel cache");
+            match traffic::run(scene) {
+                Ok(rows) => Some(traffic::markdown(scene, &rows)),
+                Err(e) => {
+                    bar.finish_and_clear();
+                    eprintln!("error: traffic: {e}");
+                    std::process::exit(1);
+                }
+            }
+        }
+        _ => None,
+    };
+
     bar.set_message("writing report");
     let run = output::RunInfo {
         command: std::env::args().collect::<Vec<_>>().join(" "),
@@ -308,12 +329,23 @@ fn main() {
     let total = started.elapsed().as_secs_f64();
     let md = output::write_markdown(&args.out, &run, &results, &stab_rows, &curves, total);
     // The depth-of-field section goes at the end of report.md.
-    let md = match (md, &dof) {
-        (Ok(path), Some(d)) => std::fs::read_to_string(&path)
-            .and_then(|text| std::fs::write(&path, format!("{text}\n{}", dof::markdown(d))))
+    // The traffic and depth-of-field sections go at the end of report.md.
+    let extra = format!(
+        "{}{}",
+        traffic
+            .as_deref()
+            .map(|t| format!("\n{t}"))
+            .unwrap_or_default(),
+        dof.as_ref()
+            .map(|d| format!("\n{}", dof::markdown(d)))
+            .unwrap_or_default()
+    );
+    let md = match md {
+        Ok(path) if !extra.is_empty() => std::fs::read_to_string(&path)
+            .and_then(|text| std::fs::write(&path, format!("{text}{extra}")))
             .map(|_| path)
             .map_err(|e| format!("report.md: {e}")),
-        (md, _) => md,
+        md => md,
     };
     note(md);
     bar.inc(1);

@@ -357,3 +357,66 @@ fn depth_of_field_scene() {
     assert!(!md.contains("depth of field"));
     assert!(!dir2.0.join("render_dof.png").exists());
 }
+
+/// The memory-traffic and texel-cache section: one row per method and rendering order, whose
+/// numbers hold together (a 32-bit bus moves at least the bits asked for, a 64-bit bus at least
+/// as many bytes, bursts more; hit rates in [0, 1]), and `--no-traffic` leaves it out.
+#[test]
+fn memory_traffic_section() {
+    let dir = temp_dir("traffic");
+    let d = dir.0.to_str().unwrap();
+    let out = run(&[
+        "--quick",
+        "--no-stability",
+        "--no-dof",
+        "--scene",
+        "crow-horizontal",
+        "--out",
+        d,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let md = std::fs::read_to_string(dir.0.join("report.md")).expect("report.md");
+    let section = md
+        .split("## Memory traffic and texel cache")
+        .nth(1)
+        .expect("section");
+    let rows: Vec<Vec<f64>> = section
+        .lines()
+        .filter(|l| l.starts_with("| sat") || l.starts_with("| trilinear"))
+        .map(|l| {
+            l.split('|')
+                .skip(3)
+                .filter_map(|c| c.trim().parse::<f64>().ok())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 10, "5 methods x 2 orders");
+    for r in &rows {
+        let [reads, bits, b32, b64, burst, hit, mem] = r[..] else {
+            panic!("row {r:?}")
+        };
+        assert!(reads >= 1.0 && bits >= reads, "{r:?}");
+        assert!(
+            b32 * 8.0 >= bits - 1.0 && b64 >= b32 && burst >= b64,
+            "{r:?}"
+        );
+        assert!((0.0..=1.0).contains(&hit) && mem >= 0.0, "{r:?}");
+    }
+    let out = run(&[
+        "--quick",
+        "--no-stability",
+        "--no-dof",
+        "--no-traffic",
+        "--scene",
+        "noise",
+        "--out",
+        d,
+    ]);
+    assert!(out.status.success());
+    let md = std::fs::read_to_string(dir.0.join("report.md")).unwrap();
+    assert!(!md.contains("## Memory traffic"));
+}
