@@ -285,7 +285,7 @@ fn main() {
         (false, Some(scene)) => {
             bar.set_message("memory traffic and texel cache");
             match traffic::run(scene) {
-                Ok(rows) => Some(traffic::markdown(scene, &rows)),
+                Ok(rows) => Some((traffic::markdown(scene, &rows), rows)),
                 Err(e) => {
                     bar.finish_and_clear();
                     eprintln!("error: traffic: {e}");
@@ -326,6 +326,9 @@ fn main() {
     if let Some(d) = &dof {
         note(dof::render(&args.out, d));
     }
+    if let Some((_, rows)) = &traffic {
+        note(traffic::plot(&args.out, rows));
+    }
     let total = started.elapsed().as_secs_f64();
     let md = output::write_markdown(&args.out, &run, &results, &stab_rows, &curves, total);
     // The depth-of-field section goes at the end of report.md.
@@ -333,8 +336,8 @@ fn main() {
     let extra = format!(
         "{}{}",
         traffic
-            .as_deref()
-            .map(|t| format!("\n{t}"))
+            .as_ref()
+            .map(|t| format!("\n{}![cache traffic](cache_traffic.png)\n", t.0))
             .unwrap_or_default(),
         dof.as_ref()
             .map(|d| format!("\n{}", dof::markdown(d)))

@@ -286,3 +286,102 @@ pub fn markdown(scene: &Scene, rows: &[TrafficRow]) -> String {
     );
     s
 }
+
+/// `cache_traffic.png`: bytes fetched from memory per sample behind the cache, and with no
+/// cache on a 32-bit bus, per method and layout, for both rendering orders (log scale).
+pub fn plot(dir: &std::path::Path, rows: &[TrafficRow]) -> Result<std::path::PathBuf, String> {
+    use plotters::prelude::*;
+    let path = dir.join("cache_traffic.png");
+    let shown = path.display().to_string();
+    let e = |x: &dyn std::fmt::Display| format!("{shown}: {x}");
+    let root = BitMapBackend::new(&path, (1100, 620)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let methods: Vec<&str> = {
+        let mut m: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+        m.dedup();
+        m
+    };
+    let ymax = rows
+        .iter()
+        .map(|r| r.bus_bytes[0].max(r.cache_bytes))
+        .fold(1.0, f64::max)
+        * 2.0;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Bytes from memory per sample: no cache (32-bit bus) and behind an 8 KiB LRU cache",
+            ("sans-serif", 20),
+        )
+        .margin(16)
+        .x_label_area_size(20)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0f64..methods.len() as f64, (0.08f64..ymax).log_scale())
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_desc("bytes per sample (log)")
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(|x| e(&x))?;
+    let bars = [
+        (
+            "no cache, 32-bit bus (either order)",
+            RGBColor(150, 150, 150),
+        ),
+        ("cache, scanline order", RGBColor(31, 119, 180)),
+        ("cache, 8x8 tiles", RGBColor(255, 127, 14)),
+    ];
+    for (k, &(label, color)) in bars.iter().enumerate() {
+        let rects: Vec<Rectangle<(f64, f64)>> = methods
+            .iter()
+            .enumerate()
+            .filter_map(|(i, m)| {
+                let v = match k {
+                    0 => rows.iter().find(|r| r.method == *m)?.bus_bytes[0],
+                    1 => {
+                        rows.iter()
+                            .find(|r| r.method == *m && r.order == "scanline")?
+                            .cache_bytes
+                    }
+                    _ => {
+                        rows.iter()
+                            .find(|r| r.method == *m && r.order != "scanline")?
+                            .cache_bytes
+                    }
+                };
+                let x0 = i as f64 + 0.15 + 0.23 * k as f64;
+                Some(Rectangle::new(
+                    [(x0, 0.1), (x0 + 0.2, v.max(0.1))],
+                    color.filled(),
+                ))
+            })
+            .collect();
+        chart
+            .draw_series(rects)
+            .map_err(|x| e(&x))?
+            .label(label)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+    }
+    // The method names under their bars (inside the plot, above the axis).
+    chart
+        .draw_series(methods.iter().enumerate().map(|(i, m)| {
+            Text::new(
+                m.to_string(),
+                (i as f64 + 0.12, 0.13),
+                ("sans-serif", 13).into_font(),
+            )
+        }))
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    drop(chart);
+    drop(root);
+    Ok(path)
+}
