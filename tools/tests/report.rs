@@ -384,6 +384,8 @@ fn memory_traffic_section() {
         .split("## Memory traffic and texel cache")
         .nth(1)
         .expect("section");
+    assert!(is_png(&dir.0.join("cache_traffic.png")));
+    assert!(section.contains("![cache traffic](cache_traffic.png)"));
     let rows: Vec<Vec<f64>> = section
         .lines()
         .filter(|l| l.starts_with("| sat") || l.starts_with("| trilinear"))
