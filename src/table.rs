@@ -424,16 +424,9 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             .unwrap_or([E::ZERO; C])
     }
 
-    /// `[S(xa, ya), S(xb, ya), S(xa, yb), S(xb, yb)]` for `xa, xb <= w`, `ya, yb <= h`, reads
-    /// counted as by [`Sat::read`].
-    ///
-    /// Two row slices of exactly `w C` entries, one range check each; the reads index them at
-    /// `(x - 1) C` with `x <= w`, which the compiler sees, so they carry no check of their own
-    /// (4-read box: 63 instructions on the Cortex-M4 against 71 through four [`Sat::s`]). `y =
-    /// 0` wraps the row's start past its end and reads nothing (the zero row); `x = 0` is the
-    /// zero column. Outside the range, or on a table shorter than `w h C` (impossible after a
-    /// build), the values read as zero: no panic path, and a far-outside corner (whose row or
-    /// column offset would overflow) reads nothing either.
+    /// `[S(xa, ya), S(xb, ya), S(xa, yb), S(xb, yb)]`, reads counted as by [`Sat::read`]; zero
+    /// (and no read) for a corner outside `[0, w] x [0, h]`, however far (a row or column
+    /// offset that would overflow reads nothing). [`Layout::quad`](crate::Layout::quad).
     #[inline(always)]
     pub(crate) fn read_quad<K: crate::Counter>(
         &self,
@@ -443,63 +436,34 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         yb: usize,
         k: &mut K,
     ) -> [[E; C]; 4] {
-        let zero = [E::ZERO; C];
-        #[allow(
-            clippy::arithmetic_side_effects,
-            reason = "w C <= w h C, which entries_needed computed without overflow"
-        )]
-        let row_len = self.width * C;
-        // `y = 0` (the zero row) and a `y` so large that its row's start overflows read
-        // nothing: the checked multiply and add give `None`, as does a row past the table.
-        let row = |y: usize| -> Option<&[E]> {
-            let start = y.checked_sub(1)?.checked_mul(row_len)?;
-            self.table.get(start..start.checked_add(row_len)?)
-        };
-        let mut at = |row: Option<&[E]>, x: usize, y: usize| -> [E; C] {
-            let Some(row) = row else { return zero };
-            if x == 0 {
-                return zero;
-            }
-            // x >= 1 here; for x <= w, (x - 1) C < w C. Past the row (or a product that
-            // overflows, possible only for C > 1) reads nothing.
-            let Some(start) = x.wrapping_sub(1).checked_mul(C) else {
-                return zero;
-            };
-            match row.get(start..).and_then(|t| t.first_chunk::<C>()) {
-                Some(v) => {
-                    k.reads(1, const { per_channel(E::BITS, C) });
-                    k.words(const { per_channel(E::BITS, C).div_ceil(32) });
-                    k.read_at(
-                        crate::Region::Table,
-                        self.entry_bit_offset(x, y),
-                        const { per_channel(E::BITS, C) },
-                    );
-                    *v
-                }
-                None => zero,
-            }
-        };
-        let (ra, rb) = (row(ya), row(yb));
-        [
-            at(ra, xa, ya),
-            at(ra, xb, ya),
-            at(rb, xa, yb),
-            at(rb, xb, yb),
-        ]
+        self.read_quad_with::<K, true>(xa, xb, ya, yb, k)
     }
 
     /// [`Sat::read_quad`] for corners placed in `[0, w] x [0, h]` (the lookups): wrapping
     /// coordinates, equal to the checked ones there (`box_sum_int` 85 instructions on the
     /// Cortex-M4 against 86); outside, unspecified values and no panic path.
+    #[inline(always)]
+    pub(crate) fn read_quad_placed<K: crate::Counter>(
+        &self,
+        xa: usize,
+        xb: usize,
+        ya: usize,
+        yb: usize,
+        k: &mut K,
+    ) -> [[E; C]; 4] {
+        self.read_quad_with::<K, false>(xa, xb, ya, yb, k)
+    }
+
+    /// The four reads of [`Sat::read_quad`] (`CHECKED`: overflow-checked offsets) and
+    /// [`Sat::read_quad_placed`] (wrapping ones).
     ///
     /// Two row slices of exactly `w C` entries, one range check each; the reads index them at
     /// `(x - 1) C` with `x <= w`, which the compiler sees, so they carry no check of their own
     /// (4-read box: 63 instructions on the Cortex-M4 against 71 through four [`Sat::s`]). `y =
-    /// 0` wraps the row's start past its end and reads nothing (the zero row); `x = 0` is the
-    /// zero column. Outside the range, or on a table shorter than `w h C` (impossible after a
-    /// build), the values read as zero: no panic path.
+    /// 0` (the zero row) gives no row and `x = 0` is the zero column; a row past the table, or
+    /// a table shorter than `w h C` (impossible after a build), reads as zero: no panic path.
     #[inline(always)]
-    pub(crate) fn read_quad_placed<K: crate::Counter>(
+    fn read_quad_with<K: crate::Counter, const CHECKED: bool>(
         &self,
         xa: usize,
         xb: usize,
@@ -513,18 +477,32 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             reason = "w C <= w h C, which entries_needed computed without overflow"
         )]
         let row_len = self.width * C;
-        // `y = 0` wraps the row's start past its end: no row (the zero row).
         let row = |y: usize| -> Option<&[E]> {
-            let start = y.wrapping_sub(1).wrapping_mul(row_len);
-            self.table.get(start..start.wrapping_add(row_len))
+            if CHECKED {
+                // A `y` so large that its row's start overflows reads nothing.
+                let start = y.checked_sub(1)?.checked_mul(row_len)?;
+                self.table.get(start..start.checked_add(row_len)?)
+            } else {
+                // `y = 0` wraps the row's start past its end: no row.
+                let start = y.wrapping_sub(1).wrapping_mul(row_len);
+                self.table.get(start..start.wrapping_add(row_len))
+            }
         };
         let mut at = |row: Option<&[E]>, x: usize, y: usize| -> [E; C] {
             let Some(row) = row else { return zero };
             if x == 0 {
                 return zero;
             }
-            // x >= 1 here; for x <= w, (x - 1) C < w C; past the row, nothing is read.
-            let start = x.wrapping_sub(1).wrapping_mul(C);
+            // x >= 1 here; for x <= w, (x - 1) C < w C; past the row (or, checked, a product
+            // that overflows, possible only for C > 1) nothing is read.
+            let start = if CHECKED {
+                match x.wrapping_sub(1).checked_mul(C) {
+                    Some(s) => s,
+                    None => return zero,
+                }
+            } else {
+                x.wrapping_sub(1).wrapping_mul(C)
+            };
             match row.get(start..).and_then(|t| t.first_chunk::<C>()) {
                 Some(v) => {
                     k.reads(1, const { per_channel(E::BITS, C) });
