@@ -338,7 +338,9 @@ impl<'a, T: Texel, const C: usize> MipPyramid<'a, T, C> {
                 let (region, index) = match level.coarse {
                     Some(_) => (
                         Region::Filter,
-                        level.first.wrapping_add(y.wrapping_mul(level.w).wrapping_add(x)),
+                        level
+                            .first
+                            .wrapping_add(y.wrapping_mul(level.w).wrapping_add(x)),
                     ),
                     None => (Region::Texture, y.wrapping_mul(level.w).wrapping_add(x)),
                 };
