@@ -280,20 +280,29 @@ fn main() {
         }
     };
 
-    // Memory traffic and the texel cache, on the first scene.
-    let traffic = match (args.no_traffic, scenes.first()) {
-        (false, Some(scene)) => {
-            bar.set_message("memory traffic and texel cache");
+    // Memory traffic and the texel cache, on every scene (the plot: the first).
+    let traffic = if args.no_traffic || scenes.is_empty() {
+        None
+    } else {
+        bar.set_message("memory traffic and texel cache");
+        let mut all = Vec::new();
+        for scene in &scenes {
             match traffic::run(scene) {
-                Ok(rows) => Some((traffic::markdown(scene, &rows), rows)),
+                Ok(rows) => all.push((scene, rows)),
                 Err(e) => {
                     bar.finish_and_clear();
-                    eprintln!("error: traffic: {e}");
+                    eprintln!("error: traffic on {}: {e}", scene.name);
                     std::process::exit(1);
                 }
             }
         }
-        _ => None,
+        let md = traffic::markdown(&all);
+        let first = all
+            .into_iter()
+            .next()
+            .map(|(_, rows)| rows)
+            .unwrap_or_default();
+        Some((md, first))
     };
 
     bar.set_message("writing report");

@@ -388,17 +388,17 @@ fn memory_traffic_section() {
     assert!(section.contains("![cache traffic](cache_traffic.png)"));
     let rows: Vec<Vec<f64>> = section
         .lines()
-        .filter(|l| l.starts_with("| sat") || l.starts_with("| trilinear"))
+        .filter(|l| l.starts_with("| crow-horizontal |"))
         .map(|l| {
             l.split('|')
-                .skip(3)
+                .skip(4)
                 .filter_map(|c| c.trim().parse::<f64>().ok())
                 .collect()
         })
         .collect();
-    assert_eq!(rows.len(), 10, "5 methods x 2 orders");
+    assert_eq!(rows.len(), 10, "5 methods x 2 orders, one scene");
     for r in &rows {
-        let [reads, bits, b32, b64, burst, hit, mem] = r[..] else {
+        let [reads, bits, b32, b64, burst, hit, mem, frame] = r[..] else {
             panic!("row {r:?}")
         };
         assert!(reads >= 1.0 && bits >= reads, "{r:?}");
@@ -407,6 +407,10 @@ fn memory_traffic_section() {
             "{r:?}"
         );
         assert!((0.0..=1.0).contains(&hit) && mem >= 0.0, "{r:?}");
+        assert!(
+            frame >= mem * 100.0 / 1024.0,
+            "{r:?}: at least 100 samples a frame"
+        );
     }
     let out = run(&[
         "--quick",

@@ -234,15 +234,19 @@ pub fn run(scene: &Scene) -> Result<Vec<TrafficRow>, String> {
     Ok(rows)
 }
 
-/// The report section.
-pub fn markdown(scene: &Scene, rows: &[TrafficRow]) -> String {
+/// The report section: every scene's rows (the first scene's described in the text).
+pub fn markdown(scenes: &[(&Scene, Vec<TrafficRow>)]) -> String {
+    let Some((scene, _)) = scenes.first() else {
+        return String::new();
+    };
     let mut s = String::new();
     let (size, line, ways) = CACHE;
     let _ = writeln!(s, "## Memory traffic and texel cache\n");
     let _ = writeln!(
         s,
-        "Scene `{}` ({} x {} pixels, {} x {} texture), every pixel's footprint in two rendering \
-         orders. Per sample: reads and bits as the lookups report them (`Counter::read_at`), the \
+        "Every scene, every pixel's footprint, in two rendering orders (the plot: scene `{}`, \
+         {} x {} pixels, {} x {} texture). Per sample: reads and bits as the lookups report them \
+         (`Counter::read_at`), the \
          bytes a bus moves with no cache (each read fetches every aligned bus word or burst it \
          overlaps), and behind a {} KiB set-associative cache ({}-byte lines, {} ways, LRU): the \
          hit rate of line accesses and the bytes fetched from memory. The table, the texture and \
@@ -258,31 +262,35 @@ pub fn markdown(scene: &Scene, rows: &[TrafficRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "| method (layout) | order | reads | bits | bytes, 32-bit bus | bytes, 64-bit bus | bytes, 64-bit x 4 bursts | cache hit rate | bytes from memory behind the cache |"
+        "| scene | method (layout) | order | reads | bits | bytes, 32-bit bus | bytes, 64-bit bus | bytes, 64-bit x 4 bursts | cache hit rate | bytes from memory behind the cache | KiB per frame behind the cache |"
     );
-    let _ = writeln!(s, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.3} | {:.2} |",
-            r.method,
-            r.order,
-            r.reads,
-            r.bits,
-            r.bus_bytes[0],
-            r.bus_bytes[1],
-            r.bus_bytes[2],
-            r.hit_rate,
-            r.cache_bytes
-        );
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for (scene, rows) in scenes {
+        for r in rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.1} | {:.0} | {:.1} | {:.1} | {:.1} | {:.3} | {:.2} | {:.1} |",
+                scene.name,
+                r.method,
+                r.order,
+                r.reads,
+                r.bits,
+                r.bus_bytes[0],
+                r.bus_bytes[1],
+                r.bus_bytes[2],
+                r.hit_rate,
+                r.cache_bytes,
+                r.cache_bytes * r.samples as f64 / 1024.0
+            );
+        }
     }
     let _ = writeln!(
         s,
-        "\nPer frame, multiply by the samples ({}). A SAT lookup's 16 reads fall on four 2 x 2 \
+        "\nA frame is every pixel whose footprint the scene defines (the samples); per frame with \
+         no cache, multiply the bus bytes by them. A SAT lookup's 16 reads fall on four 2 x 2 \
          neighbourhoods that neighbouring pixels share when the footprints overlap; the tiled \
          layout reads narrower fields (fewer bits) spread over four components; the mip map \
-         reads 8 texels of two small levels, which a small cache holds.\n",
-        rows.first().map_or(0, |r| r.samples)
+         reads 8 texels of two small levels, which a small cache holds.\n"
     );
     s
 }
