@@ -1373,7 +1373,7 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
         }
         self.quad(i, i.wrapping_add(1), j, j.wrapping_add(1), k)
     }
-    /// Under one level of power-of-two tiles ([`OneLevel`]), each field of the four corners
+    /// Under one level of power-of-two tiles (8 x 8 and the like), each field of the four corners
     /// read once (9 instead of 16 for a 16-read corner inside a tile); else four
     /// [`Layout::corner`] calls.
     #[inline]
