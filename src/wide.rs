@@ -72,6 +72,19 @@ struct Pair {
 }
 
 impl Pair {
+    /// Bits of the value (0 for 0).
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "bits64 <= 64, so 64 + bits64 <= 128"
+    )]
+    fn bits(self) -> u32 {
+        if self.hi != 0 {
+            64 + bits64(self.hi)
+        } else {
+            bits64(self.lo)
+        }
+    }
+
     /// The full product `a * b`, from 32-bit halves (no 128-bit operation).
     #[allow(
         clippy::arithmetic_side_effects,
@@ -208,8 +221,12 @@ impl Wide for u64 {
         if w == 0 || h == 0 {
             return Err(Error::ZeroArea);
         }
-        if g > 128 {
-            return Err(too_wide(bits64(self).saturating_add(g), 64));
+        // The quotient is at least 2^(bits(sum) - 1 + g - bits(area)): from 2^64 on, it does
+        // not fit. Below, g < 65 + bits(area) <= 193, so the long division takes at most 257
+        // steps, and a huge area may bring a huge g back under 2^64.
+        let area_bits = Pair::mul(w, h).bits();
+        if bits64(self).saturating_add(g) >= area_bits.saturating_add(65) {
+            return Err(too_wide(bits64(self).saturating_add(g) - area_bits, 64));
         }
         div_round_long(self, g, w, h)
     }
@@ -254,13 +271,54 @@ impl Wide for u128 {
             return Err(Error::ZeroArea);
         }
         let needed = self.bits().saturating_add(g);
-        if needed > 128 || g >= 128 {
-            return Err(too_wide(needed, 128));
+        if needed <= 128 && g < 128 {
+            let n = self << g;
+            let (q, r) = (n / area, n % area);
+            return Ok(if r >= area - r { q + 1 } else { q });
         }
-        let n = self << g;
-        let (q, r) = (n / area, n % area);
-        Ok(if r >= area - r { q + 1 } else { q })
+        // sum 2^g past 128 bits: the quotient is at least 2^(needed - 1 - bits(area)); from
+        // 2^128 on it does not fit. Below, g < 129 + bits(area) <= 257, and restoring division
+        // over the bits of the sum followed by g zeros takes at most 385 steps.
+        let area_bits = 128 - area.leading_zeros();
+        if needed >= area_bits.saturating_add(129) {
+            return Err(too_wide(needed - area_bits, 128));
+        }
+        div_round_long_u128(self, g, area)
     }
+}
+
+/// `round(num 2^g / den)`, ties up, for `den >= 1` and a quotient below `2^128` (else
+/// [`Error::TooWide`]), by restoring division over the bits of `num` followed by `g` zero bits;
+/// the remainder stays below `den`, and the bit shifted out of it on each step is kept (the
+/// cold path of the `u128` mean: `num 2^g` past 128 bits).
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "i < total keeps 127 - i in range; rem < den, so (rem << 1 | bit) - den with the \
+              shifted-out bit (out) is the true remainder, below den, and wrapping_sub gives it; \
+              q << 1 is taken only when q's top bit is clear; den - rem >= 1"
+)]
+fn div_round_long_u128(num: u128, g: u32, den: u128) -> Result<u128, Error> {
+    let total = 128 + g;
+    let (mut rem, mut q) = (0u128, 0u128);
+    for i in 0..total {
+        let bit = i < 128 && (num >> (127 - i)) & 1 != 0;
+        let out = rem >> 127 != 0;
+        let shifted = (rem << 1) | u128::from(bit);
+        if q >> 127 != 0 {
+            return Err(too_wide(total - i + 128, 128));
+        }
+        q <<= 1;
+        if out || shifted >= den {
+            rem = shifted.wrapping_sub(den);
+            q |= 1;
+        } else {
+            rem = shifted;
+        }
+    }
+    if rem >= den - rem {
+        q = q.checked_add(1).ok_or(too_wide(129, 128))?;
+    }
+    Ok(q)
 }
 
 /// `round(num * 2^shift / den)`, ties up, for `0 < den < 2^127`, by restoring division (no
@@ -371,6 +429,60 @@ mod tests {
                 assert_eq!(div_round_long(num, g, w, h), Ok(v as u64));
             }
         }
+    }
+
+    /// Means whose numerator `sum 2^g` leaves the word but whose quotient fits: areas that are
+    /// `2^k` or `3 2^k`, where the exact mean is `sum 2^(g - k)` or that over 3 (computed here in
+    /// `u128` without the code under test).
+    #[test]
+    fn huge_output_bits_over_huge_areas() {
+        for sum in [1u64, 3, 255, 265_200, 4_177_920, 0xFFFF_FFFF, u64::MAX >> 1] {
+            for (i, j) in [(60u32, 60u32), (63, 63), (40, 63), (63, 1)] {
+                let k = i + j;
+                for d in [0u32, 1, 5, 20, 40] {
+                    let g = k + d;
+                    // u64 result: area 2^k.
+                    let want = u128::from(sum) << d;
+                    let got = sum.div_round_area(g, 1 << i, 1 << j);
+                    if want <= u128::from(u64::MAX) {
+                        assert_eq!(got, Ok(want as u64), "{sum} g={g} 2^{i} 2^{j}");
+                    } else {
+                        assert!(got.is_err(), "{sum} g={g}");
+                    }
+                    // u128 result: area 3 2^k (w = 3 2^(i-2), h = 2^(j+2) when i >= 2).
+                    if i >= 2 && j + 2 <= 63 {
+                        let (w, h) = (3u64 << (i - 2), 1u64 << (j + 2));
+                        let n = u128::from(sum) << d;
+                        let (q, r) = (n / 3, n % 3);
+                        let want = if r >= 3 - r { q + 1 } else { q };
+                        let got = u128::from(sum).div_round_area(g, w, h);
+                        assert_eq!(got, Ok(want), "u128 {sum} g={g} 3x2^{k}");
+                    }
+                }
+            }
+        }
+        // The fuzz findings: bits(sum) + g past the word with a mean that fits.
+        // u128: sum 265200, g = 119, sides 26 x 40: mean = 265200 2^119 / 1040 < 2^128.
+        // 265200 = 255 x 1040, so the mean is exactly 255 2^119.
+        assert_eq!(265_200u128.div_round_area(119, 26, 40), Ok(255u128 << 119));
+        // And a rounded one: 265201 2^119 / 1040 = 255 2^119 + 2^119 / 1040, whose quotient and
+        // remainder come from 2^119 = 1040 q + r (in range here).
+        let (q, r) = ((1u128 << 119) / 1040, (1u128 << 119) % 1040);
+        let want = (255u128 << 119) + if r >= 1040 - r { q + 1 } else { q };
+        assert_eq!(265_201u128.div_round_area(119, 26, 40), Ok(want));
+        // u64: g = 131 over sides near 2^62 x 2^61: the mean is small.
+        let got = 4_177_920u64.div_round_area(131, 1 << 62, 1 << 61);
+        assert_eq!(got, Ok((4_177_920u128 << 8) as u64));
+        // Still refused when the quotient itself leaves the word.
+        assert!(u64::MAX.div_round_area(200, 1, 1).is_err());
+        assert!(u128::MAX.div_round_area(300, 1, 1).is_err());
+        assert_eq!(
+            u128::MAX
+                .div_round_area(127, u64::MAX, u64::MAX)
+                .map(|_| ()),
+            Ok(())
+        );
+        assert!(u128::MAX.div_round_area(128, u64::MAX, u64::MAX).is_err());
     }
 
     #[test]

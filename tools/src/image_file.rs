@@ -245,17 +245,18 @@ impl Probe {
         let what = format!("buffer of the {}", self.describe());
         let decode_err =
             |e: &dyn std::fmt::Display| err(&format_args!("cannot decode the samples: {e}"));
+        let decoder = self.decoder;
         let pixels = if self.sample_bits == 8 {
             let mut buf = budget::zeroed(samples, 0u8, &what)?;
-            self.decoder
-                .read_image(&mut buf)
+            without_panic(|| decoder.read_image(&mut buf))
+                .map_err(|e| decode_err(&e))?
                 .map_err(|e| decode_err(&e))?;
             Pixels::U8(buf)
         } else {
             let mut buf = budget::zeroed(samples, 0u16, &what)?;
             // The decoder writes native-endian 16-bit samples.
-            self.decoder
-                .read_image(bytemuck::cast_slice_mut(&mut buf))
+            without_panic(|| decoder.read_image(bytemuck::cast_slice_mut(&mut buf)))
+                .map_err(|e| decode_err(&e))?
                 .map_err(|e| decode_err(&e))?;
             Pixels::U16(buf)
         };
@@ -266,4 +267,24 @@ impl Probe {
             channels: self.channels,
         })
     }
+}
+
+/// Runs a decoder step, turning a panic inside it into an error: the `png` crate (0.18.1, the
+/// latest release) panics on a PLTE chunk whose length is not a multiple of 3
+/// (image-rs/image-png#694; found by `fuzz/fuzz_targets/cli_image.rs`), and a test bench's file
+/// must give a message and exit status 1, never a panic. The panic hook is silenced for the call
+/// (the tools decode on one thread), so nothing but the error reaches stderr.
+fn without_panic<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    std::panic::set_hook(hook);
+    out.map_err(|p| {
+        let what = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a decoder panic".to_string());
+        format!("corrupt image data (the decoder failed: {what})")
+    })
 }

@@ -1032,3 +1032,51 @@ fn the_report_refuses_hostile_image_scenes_before_decoding() {
     expect_status(&out, 1, &["the file is empty"], "report empty");
     assert!(!out_dir.join("report.md").exists(), "nothing written");
 }
+
+/// A palette PNG whose PLTE chunk is 4 bytes long (not a multiple of 3): the `png` crate panics
+/// while decoding it (image-rs/image-png#694, found by the `cli_image` fuzz target); `sat`
+/// turns that into a message and exit status 1, with nothing else on stderr.
+#[test]
+fn a_png_that_makes_the_decoder_panic_is_refused() {
+    let dir = temp_dir("plte");
+    let ihdr = [0, 0, 0, 2, 0, 0, 0, 2, 8, 3, 0, 0, 0]; // 2 x 2, 8-bit palette
+    let raw = [0u8, 0, 0, 0, 0, 0];
+    let mut idat = Vec::new();
+    {
+        let mut enc = flate2_like_store(&raw);
+        idat.append(&mut enc);
+    }
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(chunk(b"IHDR", &ihdr));
+    png.extend(chunk(b"PLTE", &[10, 20, 30, 40]));
+    png.extend(chunk(b"IDAT", &idat));
+    png.extend(chunk(b"IEND", &[]));
+    let path = write(&dir.0, "plte.png", &png);
+    for cmd in [vec!["info", path.as_str()], vec!["query", path.as_str()]] {
+        let out = run(&cmd, b"0 0 1 1\n");
+        expect_status(&out, 1, &["plte.png", "corrupt image data"], "bad PLTE");
+        assert!(
+            !text(&out.stderr).contains("panicked"),
+            "{}",
+            text(&out.stderr)
+        );
+    }
+}
+
+/// A zlib stream holding `data` in one stored (uncompressed) block: what an IDAT chunk needs,
+/// without a compressor.
+fn flate2_like_store(data: &[u8]) -> Vec<u8> {
+    let mut out = vec![0x78, 0x01, 0x01];
+    let len = data.len() as u16;
+    out.extend(len.to_le_bytes());
+    out.extend((!len).to_le_bytes());
+    out.extend(data);
+    // Adler-32 of the data, big-endian.
+    let (mut a, mut b) = (1u32, 0u32);
+    for &d in data {
+        a = (a + u32::from(d)) % 65521;
+        b = (b + a) % 65521;
+    }
+    out.extend(((b << 16) | a).to_be_bytes());
+    out
+}
