@@ -200,46 +200,22 @@ pub fn first_invalid(
     None
 }
 
-/// Model the known false refusal of `Sat::from_table` (`src/table.rs`): it checks each implied
-/// texel as `S(x,y) + S(x-1,y-1) - S(x,y-1) - S(x-1,y)` with checked arithmetic in the entry
-/// type, so a *valid* table whose `S(x,y) + S(x-1,y-1)` exceeds the entry type is refused as
-/// `InvalidTable` at the first such texel (e.g. the all-255 16 x 16 `u8` texture in a `u16`
-/// table, which `Sat::build` accepts). `fuzz/README.md`, "Known findings". `false` makes it a
-/// finding again.
-pub const KNOWN_FROM_TABLE_OVERFLOW: bool = true;
-
 /// What `Sat::from_table` must answer for `table` (entries as `u128`, `w x h x c`, texels of
-/// `bits` bits, `bits` valid) in an entry type whose largest value is `e_max`: the table itself,
-/// or `InvalidTable` at the first texel (row-major, then channel) it implies outside
-/// `[0, 2^bits - 1]` (or, with [`KNOWN_FROM_TABLE_OVERFLOW`], where the check overflows).
+/// `bits` bits, `bits` valid): the table itself, or `InvalidTable` at the first texel (row-major,
+/// then channel) it implies outside `[0, 2^bits - 1]`, whatever the entry type (a valid table
+/// whose `S(x, y) + S(x-1, y-1)` exceeds the entry type is still valid: found by `sat_build`,
+/// fixed in c0556b4).
 pub fn from_table_verdict(
     table: &[u128],
     w: usize,
     h: usize,
     c: usize,
     bits: u32,
-    e_max: u128,
 ) -> std::result::Result<Vec<u128>, Error> {
-    let s = |x: usize, y: usize, ch: usize| -> i128 {
-        if x == 0 || y == 0 {
-            0
-        } else {
-            table[((y - 1) * w + (x - 1)) * c + ch] as i128
-        }
-    };
-    let max = i128::from(max_texel(bits));
-    for y in 0..h {
-        for x in 0..w {
-            for ch in 0..c {
-                let t = s(x + 1, y + 1, ch) - s(x, y + 1, ch) - s(x + 1, y, ch) + s(x, y, ch);
-                let overflow = s(x + 1, y + 1, ch) + s(x, y, ch) > e_max as i128;
-                if !(0..=max).contains(&t) || (KNOWN_FROM_TABLE_OVERFLOW && overflow) {
-                    return Err(Error::InvalidTable { x, y, channel: ch });
-                }
-            }
-        }
+    match first_invalid(table, w, h, c, bits) {
+        None => Ok(table.to_vec()),
+        Some((x, y, channel)) => Err(Error::InvalidTable { x, y, channel }),
     }
-    Ok(table.to_vec())
 }
 
 /// The texels a valid table implies (the inverse of [`Tex::sat`]).
@@ -537,10 +513,9 @@ impl SumCase {
 /// Panics unless `got` is the mean of channel `ch` of an `Ok` lookup as [`mean_ref`] says,
 /// or a refusal the documentation allows.
 ///
-/// Allowed refusals: `ZeroArea` for a zero side; `TooWide { MeanNumerator }` when the exact mean
-/// does not fit the word, and also, on the `u128` word, when `sum 2^g` does not fit 128 bits,
-/// and on the `u64` word when `g > 128` (both conservative refusals of `wide.rs`, reported as
-/// findings in `/work/helpers/fuzz-report.md`; see `fuzz/README.md`).
+/// Allowed refusals: `ZeroArea` for a zero side; `TooWide { MeanNumerator }` exactly when the
+/// rounded mean does not fit the word (not merely `sum 2^g`: found by `lookup`, fixed in
+/// f7c47fc).
 pub fn check_mean<W: Into<u128> + Copy + Debug>(
     got: &std::result::Result<W, Error>,
     sum: u128,
@@ -579,29 +554,13 @@ pub fn check_mean<W: Into<u128> + Copy + Debug>(
     }
 }
 
-/// Accept the conservative refusal of the mean on the `u128` word (`wide.rs`: refused when
-/// `bits(sum) + g > 128`, although the rounded mean may fit): `fuzz/README.md`, "Known findings".
-/// `false` makes it a finding again.
-pub const KNOWN_U128_MEAN_REFUSAL: bool = true;
-
-/// Accept the conservative refusal of the mean on the `u64` word for `g > 128` (`wide.rs`),
-/// although the rounded mean may fit (a huge area): `fuzz/README.md`, "Known findings".
-/// `false` makes it a finding again.
-pub const KNOWN_U64_MEAN_REFUSAL: bool = true;
-
 /// Whether `TooWide { MeanNumerator }` is an allowed answer for this mean (see [`check_mean`]).
 pub fn mean_refusal_allowed(sum: u128, g: u32, sides: (u64, u64), word_bits: u32) -> bool {
     let (w, h) = sides;
     if w == 0 || h == 0 {
         return false;
     }
-    let fits = mean_ref(sum, g, w, h).bits() <= u64::from(word_bits);
-    let conservative = if word_bits == 128 {
-        KNOWN_U128_MEAN_REFUSAL && (bits_of(sum) + g > 128 || g >= 128)
-    } else {
-        KNOWN_U64_MEAN_REFUSAL && g > 128
-    };
-    !fits || conservative
+    mean_ref(sum, g, w, h).bits() > u64::from(word_bits)
 }
 
 /// Accumulator value bits of a table of `entry_bits`-bit words (`i32`, `i64`, `i128` without
