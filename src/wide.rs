@@ -442,7 +442,11 @@ mod tests {
         } else {
             &[1, 3, 255, 265_200, 4_177_920, 0xFFFF_FFFF, u64::MAX >> 1]
         };
-        let ds: &[u32] = if cfg!(miri) { &[0, 40] } else { &[0, 1, 5, 20, 40] };
+        let ds: &[u32] = if cfg!(miri) {
+            &[0, 40]
+        } else {
+            &[0, 1, 5, 20, 40]
+        };
         for &sum in sums {
             for (i, j) in [(60u32, 60u32), (63, 63), (40, 63), (63, 1)] {
                 let k = i + j;
