@@ -449,12 +449,25 @@ impl U256 {
 
 /// Whether `m` is `round(sum * 2^g / area)` rounded to nearest with ties up, checked by the
 /// defining inequality in exact integers: `(2m - 1) area <= sum * 2^(g+1) < (2m + 1) area`.
-/// Any `g` for which `sum * 2^(g+1)` fits 256 bits; `m < 2^127`.
+/// Any `g` for which `sum * 2^(g+1)` fits 256 bits; any `m` below `2^128`.
 pub fn is_rounded_mean(sum: u128, area: u128, g: u32, m: u128) -> bool {
-    assert!(area > 0 && m < 1 << 127);
+    assert!(area > 0);
+    // (2m +- 1) area = 2 m area +- area, formed in 256 bits for any m (m area < 2^256).
+    let twice = |v: U256| U256 {
+        hi: (v.hi << 1) | (v.lo >> 127),
+        lo: v.lo << 1,
+    };
+    let add = |a: U256, b: u128| {
+        let (lo, carry) = a.lo.overflowing_add(b);
+        U256 {
+            hi: a.hi + carry as u128,
+            lo,
+        }
+    };
     let n2 = U256::shl_any(sum, g + 1);
-    let upper = U256::mul(2 * m + 1, area);
-    let lower_ok = m == 0 || U256::mul(2 * m - 1, area) <= n2;
+    let two_m_area = twice(U256::mul(m, area));
+    let upper = add(two_m_area, area);
+    let lower_ok = m == 0 || U256::abs_diff(two_m_area, U256 { hi: 0, lo: area }) <= n2;
     lower_ok && n2 < upper
 }
 
