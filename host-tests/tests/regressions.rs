@@ -262,10 +262,15 @@ fn i64_limits<T: RefTexel, E: Entry, const C: usize>(tex: &RefTexture) -> usize 
                                 let area = w as u128 * h as u128;
                                 for g in [0u32, 8, 40, 64, 127, 200] {
                                     match s.mean_rounded(0, g, &mut NoCount) {
-                                        Ok(m) => assert!(
-                                            is_rounded_mean(want[0], area, g, m.into()),
-                                            "{b:?} g={g}"
-                                        ),
+                                        // The reference works in 256 bits: checkable when
+                                        // sum 2^(g+1) fits them.
+                                        Ok(m) if (128 - want[0].leading_zeros()) + g < 256 => {
+                                            assert!(
+                                                is_rounded_mean(want[0], area, g, m.into()),
+                                                "{b:?} g={g}"
+                                            )
+                                        }
+                                        Ok(_) => {}
                                         Err(Error::TooWide {
                                             what: Quantity::MeanNumerator,
                                             ..
