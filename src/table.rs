@@ -389,13 +389,40 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             return Err(Error::CoordinateOutOfRange);
         }
         let mut out = [E::ZERO; C];
-        let [a, b, c, d] = self.read_quad_placed(x0, x1, y0, y1, &mut crate::NoCount);
-        for (i, o) in out.iter_mut().enumerate() {
-            let (Some(d), Some(c), Some(b), Some(a)) = (d.get(i), c.get(i), b.get(i), a.get(i))
-            else {
-                continue;
-            };
-            *o = d.wrapping_sub(*c).wrapping_sub(b.wrapping_sub(*a));
+        // Each read is one range check on a wrapping index, `((y - 1) w + x - 1) C`: on the
+        // zero row (`y = 0`) every index wraps below zero (above `w h C` as an unsigned
+        // number: `w C <= w h C < 2^(usize::BITS - 1)`, slices being at most `isize::MAX`
+        // bytes), so it reads nothing; the zero column (`x0 = 0`) is one test for both of its
+        // reads. For corners with `x, y >= 1` the wrapping index equals the plain one (below
+        // `w h C`, computed without overflow). An empty box needs no test of its own: for
+        // `x0 = x1 >= 1` or `y0 = y1` the reads cancel exactly; only `x0 = x1 = 0`, where the
+        // index of `x1 - 1` would wrap into the row before, returns early.
+        let w = self.width;
+        let (row0, row1) = (
+            y0.wrapping_sub(1).wrapping_mul(w),
+            y1.wrapping_sub(1).wrapping_mul(w),
+        );
+        let at = |i: usize| -> [E; C] {
+            self.table
+                .get(i.wrapping_mul(C)..)
+                .and_then(|t| t.first_chunk::<C>())
+                .copied()
+                .unwrap_or([E::ZERO; C])
+        };
+        let x1m = x1.wrapping_sub(1);
+        let (i1, i0) = (row1.wrapping_add(x1m), row0.wrapping_add(x1m));
+        let (d, b) = (at(i1), at(i0));
+        let (c, a) = if x0 == 0 {
+            if x1 == 0 {
+                return Ok(out);
+            }
+            ([E::ZERO; C], [E::ZERO; C])
+        } else {
+            let bw = x1.wrapping_sub(x0);
+            (at(i1.wrapping_sub(bw)), at(i0.wrapping_sub(bw)))
+        };
+        for (((o, d), c), (b, a)) in out.iter_mut().zip(d).zip(c).zip(b.iter().zip(a)) {
+            *o = d.wrapping_sub(c).wrapping_sub(b.wrapping_sub(a));
         }
         Ok(out)
     }

@@ -304,7 +304,7 @@ pub trait BoxLookup<const C: usize>: Layout<C> + Sized {
     /// `M`. An in-range (or placeable, see [`crate::edge`]) box costs 4 corner reads and 3
     /// additive operations per channel; corners on the zero row or column cost no read. Zero-area
     /// boxes sum to 0 with no reads; inverted boxes are [`Error::InvertedBox`].
-    #[inline]
+    #[inline(always)]
     fn box_sum_int<M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<i32>,
@@ -392,7 +392,7 @@ impl<const C: usize, L: Layout<C>> BoxLookup<C> for L {}
 
 impl<E: Entry, const C: usize> Sat<'_, E, C> {
     /// [`BoxLookup::box_sum_int`] on the flat table: 4 reads, exact.
-    #[inline]
+    #[inline(always)]
     pub fn box_sum_int<M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<i32>,

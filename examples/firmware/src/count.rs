@@ -96,12 +96,12 @@ fn m_baseline(sat: &Sat<'_, En>, r: &Rect<Co>) {
 
 #[inline(never)]
 fn m_box_sum_int_border(sat: &Sat<'_, En>, r: &Rect<i32>) {
-    keep(sat.box_sum_int(r, Border, &mut NoCount));
+    keep(sat.box_sum_int(r, Border, &mut NoCount).map_or(0, |s| s.sum()));
 }
 
 #[inline(never)]
 fn m_box_sum_inside(sat: &Sat<'_, En>, r: &Rect<u32>) {
-    keep(sat.box_sum_inside(r));
+    keep(sat.box_sum_inside(r).map_or(0, |s| s[0]));
 }
 
 #[inline(never)]
