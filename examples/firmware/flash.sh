@@ -71,4 +71,5 @@ echo "|---|---:|---:|---:|"
 row 'build + 4-read `box_sum_int` ClampToEdge + mean (the smallest plan'"'"'s lookup)' flash-int4 flash-int4-hand
 row 'build + `box_sum_inside` (boxes known inside)' flash-inside flash-inside-hand
 row 'build + 16-read Stable Repeat + mean (hand-written: boxes inside one period only)' flash-stable-repeat flash-stable-repeat-hand
+row 'every cargo feature enabled (`filters`, `defmt`), the Stable Repeat plan used: what features cost unused' flash-stable-repeat,filters,defmt
 row 'every cargo feature: Stable Repeat plan + `box_sum_raw` + every filter'"'"'s raw sampler and build' flash-all
