@@ -134,6 +134,28 @@ pub trait Layout<const C: usize> {
     ) -> [[Self::Value; C]; 4] {
         self.cell_corners(i, j, k)
     }
+    /// The corners of the four cells a 16-read lookup reads, placed as for
+    /// [`Layout::cell_corners_placed`], in the order `(i[1], j[1])`, `(i[1], j[0])`, `(i[0],
+    /// j[1])`, `(i[0], j[0])` (reads counted in that order). A layout may share work between
+    /// the four (the tiled one: one call, one geometry load, the digits of each coordinate once).
+    /// Hidden.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn cells4_placed<K: Counter>(
+        &self,
+        i: [usize; 2],
+        j: [usize; 2],
+        k: &mut K,
+    ) -> [[[Self::Value; C]; 4]; 4] {
+        let [i0, i1] = i;
+        let [j0, j1] = j;
+        [
+            self.cell_corners_placed(i1, j1, k),
+            self.cell_corners_placed(i1, j0, k),
+            self.cell_corners_placed(i0, j1, k),
+            self.cell_corners_placed(i0, j0, k),
+        ]
+    }
     /// Bits per texel and channel: `storage_bits / (w h C)`.
     #[allow(
         clippy::as_conversions,

@@ -17,20 +17,19 @@ use crate::rect::RawBox;
 use crate::texel::{Acc, Entry};
 use crate::width;
 
-/// `2^2F S(i + A/2^F, j + B/2^F)` per channel: 4 reads, 3 multiplies, 6 additive operations.
+/// `2^2F S(i + A/2^F, j + B/2^F)` per channel from the 4 corners of cell `(i, j)` (read by the
+/// caller, [`Layout::cells4_placed`]): 3 multiplies, 6 additive operations.
 /// Wrapping operations: on flat and tiled tables the width proof rules out any wrap (so they are
 /// the plain operations); on a modular table the result is only needed modulo `2^k`.
 #[inline(always)]
 fn corner<L: Layout<C>, const C: usize, K: Counter>(
-    t: &L,
-    x: i64,
-    y: i64,
+    cell: [[L::Value; C]; 4],
+    a: u32,
+    b: u32,
     f: u32,
     k: &mut K,
 ) -> [AccOf<L, C>; C] {
-    let (i, a) = split_coord(x, t.width(), f);
-    let (j, b) = split_coord(y, t.height(), f);
-    let [q00, q10, q01, q11] = t.cell_corners_placed(i, j, k);
+    let [q00, q10, q01, q11] = cell;
     k.muls(const { per_channel(3, C) });
     k.adds(const { per_channel(6, C) });
     let a = AccOf::<L, C>::from_u32(a);
@@ -77,10 +76,17 @@ impl FormImpl for Paper {
         f: u32,
         k: &mut K,
     ) -> [AccOf<L, C>; C] {
-        let v11 = corner(t, b.x1, b.y1, f, k);
-        let v10 = corner(t, b.x1, b.y0, f, k);
-        let v01 = corner(t, b.x0, b.y1, f, k);
-        let v00 = corner(t, b.x0, b.y0, f, k);
+        // Each coordinate split once (not once per corner that uses it), the four cells read
+        // through one call a layout may share work in.
+        let (i0, a0) = split_coord(b.x0, t.width(), f);
+        let (i1, a1) = split_coord(b.x1, t.width(), f);
+        let (j0, b0) = split_coord(b.y0, t.height(), f);
+        let (j1, b1) = split_coord(b.y1, t.height(), f);
+        let [c11, c10, c01, c00] = t.cells4_placed([i0, i1], [j0, j1], k);
+        let v11 = corner::<L, C, K>(c11, a1, b1, f, k);
+        let v10 = corner::<L, C, K>(c10, a1, b0, f, k);
+        let v01 = corner::<L, C, K>(c01, a0, b1, f, k);
+        let v00 = corner::<L, C, K>(c00, a0, b0, f, k);
         k.adds(const { per_channel(3, C) });
         let modulus = t.modulus();
         let mut out = [AccOf::<L, C>::ZERO; C];
