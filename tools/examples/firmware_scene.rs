@@ -13,6 +13,7 @@ mod scene;
 
 use scene::{Checksum, H, REPEAT, SMALL, TILED, W};
 use std::process::ExitCode;
+use texsat::filters::mip::MipPyramid;
 use texsat::layouts::{Modular, Tiled};
 use texsat::plan::{Plan, PlanLayout};
 use texsat::{Error, Texture};
@@ -48,6 +49,12 @@ fn tiled(tex: &Texture<'_, u8>, plan: &Plan) -> Result<Checksum, Error> {
     scene::render(&t, plan)
 }
 
+fn mip(tex: &Texture<'_, u8>) -> Result<Checksum, Error> {
+    let mut levels = vec![0u8; MipPyramid::<u8>::storage_needed(W, H)?];
+    let p = MipPyramid::build(tex, &mut levels)?;
+    scene::render_mip(&p)
+}
+
 fn main() -> ExitCode {
     let mut texels = vec![0u8; W * H];
     scene::fill_texture(&mut texels);
@@ -57,6 +64,7 @@ fn main() -> ExitCode {
             line("small", &modular::<u16>(&tex, &SMALL)?),
             line("repeat", &modular::<u32>(&tex, &REPEAT)?),
             line("tiled", &tiled(&tex, &TILED)?),
+            line("mip", &mip(&tex)?),
         ])
     };
     match run() {

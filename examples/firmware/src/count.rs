@@ -96,7 +96,10 @@ fn m_baseline(sat: &Sat<'_, En>, r: &Rect<Co>) {
 
 #[inline(never)]
 fn m_box_sum_int_border(sat: &Sat<'_, En>, r: &Rect<i32>) {
-    keep(sat.box_sum_int(r, Border, &mut NoCount).map_or(0, |s| s.sum()));
+    keep(
+        sat.box_sum_int(r, Border, &mut NoCount)
+            .map_or(0, |s| s.sum()),
+    );
 }
 
 #[inline(never)]

@@ -1,7 +1,7 @@
 //! The firmware demo (feature `demo`, bin `texsat-demo`; run by `run.sh`): builds the tables of
 //! the demo scene (`scene.rs`) into `static`s sized by three scene plans at compile time,
-//! samples the 32 x 24 perspective scene with each plan's configuration, and logs one line per
-//! plan (checksum, first means, samples) with `defmt`, its frames written to the semihosting
+//! samples the 32 x 24 perspective scene with each plan's configuration (and, for comparison,
+//! with trilinear mip-mapping), and logs one line per plan (checksum, first means, samples) with `defmt`, its frames written to the semihosting
 //! console, then exits QEMU. `run.sh` decodes the frames with `defmt-print` and compares the
 //! lines with the host's (`tools/examples/firmware_scene.rs`, the same scene code).
 //!
@@ -12,6 +12,7 @@
 use core::arch::asm;
 
 use cortex_m_rt::entry;
+use texsat::filters::mip::MipPyramid;
 use texsat::layouts::{Modular, Tiled};
 use texsat::plan::{EntryWord, PlanLayout};
 use texsat::Texture;
@@ -56,6 +57,9 @@ static mut REPEAT_WORDS: [u32; REPEAT.storage_len()] = [0; REPEAT.storage_len()]
 static mut REPEAT_ROW: [u32; W] = [0; W];
 static mut TILED_WORDS: [u32; TILED.storage_len()] = [0; TILED.storage_len()];
 static mut TILED_SCRATCH_ROWS: [u32; TILED_SCRATCH] = [0; TILED_SCRATCH];
+/// The mip levels below the texture: `W H / 3` texels for a square power-of-two texture
+/// (`MipPyramid::storage_needed`, checked in `main`); one spare.
+static mut MIP_LEVELS: [u8; W * H / 3 + 1] = [0; W * H / 3 + 1];
 
 /// A marker between phases (`run.sh` with `DEMO_COUNT=1` counts the instructions executed
 /// between its calls: build and render of each plan).
@@ -166,7 +170,7 @@ fn fail(what: &str) -> ! {
 fn main() -> ! {
     // SAFETY: single-threaded, no interrupts: `main` is the only user of these statics, each
     // borrowed once.
-    let (texels, small_w, small_r, rep_w, rep_r, til_w, til_s) = unsafe {
+    let (texels, small_w, small_r, rep_w, rep_r, til_w, til_s, mip) = unsafe {
         (
             &mut *core::ptr::addr_of_mut!(TEXELS),
             &mut *core::ptr::addr_of_mut!(SMALL_WORDS),
@@ -175,6 +179,7 @@ fn main() -> ! {
             &mut *core::ptr::addr_of_mut!(REPEAT_ROW),
             &mut *core::ptr::addr_of_mut!(TILED_WORDS),
             &mut *core::ptr::addr_of_mut!(TILED_SCRATCH_ROWS),
+            &mut *core::ptr::addr_of_mut!(MIP_LEVELS),
         )
     };
     scene::fill_texture(texels);
@@ -222,6 +227,27 @@ fn main() -> ! {
             }
         }
         Err(_) => fail("tiled: build"),
+    }
+    // For comparison: trilinear mip-mapping of the REPEAT footprints.
+    texsat_demo_mark();
+    let built = match MipPyramid::<u8>::storage_needed(W, H) {
+        Ok(n) => match mip.get_mut(..n) {
+            Some(levels) => MipPyramid::build(&tex, levels),
+            None => fail("mip: storage"),
+        },
+        Err(_) => fail("mip: storage"),
+    };
+    texsat_demo_mark();
+    match built {
+        Ok(p) => {
+            let rendered = scene::render_mip(&p);
+            texsat_demo_mark();
+            match rendered {
+                Ok(c) => report("mip", &c),
+                Err(_) => fail("mip: a footprint was refused"),
+            }
+        }
+        Err(_) => fail("mip: build"),
     }
     semihosting::exit(true)
 }

@@ -11,9 +11,14 @@
 //! * `REPEAT`: boxes of 0.5 to 12 texels at `F = 8` that leave the texture under Repeat, at most
 //!   64 reads: `modular:16`, `u32` values, Stable;
 //! * `TILED`: the same facts without a read bound: `tiled:4x4`, the smallest table.
+//!
+//! And for comparison, not a plan: trilinear mip-mapping (`filter-mip`) of the `REPEAT`
+//! footprints under Repeat, the 8-tap filter a texture unit would use instead of a table.
 
+use texsat::filters::mip::MipPyramid;
+use texsat::filters::OUT_FRAC_BITS;
 use texsat::plan::{Plan, PlanLookup, SceneFacts};
-use texsat::{BoxLookup, EdgeKind, Error, FracBits, NoCount, Rect};
+use texsat::{BoxLookup, EdgeKind, Error, FracBits, NoCount, Rect, Repeat};
 
 /// Texture side.
 pub const W: usize = 64;
@@ -178,6 +183,41 @@ where
     for py in 0..OUT_H {
         for px in 0..OUT_W {
             c.push(sample(l, plan, px, py)?);
+        }
+    }
+    Ok(c)
+}
+
+/// One pixel's trilinear mip sample, for comparison with the plans: the `REPEAT` plan's
+/// footprint under Repeat, the value rounded (ties up) from `2^-16` to `2^-G` texel units, the
+/// units of the plans' means.
+pub fn sample_mip(p: &MipPyramid<'_, u8>, px: usize, py: usize) -> Result<u64, Error> {
+    let f = REPEAT.facts();
+    let [x0, y0, x1, y1] = footprint(
+        px,
+        py,
+        f.frac_bits,
+        f.min_box[0] as i64,
+        f.max_box[0] as i64,
+    );
+    let s = p.trilinear_raw(
+        &Rect::new(x0, y0, x1, y1),
+        FracBits::new(f.frac_bits)?,
+        Repeat,
+        &mut NoCount,
+    )?;
+    let v = s.values.first().copied().unwrap_or(0);
+    let shift = OUT_FRAC_BITS - G;
+    // v <= 255 2^16: the rounding addition does not wrap.
+    Ok(v.wrapping_add(1 << (shift - 1)) >> shift)
+}
+
+/// Every pixel of the image, trilinear mip-mapped ([`sample_mip`]).
+pub fn render_mip(p: &MipPyramid<'_, u8>) -> Result<Checksum, Error> {
+    let mut c = Checksum::new();
+    for py in 0..OUT_H {
+        for px in 0..OUT_W {
+            c.push(sample_mip(p, px, py)?);
         }
     }
     Ok(c)
