@@ -16,15 +16,34 @@ fn texture(w: usize, h: usize, seed: u32) -> [u8; 4096] {
     t
 }
 
+/// The coordinates a sweep visits from `lo` to `hi` (inclusive): all of them natively; under
+/// Miri, which interprets about 10^4 times slower, only both ends, their neighbours and the
+/// middle, so the sweeps still meet the empty, the one-cell, the edge and the whole-axis boxes.
+fn span(lo: i32, hi: i32) -> impl Iterator<Item = i32> + Clone {
+    let mid = lo + (hi - lo) / 2;
+    (lo..=hi).filter(move |&v| !cfg!(miri) || v <= lo + 1 || v >= hi - 1 || v == mid)
+}
+
+/// [`span`] over `usize` coordinates.
+fn span_usize(lo: usize, hi: usize) -> impl Iterator<Item = usize> + Clone {
+    span(lo as i32, hi as i32).map(|v| v as usize)
+}
+
 fn check_all_boxes<L: BoxLookup<1>>(l: &L, flat: &Sat<'_, u32, 1>)
 where
     crate::WideOf<L, 1>: Into<u128>,
 {
     let (w, h) = (flat.width() as i32, flat.height() as i32);
-    for x0 in 0..=w {
-        for x1 in x0..=w {
-            for y0 in 0..=h {
-                for y1 in y0..=h {
+    // Under Miri every 7th box of the spans (the first included).
+    let mut case = 0u32;
+    for x0 in span(0, w) {
+        for x1 in span(x0, w) {
+            for y0 in span(0, h) {
+                for y1 in span(y0, h) {
+                    case += 1;
+                    if cfg!(miri) && case % 7 != 1 {
+                        continue;
+                    }
                     let r = Rect::new(x0, y0, x1, y1);
                     let a = flat.box_sum_int(&r, Border, &mut NoCount).unwrap();
                     let b = l.box_sum_int(&r, Border, &mut NoCount).unwrap();
@@ -53,8 +72,8 @@ fn tiled_equals_flat_every_box() {
             let mut words = [0u32; 4096];
             let mut scratch = [0u32; 512];
             let tiled = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
-            for y in 0..=h {
-                for x in 0..=w {
+            for y in span_usize(0, h) {
+                for x in span_usize(0, w) {
                     assert_eq!(
                         tiled.corner(x, y, &mut NoCount),
                         flat.corner(x, y).unwrap(),
@@ -156,8 +175,8 @@ fn tiled_modular_combination() {
         // u16 values suffice: only k = 13 bits are ever held.
         let l = Tiled::<u16>::build(&t, spec, &mut words, &mut scratch).unwrap();
         assert!(l.bits_per_entry() < k as f64, "{}", l.bits_per_entry());
-        for x0 in 0..=w as i32 {
-            for x1 in x0..=w as i32 {
+        for x0 in span(0, w as i32) {
+            for x1 in span(x0, w as i32) {
                 for (y0, y1) in [(0, 5), (3, 8), (13, 18), (7, 8), (0, 18)] {
                     let r = Rect::new(x0, y0, x1, y1);
                     let area = (x1 - x0) * (y1 - y0);
@@ -487,8 +506,8 @@ fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
     let (w, h) = (l.width(), l.height());
     let mut sum = 0u64;
     let mut k = Tally::new();
-    for y in (0..=h + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
-        for x in (0..=w + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
+    for y in span_usize(0, h + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
+        for x in span_usize(0, w + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
             let v = l.corner(x, y, &mut k);
             if x > w || y > h || x == 0 || y == 0 {
                 assert!(v.iter().all(|e| e.to_u64() == 0), "({x}, {y})");
@@ -499,10 +518,16 @@ fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
     // Every box on the small textures; on the larger ones, boxes from the corner.
     let (wi, hi) = (w as i32, h as i32);
     let lo = if w * h <= 35 { -1 } else { wi - 1 };
-    for x0 in lo..=wi + 1 {
-        for x1 in x0..=wi + 1 {
-            for y0 in -1..=hi + 1 {
-                for y1 in y0..=hi + 1 {
+    // Under Miri every 13th box of the spans (the first included).
+    let mut case = 0u32;
+    for x0 in span(lo, wi + 1) {
+        for x1 in span(x0, wi + 1) {
+            for y0 in span(-1, hi + 1) {
+                for y1 in span(y0, hi + 1) {
+                    case += 1;
+                    if cfg!(miri) && case % 13 != 1 {
+                        continue;
+                    }
                     let r = Rect::new(x0, y0, x1, y1);
                     for s in [
                         l.box_sum_int(&r, Border, &mut k),
@@ -541,9 +566,19 @@ fn fuzz_corrupt_words_never_panic() {
         TiledSpec::tiles(4, 4).unwrap().with_modulus(13),
     ];
     let mut check = 0u64;
-    for (w, h) in [(1usize, 1usize), (7, 5), (16, 16), (13, 17)] {
+    // Under Miri (about 10^4 times slower) every 5th combination of size, spec and fill, and
+    // the modular layouts on the first and last sizes only.
+    let mut combo = 0u32;
+    for (size, (w, h)) in [(1usize, 1usize), (7, 5), (16, 16), (13, 17)]
+        .into_iter()
+        .enumerate()
+    {
         for (n, spec) in specs.iter().enumerate() {
             for fill in 0..3u32 {
+                combo += 1;
+                if cfg!(miri) && combo % 5 != 1 {
+                    continue;
+                }
                 let words = |need: usize| -> [u32; 4096] {
                     match fill {
                         0 => noise(need + 1, (w * 97 + h * 13 + n) as u32),
@@ -567,6 +602,9 @@ fn fuzz_corrupt_words_never_panic() {
                 let t = Tiled::<u16>::from_words(&ws[..need], *spec, w, h, 1).unwrap();
                 check = check.wrapping_add(poke(&t));
             }
+        }
+        if cfg!(miri) && size % 3 != 0 {
+            continue;
         }
         for k in [8u32, 13, 32] {
             let need = Modular::<u32>::words_needed(w, h, k).unwrap();
@@ -609,7 +647,14 @@ fn pow2_digits_equal_division_digits() {
         let a = Axis::new(&AxisLevels::new(blocks).unwrap());
         assert_eq!(a.is_pow2(), is_pow2, "{blocks:?}");
         let d = a.by_division();
-        let xs = (0..5000u32).chain([u32::MAX, (1 << 31) - 1, 1 << 30, 123_456_789]);
+        // Under Miri (about 10^4 times slower) every x below 130 (past every digit boundary of
+        // the small blocks), every 251st, and the neighbours of 1024 and 4096.
+        let sample = |x: &u32| {
+            !cfg!(miri) || *x < 130 || x % 251 == 0 || matches!(x, 1023..=1025 | 4095..=4097)
+        };
+        let xs = (0..5000u32)
+            .filter(sample)
+            .chain([u32::MAX, (1 << 31) - 1, 1 << 30, 123_456_789]);
         for x in xs {
             let (fast, slow) = (a.digits(x), d.digits(x));
             let mut q = x;
@@ -674,8 +719,8 @@ fn pow2_fast_path_equals_general_path_every_box() {
             let mut scratch = [0u32; 512];
             let l = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
             let g = l.geometry();
-            for y in 1..=h as u32 {
-                for x in 1..=w as u32 {
+            for y in span(1, h as i32).map(|v| v as u32) {
+                for x in span(1, w as i32).map(|v| v as u32) {
                     let (mut fast, mut general) = ([0u32], [0u32]);
                     let (mut kf, mut kg) = (Tally::new(), Tally::new());
                     l.corner_one_level(x, y, &mut fast, &mut kf);
