@@ -1464,20 +1464,21 @@ mod tests {
     }
 
     fn every_int<M: EdgeMode>(mode: M) {
+        // Under Miri (about 10^4 times slower) every 4999th case of the sweep over all sizes
+        // (the first included): a strided subset that meets centres outside, on and inside the
+        // edges, and every size.
+        let mut case = 0u32;
         for (w, h) in [(1, 1), (1, 4), (4, 1), (3, 5), (5, 3)] {
             let t = tex(w, h, (w * 10 + h) as u64);
             let texture = Texture::<u8>::new(&t, w, h).unwrap();
             let mut st = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
             let tt = TentTable::build(&texture, &mut st).unwrap();
-            // Under Miri (about 10^4 times slower) every 997th case of the sweep (the first included), a strided
-            // subset that still meets centres outside, on and inside every edge.
-            let mut case = 0u32;
             for cx in -8i32..=w as i32 + 8 {
                 for cy in -7i32..=h as i32 + 7 {
                     for a in 1u32..=7 {
                         for b in [1u32, 2, 5] {
                             case += 1;
-                            if cfg!(miri) && case % 997 != 1 {
+                            if cfg!(miri) && case % 4999 != 1 {
                                 continue;
                             }
                             let got = tt.sample_int(cx, cy, a, b, mode, &mut NoCount).unwrap();
@@ -1509,8 +1510,9 @@ mod tests {
         every_int(ClampToEdge);
         every_int(Repeat);
         every_int(MirroredRepeat);
-        // The run-time mode is the same lookup (one description of a mode: EdgeMode::kind).
-        for kind in EdgeKind::ALL {
+        // The run-time mode is the same lookup (one description of a mode: EdgeMode::kind);
+        // under Miri (about 10^4 times slower) the static modes above only.
+        for kind in EdgeKind::ALL.into_iter().filter(|_| !cfg!(miri)) {
             every_int(kind);
         }
     }
@@ -1533,8 +1535,8 @@ mod tests {
             let tt = TentTable::build(&texture, &mut st).unwrap();
             let mut ls = vec![0u64; TentLines::<u64>::storage_needed(w, h).unwrap()];
             let lines = TentLines::build(&texture, &mut ls).unwrap();
-            // Under Miri (about 10^4 times slower) 2 random boxes per texture and mode.
-            for _ in 0..if cfg!(miri) { 2 } else { 400 } {
+            // Under Miri (about 10^4 times slower) 1 random box per texture and mode.
+            for _ in 0..if cfg!(miri) { 1 } else { 400 } {
                 let span = 16 * 4 * (w.max(h) as i64 + 4);
                 let x0 = -2 * span / 3 + (lcg(&mut seed) as i64 % span);
                 let y0 = -2 * span / 3 + (lcg(&mut seed) as i64 % span);

@@ -81,11 +81,11 @@ fn a_planned_table_answers_every_box_within_its_facts() {
             let check = |l: &dyn Fn(&Rect<i64>) -> Result<u128, Error>| {
                 let xs = (0..x_end)
                     .step_by(x_step)
-                    .chain(cfg!(miri).then_some(x_end - 1));
+                    .chain((cfg!(miri) && x_end > 0).then_some(x_end - 1));
                 for x0 in xs {
                     let ys = (0..y_end)
                         .step_by(y_step)
-                        .chain(cfg!(miri).then_some(y_end - 1));
+                        .chain((cfg!(miri) && y_end > 0).then_some(y_end - 1));
                     for y0 in ys {
                         for (dw, dh) in [
                             (one, one),
