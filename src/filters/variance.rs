@@ -777,11 +777,17 @@ mod tests {
                 bits_available: 32
             })
         );
-        assert!(vs.iter().chain(qs.iter()).all(|&v| v == 7));
+        // Under Miri (about 10^4 times slower) every 257th entry is probed, and the u64 tables
+        // are built for a 16 x 16 texture instead of 258 x 258.
+        let stride = if cfg!(miri) { 257 } else { 1 };
+        assert!(vs.iter().chain(qs.iter()).step_by(stride).all(|&v| v == 7));
         let mut short = vec![0u64; 10];
-        let mut vs64 = vec![0u64; 258 * 258];
-        let mut qs64 = vec![0u64; 258 * 258];
-        assert!(VarianceTables::build(&texture, &mut vs64, &mut qs64).is_ok());
+        let n = if cfg!(miri) { 16 } else { 258 };
+        let t64 = vec![0u8; n * n];
+        let texture64 = Texture::<u8>::new(&t64, n, n).unwrap();
+        let mut vs64 = vec![0u64; n * n];
+        let mut qs64 = vec![0u64; n * n];
+        assert!(VarianceTables::build(&texture64, &mut vs64, &mut qs64).is_ok());
         let mut vs2 = vec![0u64; 258 * 258];
         assert!(matches!(
             VarianceTables::build(&texture, &mut vs2, &mut short),
