@@ -801,8 +801,9 @@ mod tests {
             let c = Centre::of(x0, x1);
             let p = x0 as i128 + x1 as i128;
             assert_eq!(2 * c.mid as i128 + c.odd as i128, p, "{x0} {x1}");
-            let shifts = (0..=56u32)
-                .filter(|s| !cfg!(miri) || s % 7 == 0 || matches!(s, 1 | 31 | 32 | 55 | 56));
+            let shifts = (0..=56u32).filter(|s| {
+                !cfg!(miri) || s.is_multiple_of(7) || matches!(s, 1 | 31 | 32 | 55 | 56)
+            });
             for s in shifts {
                 assert_eq!(c.index(s) as i128, p >> (s + 1));
                 for bits in [4u32, 16, 20, 24, 32] {
@@ -913,8 +914,9 @@ mod tests {
         let mut k = crate::cost::NoCount;
         // Under Miri (about 10^4 times slower) the values 0, 1, 254, 255 and every 37th, the weights 0, 1, 128, 255,
         // 256 and every 41st, and 300 random 16-bit cases.
-        let value = |v: &u64| !cfg!(miri) || *v <= 1 || *v >= 254 || v % 37 == 0;
-        let weight = |a: &u64| !cfg!(miri) || *a <= 1 || *a >= 255 || *a == 128 || a % 41 == 0;
+        let value = |v: &u64| !cfg!(miri) || *v <= 1 || *v >= 254 || v.is_multiple_of(37);
+        let weight =
+            |a: &u64| !cfg!(miri) || *a <= 1 || *a >= 255 || *a == 128 || a.is_multiple_of(41);
         for b in (0..=255u64).filter(value) {
             for c in (0..=255u64).filter(value) {
                 for a in (0..=256u64).filter(weight) {

@@ -362,7 +362,10 @@ mod tests {
             // Under Miri (about 10^4 times slower) every width, but only the offsets at and next
             // to a word boundary, every 11th, and the last.
             let offsets = (0..end_offset).filter(|o| {
-                !cfg!(miri) || matches!(o % 32, 0 | 1 | 31) || o % 11 == 0 || o + 1 == end_offset
+                !cfg!(miri)
+                    || matches!(o % 32, 0 | 1 | 31)
+                    || o.is_multiple_of(11)
+                    || o + 1 == end_offset
             });
             for offset in offsets {
                 let value =
@@ -412,7 +415,7 @@ mod tests {
         // word and slice boundaries (the slice holds 160 bits).
         let edges = [1, 31, 32, 33, 63, 64, 96, 127, 128, 159, 160, 199];
         let offsets: Vec<u64> = (0..200u64)
-            .filter(|o| !cfg!(miri) || o % 40 == 0 || edges.contains(o))
+            .filter(|o| !cfg!(miri) || o.is_multiple_of(40) || edges.contains(o))
             .collect();
         for len in 1..=64u32 {
             for &offset in &offsets {
