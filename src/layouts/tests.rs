@@ -647,12 +647,12 @@ fn pow2_digits_equal_division_digits() {
         let a = Axis::new(&AxisLevels::new(blocks).unwrap());
         assert_eq!(a.is_pow2(), is_pow2, "{blocks:?}");
         let d = a.by_division();
-        // Under Miri (about 10^4 times slower) every x below 130 (past every digit boundary of
-        // the small blocks), every 251st, and the neighbours of 1024 and 4096.
+        // Under Miri (about 10^4 times slower) every x below 70 (past the digit boundaries of
+        // the blocks up to 64), every 499th, and the neighbours of 1024 and 4096.
         let sample = |x: &u32| {
             !cfg!(miri)
-                || *x < 130
-                || x.is_multiple_of(251)
+                || *x < 70
+                || x.is_multiple_of(499)
                 || matches!(x, 1023..=1025 | 4095..=4097)
         };
         let xs = (0..5000u32)
