@@ -353,7 +353,7 @@ fn sampled(case: usize, stride: usize) -> bool {
 }
 
 /// Runs [`hostile_boxes`] through every mode and form (and `F` in {0, 8}) on one layout (under
-/// Miri every 5th case).
+/// Miri every 11th case).
 fn sweep<L: BoxLookup<C>, const C: usize>(name: &str, l: &L, tex: &RefTex) {
     let mut failures = Vec::new();
     let mut n = 0;
@@ -362,7 +362,7 @@ fn sweep<L: BoxLookup<C>, const C: usize>(name: &str, l: &L, tex: &RefTex) {
             for kind in MODES {
                 for form in FORMS {
                     n += 1;
-                    if !sampled(n - 1, 5) {
+                    if !sampled(n - 1, 11) {
                         continue;
                     }
                     if let Verdict::Wrong(why) = check_box(l, tex, r, f, form, kind, false) {
