@@ -2122,8 +2122,8 @@ fn shortcut_within_its_bound_and_at_the_limits() {
     let m = rt.max() as i128;
     let mut seed = 99u64;
     for kind in MODES {
-        // Under Miri (about 10^4 times slower) 8 random boxes per mode.
-        for _ in 0..if cfg!(miri) { 8 } else { 200 } {
+        // Under Miri (about 10^4 times slower) 4 random boxes per mode.
+        for _ in 0..if cfg!(miri) { 4 } else { 200 } {
             let mut next = |n: i64| -> i64 {
                 seed ^= seed << 13;
                 seed ^= seed >> 7;
