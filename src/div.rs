@@ -195,9 +195,16 @@ mod tests {
                 assert_eq!(got, Some((q as u32, r as u32)), "{n} / {d}");
             }
         };
-        // Exhaustive over small dividends and divisors.
-        for d in 0..=300u32 {
-            for n in 0..=3000u64 {
+        // Exhaustive over small dividends and divisors (under Miri, which interprets each check
+        // about 10^4 times slower, a smaller square and fewer random rounds per shift: every
+        // shift and every edge below still runs).
+        let (max_d, max_n, rounds) = if cfg!(miri) {
+            (16, 80, 8)
+        } else {
+            (300, 3000, 20_000)
+        };
+        for d in 0..=max_d {
+            for n in 0..=max_n {
                 check(n, d);
             }
         }
@@ -210,7 +217,7 @@ mod tests {
             s
         };
         for shift in 0..32 {
-            for _ in 0..20_000 {
+            for _ in 0..rounds {
                 let d = ((next() as u32) >> shift).max(1);
                 // A quotient that fits: n < d 2^32.
                 let n = next() % (u64::from(d) << 32);
@@ -247,8 +254,15 @@ mod tests {
             let want = n.checked_div(d).zip(n.checked_rem(d));
             assert_eq!(divrem_u64_narrow(n, d), want, "{n} / {d}");
         };
-        for n in 0..300u64 {
-            for d in 0..300u64 {
+        // Under Miri (about 10^4 times slower) a smaller square and fewer random pairs; the
+        // edges below run in full.
+        let (small, rounds) = if cfg!(miri) {
+            (24u64, 1_500)
+        } else {
+            (300, 200_000)
+        };
+        for n in 0..small {
+            for d in 0..small {
                 check(n, d);
             }
         }
@@ -270,7 +284,7 @@ mod tests {
                 check(n, d);
             }
         }
-        for _ in 0..200_000 {
+        for _ in 0..rounds {
             let (n, d) = (next() >> (next() % 64), next() >> (next() % 64));
             check(n, d);
         }
@@ -293,8 +307,15 @@ mod tests {
             };
             assert_eq!(div_euclid_i64(x, p), want, "{x} / {p}");
         };
-        for x in -300i64..300 {
-            for p in -3i64..300 {
+        // Under Miri (about 10^4 times slower) a smaller square and fewer random pairs; the
+        // extremes below run in full.
+        let (small, rounds) = if cfg!(miri) {
+            (24i64, 1_500)
+        } else {
+            (300, 200_000)
+        };
+        for x in -small..small {
+            for p in -3i64..small {
                 check(x, p);
             }
         }
@@ -303,7 +324,7 @@ mod tests {
                 check(x, p);
             }
         }
-        for _ in 0..200_000 {
+        for _ in 0..rounds {
             let x = (next() as i64) >> (next() % 64);
             let p = ((next() >> 1) >> (next() % 63)).max(1) as i64;
             check(x, p);

@@ -153,7 +153,9 @@ fn square_u64(m: u64) -> (u64, u64) {
     clippy::as_conversions
 )]
 mod tests {
+    extern crate std;
     use super::*;
+    use std::vec::Vec;
 
     /// The earlier formulation, Q1.63 squared in `u128`: the reference the 64-bit one must match
     /// bit for bit.
@@ -189,7 +191,8 @@ mod tests {
     #[test]
     fn square_u64_matches_u128() {
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        for _ in 0..100_000 {
+        // Under Miri (about 10^4 times slower) 1000 random values (the extremes run every round).
+        for _ in 0..if cfg!(miri) { 1_000 } else { 100_000 } {
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
@@ -203,8 +206,26 @@ mod tests {
     #[test]
     fn bit_for_bit_with_the_u128_formulation() {
         // Exhaustive below 2^20 for every output width the filters use, and the fraction
-        // widths 1..=16 on a smaller range.
-        for raw in 1u64..1 << 20 {
+        // widths 1..=16 on a smaller range. Under Miri (about 10^4 times slower) every input
+        // below `dense`, the neighbours of every power of two up to the limit, every
+        // `stride`-th input, and 300 random ones.
+        let inputs = |limit: u64, dense: u64, stride: usize| -> Vec<u64> {
+            if !cfg!(miri) {
+                return (1..limit).collect();
+            }
+            let mut v: Vec<u64> = (1..dense)
+                .chain((1..64 - limit.leading_zeros()).flat_map(|k| {
+                    let p = 1u64 << k;
+                    [p - 1, p, p + 1]
+                }))
+                .chain((dense..limit).step_by(stride))
+                .filter(|&v| v < limit)
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        for raw in inputs(1 << 20, 64, 8191) {
             for out in [8u32, 12, 16] {
                 assert_eq!(
                     log2_fixed(raw, 0, out),
@@ -213,7 +234,7 @@ mod tests {
                 );
             }
         }
-        for raw in 1u64..1 << 12 {
+        for raw in inputs(1 << 12, 16, 257) {
             for out in 0..=16u32 {
                 assert_eq!(log2_fixed(raw, 5, out), log2_fixed_u128(raw, 5, out));
             }
@@ -229,7 +250,7 @@ mod tests {
         }
         // Random 64-bit inputs of every magnitude.
         let mut s = 1u64;
-        for _ in 0..300_000 {
+        for _ in 0..if cfg!(miri) { 300 } else { 300_000 } {
             s = s
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
@@ -258,7 +279,8 @@ mod tests {
     #[test]
     fn within_one_ulp_below_f64() {
         let mut x = 1u64;
-        for _ in 0..2000 {
+        // Under Miri (about 10^4 times slower) 400 random inputs.
+        for _ in 0..if cfg!(miri) { 400 } else { 2000 } {
             x = x
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);

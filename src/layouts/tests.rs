@@ -1,8 +1,10 @@
 //! Every layout against the flat table, every box of small textures.
 
+extern crate std;
 use super::*;
 use crate::{Border, BoxLookup, NoCount, Paper, Rect, Repeat, Sat, Stable, Tally, Texture};
 use fixed::types::I28F4;
+use std::vec::Vec;
 
 fn texture(w: usize, h: usize, seed: u32) -> [u8; 4096] {
     let mut t = [0u8; 4096];
@@ -16,15 +18,34 @@ fn texture(w: usize, h: usize, seed: u32) -> [u8; 4096] {
     t
 }
 
+/// The coordinates a sweep visits from `lo` to `hi` (inclusive): all of them natively; under
+/// Miri, which interprets about 10^4 times slower, only both ends, their neighbours and the
+/// middle, so the sweeps still meet the empty, the one-cell, the edge and the whole-axis boxes.
+fn span(lo: i32, hi: i32) -> impl Iterator<Item = i32> + Clone {
+    let mid = lo + (hi - lo) / 2;
+    (lo..=hi).filter(move |&v| !cfg!(miri) || v <= lo + 1 || v >= hi - 1 || v == mid)
+}
+
+/// [`span`] over `usize` coordinates.
+fn span_usize(lo: usize, hi: usize) -> impl Iterator<Item = usize> + Clone {
+    span(lo as i32, hi as i32).map(|v| v as usize)
+}
+
 fn check_all_boxes<L: BoxLookup<1>>(l: &L, flat: &Sat<'_, u32, 1>)
 where
     crate::WideOf<L, 1>: Into<u128>,
 {
     let (w, h) = (flat.width() as i32, flat.height() as i32);
-    for x0 in 0..=w {
-        for x1 in x0..=w {
-            for y0 in 0..=h {
-                for y1 in y0..=h {
+    // Under Miri every 13th box of the spans (the first included).
+    let mut case = 0u32;
+    for x0 in span(0, w) {
+        for x1 in span(x0, w) {
+            for y0 in span(0, h) {
+                for y1 in span(y0, h) {
+                    case += 1;
+                    if cfg!(miri) && case % 13 != 1 {
+                        continue;
+                    }
                     let r = Rect::new(x0, y0, x1, y1);
                     let a = flat.box_sum_int(&r, Border, &mut NoCount).unwrap();
                     let b = l.box_sum_int(&r, Border, &mut NoCount).unwrap();
@@ -37,6 +58,9 @@ where
 
 #[test]
 fn tiled_equals_flat_every_box() {
+    // Under Miri (about 10^4 times slower) every 5th combination of size and spec (5 is coprime
+    // to the 6 specs, so each spec still runs once, on a different size).
+    let mut combo = 0u32;
     for (w, h) in [(1usize, 7usize), (7, 1), (9, 10), (16, 13), (17, 17)] {
         let tex = texture(w, h, (w * 31 + h) as u32);
         let t = Texture::<u8>::new(&tex[..w * h], w, h).unwrap();
@@ -50,11 +74,15 @@ fn tiled_equals_flat_every_box() {
             TiledSpec::square(&[2, 4]).unwrap(),
             TiledSpec::square(&[2, 6, 12]).unwrap(),
         ] {
+            combo += 1;
+            if cfg!(miri) && combo % 5 != 1 {
+                continue;
+            }
             let mut words = [0u32; 4096];
             let mut scratch = [0u32; 512];
             let tiled = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
-            for y in 0..=h {
-                for x in 0..=w {
+            for y in span_usize(0, h) {
+                for x in span_usize(0, w) {
                     assert_eq!(
                         tiled.corner(x, y, &mut NoCount),
                         flat.corner(x, y).unwrap(),
@@ -156,8 +184,8 @@ fn tiled_modular_combination() {
         // u16 values suffice: only k = 13 bits are ever held.
         let l = Tiled::<u16>::build(&t, spec, &mut words, &mut scratch).unwrap();
         assert!(l.bits_per_entry() < k as f64, "{}", l.bits_per_entry());
-        for x0 in 0..=w as i32 {
-            for x1 in x0..=w as i32 {
+        for x0 in span(0, w as i32) {
+            for x1 in span(x0, w as i32) {
                 for (y0, y1) in [(0, 5), (3, 8), (13, 18), (7, 8), (0, 18)] {
                     let r = Rect::new(x0, y0, x1, y1);
                     let area = (x1 - x0) * (y1 - y0);
@@ -487,8 +515,8 @@ fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
     let (w, h) = (l.width(), l.height());
     let mut sum = 0u64;
     let mut k = Tally::new();
-    for y in (0..=h + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
-        for x in (0..=w + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
+    for y in span_usize(0, h + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
+        for x in span_usize(0, w + 2).chain([usize::MAX, usize::MAX / 2, 1 << 31, 1 << 32]) {
             let v = l.corner(x, y, &mut k);
             if x > w || y > h || x == 0 || y == 0 {
                 assert!(v.iter().all(|e| e.to_u64() == 0), "({x}, {y})");
@@ -499,10 +527,16 @@ fn poke<L: BoxLookup<C>, const C: usize>(l: &L) -> u64 {
     // Every box on the small textures; on the larger ones, boxes from the corner.
     let (wi, hi) = (w as i32, h as i32);
     let lo = if w * h <= 35 { -1 } else { wi - 1 };
-    for x0 in lo..=wi + 1 {
-        for x1 in x0..=wi + 1 {
-            for y0 in -1..=hi + 1 {
-                for y1 in y0..=hi + 1 {
+    // Under Miri every 29th box of the spans (the first included).
+    let mut case = 0u32;
+    for x0 in span(lo, wi + 1) {
+        for x1 in span(x0, wi + 1) {
+            for y0 in span(-1, hi + 1) {
+                for y1 in span(y0, hi + 1) {
+                    case += 1;
+                    if cfg!(miri) && case % 29 != 1 {
+                        continue;
+                    }
                     let r = Rect::new(x0, y0, x1, y1);
                     for s in [
                         l.box_sum_int(&r, Border, &mut k),
@@ -541,9 +575,19 @@ fn fuzz_corrupt_words_never_panic() {
         TiledSpec::tiles(4, 4).unwrap().with_modulus(13),
     ];
     let mut check = 0u64;
-    for (w, h) in [(1usize, 1usize), (7, 5), (16, 16), (13, 17)] {
+    // Under Miri (about 10^4 times slower) every 9th combination of size, spec and fill, and
+    // the modular layouts on the first and last sizes only.
+    let mut combo = 0u32;
+    for (size, (w, h)) in [(1usize, 1usize), (7, 5), (16, 16), (13, 17)]
+        .into_iter()
+        .enumerate()
+    {
         for (n, spec) in specs.iter().enumerate() {
             for fill in 0..3u32 {
+                combo += 1;
+                if cfg!(miri) && combo % 9 != 1 {
+                    continue;
+                }
                 let words = |need: usize| -> [u32; 4096] {
                     match fill {
                         0 => noise(need + 1, (w * 97 + h * 13 + n) as u32),
@@ -567,6 +611,9 @@ fn fuzz_corrupt_words_never_panic() {
                 let t = Tiled::<u16>::from_words(&ws[..need], *spec, w, h, 1).unwrap();
                 check = check.wrapping_add(poke(&t));
             }
+        }
+        if cfg!(miri) && size % 3 != 0 {
+            continue;
         }
         for k in [8u32, 13, 32] {
             let need = Modular::<u32>::words_needed(w, h, k).unwrap();
@@ -609,7 +656,19 @@ fn pow2_digits_equal_division_digits() {
         let a = Axis::new(&AxisLevels::new(blocks).unwrap());
         assert_eq!(a.is_pow2(), is_pow2, "{blocks:?}");
         let d = a.by_division();
-        let xs = (0..5000u32).chain([u32::MAX, (1 << 31) - 1, 1 << 30, 123_456_789]);
+        // Under Miri (about 10^4 times slower) every x below 70 (past the digit boundaries of
+        // the blocks up to 64), every 499th, and the neighbours of 1024 and 4096.
+        let xs: Vec<u32> = if cfg!(miri) {
+            (0..70)
+                .chain((499..5000).step_by(499))
+                .chain([1023, 1024, 1025, 4095, 4096, 4097])
+                .collect()
+        } else {
+            (0..5000).collect()
+        };
+        let xs = xs
+            .into_iter()
+            .chain([u32::MAX, (1 << 31) - 1, 1 << 30, 123_456_789]);
         for x in xs {
             let (fast, slow) = (a.digits(x), d.digits(x));
             let mut q = x;
@@ -664,18 +723,31 @@ fn pow2_fast_path_equals_general_path_every_box() {
         TiledSpec::tiles(4, 4).unwrap().with_modulus(13),
         TiledSpec::tiles(3, 5).unwrap().with_modulus(13),
     ];
+    // Under Miri (about 10^4 times slower) every 5th combination of size and spec (5 is coprime
+    // to the 14 specs, so each spec still runs once, on a different size), and every 7th corner
+    // of the spans.
+    let mut combo = 0u32;
     for (w, h) in [(9usize, 10usize), (16, 13), (17, 17), (32, 5), (5, 33)] {
         let tex = texture(w, h, (w * 7 + h) as u32);
         let t = Texture::<u8>::new(&tex[..w * h], w, h).unwrap();
         let mut flat_st = [0u32; 4096];
         let flat = Sat::build(&t, &mut flat_st).unwrap();
         for spec in specs {
+            combo += 1;
+            if cfg!(miri) && combo % 5 != 1 {
+                continue;
+            }
+            let mut corner = 0u32;
             let mut words = [0u32; 4096];
             let mut scratch = [0u32; 512];
             let l = Tiled::<u32>::build(&t, spec, &mut words, &mut scratch).unwrap();
             let g = l.geometry();
-            for y in 1..=h as u32 {
-                for x in 1..=w as u32 {
+            for y in span(1, h as i32).map(|v| v as u32) {
+                for x in span(1, w as i32).map(|v| v as u32) {
+                    corner += 1;
+                    if cfg!(miri) && corner % 7 != 1 {
+                        continue;
+                    }
                     let (mut fast, mut general) = ([0u32], [0u32]);
                     let (mut kf, mut kg) = (Tally::new(), Tally::new());
                     l.corner_one_level(x, y, &mut fast, &mut kf);
