@@ -59,6 +59,10 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     above: Option<&[E]>,
     out: &mut [E],
 ) -> Result<(), ()> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if !CHECKED && crate::simd::build_row::<T, E, C>(texels, above, out) {
+        return Ok(());
+    }
     let mut run = [E::ZERO; C];
     match above {
         None => {
@@ -582,6 +586,10 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     row: &mut [E],
     first: bool,
 ) -> Result<(), ()> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first) {
+        return Ok(());
+    }
     let mut run = [E::ZERO; C];
     for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
         for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
