@@ -40,8 +40,9 @@
 //! 3. *Aliasing.* `above` and `out` are separate slices (`&[u32]`, `&mut [u32]`) except in the
 //!    in-place streaming row, where the kernel gets the single `&mut [u32]` and reads the row
 //!    above through the same pointer it writes: each block reads `row[i..i + 16]` before it
-//!    writes those same entries, and no block reads what another wrote. No reference is created
-//!    from the raw pointers.
+//!    writes those same entries, and no block reads what another wrote. The optional copy of
+//!    the streamed row is a third, separate `&mut [u32]` (at least `n` long). No reference is
+//!    created from the raw pointers.
 //! 4. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]` and `&mut [E]` to `&mut [u32]` only after
 //!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length.
 #![allow(unsafe_code)]
@@ -82,9 +83,9 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
         return false;
     };
     match above {
-        None => row_u8_u32(t, &[], out, Above::Zero),
+        None => row_u8_u32(t, &[], out, Above::Zero, None),
         Some(a) => match as_u32(a) {
-            Some(a) => row_u8_u32(t, a, out, Above::Slice),
+            Some(a) => row_u8_u32(t, a, out, Above::Slice, None),
             None => return false,
         },
     }
@@ -92,22 +93,27 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
 }
 
 /// [`build_row`] in place: `row` holds the row above on entry (ignored if `first`) and the new
-/// row on exit.
+/// row on exit; with `copy`, the new row is also written there (same length as `row`) in the
+/// same pass.
 #[inline]
 pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     row: &mut [E],
     first: bool,
+    copy: Option<&mut [E]>,
 ) -> bool {
     let (Some(t), Some(row)) = (as_u8(texels), as_u32_mut::<E, C>(row)) else {
         return false;
     };
-    row_u8_u32(
-        t,
-        &[],
-        row,
-        if first { Above::Zero } else { Above::InPlace },
-    );
+    let copy = match copy {
+        None => None,
+        Some(c) => match as_u32_mut::<E, C>(c) {
+            Some(c) if c.len() == row.len() => Some(c),
+            _ => return false,
+        },
+    };
+    let mode = if first { Above::Zero } else { Above::InPlace };
+    row_u8_u32(t, &[], row, mode, copy);
     true
 }
 
@@ -139,15 +145,28 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 }
 
 /// One row with the widest kernel the build targets; `above` is read only for
-/// [`Above::Slice`].
+/// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too.
 #[inline]
-fn row_u8_u32(texels: &[u8], above: &[u32], out: &mut [u32], mode: Above) {
+fn row_u8_u32(
+    texels: &[u8],
+    above: &[u32],
+    out: &mut [u32],
+    mode: Above,
+    mut copy: Option<&mut [u32]>,
+) {
     let mut n = out.len().min(texels.len());
     if let Above::Slice = mode {
         n = n.min(above.len());
     }
+    if let Some(c) = &copy {
+        n = n.min(c.len());
+    }
     let t = texels.as_ptr();
     let o = out.as_mut_ptr();
+    let o2: *mut u32 = match &mut copy {
+        Some(c) => c.as_mut_ptr(),
+        None => core::ptr::null_mut(),
+    };
     let a: *const u32 = match mode {
         Above::Zero => core::ptr::null(),
         Above::Slice => above.as_ptr(),
@@ -156,9 +175,11 @@ fn row_u8_u32(texels: &[u8], above: &[u32], out: &mut [u32], mode: Above) {
     // SAFETY: the target features are enabled at compile time (argument 1); `t`, `a` (when
     // read) and `o` are valid for `n` elements (argument 2) and alias only as argument 3 allows.
     let run = unsafe {
-        match mode {
-            Above::Zero => kernel::<false>(t, a, o, n),
-            Above::Slice | Above::InPlace => kernel::<true>(t, a, o, n),
+        match (mode, o2.is_null()) {
+            (Above::Zero, true) => kernel::<false, false>(t, a, o, o2, n),
+            (Above::Zero, false) => kernel::<false, true>(t, a, o, o2, n),
+            (Above::Slice | Above::InPlace, true) => kernel::<true, false>(t, a, o, o2, n),
+            (Above::Slice | Above::InPlace, false) => kernel::<true, true>(t, a, o, o2, n),
         }
     };
     // The tail after the last full block, portable: the same two additions per entry.
@@ -171,6 +192,9 @@ fn row_u8_u32(texels: &[u8], above: &[u32], out: &mut [u32], mode: Above) {
             Above::InPlace => out[i],
         };
         out[i] = r.wrapping_add(up);
+        if let Some(c) = &mut copy {
+            c[i] = out[i];
+        }
     }
 }
 
@@ -208,13 +232,14 @@ mod sse2 {
     /// Blocks of 16 while `i + 16 <= n`; returns the running sum after the last full block.
     ///
     /// # Safety
-    /// SSE2 (x86-64 baseline); `t`, `o` and (if `ABOVE`) `a` valid for `n` elements; `a` may
-    /// equal `o` (each block reads before it writes).
+    /// SSE2 (x86-64 baseline); `t`, `o`, (if `ABOVE`) `a` and (if `COPY`) `o2` valid for `n`
+    /// elements; `a` may equal `o` (each block reads before it writes); `o2` aliases nothing.
     #[target_feature(enable = "sse2")]
-    pub(super) unsafe fn kernel<const ABOVE: bool>(
+    pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
         t: *const u8,
         a: *const u32,
         o: *mut u32,
+        o2: *mut u32,
         n: usize,
     ) -> u32 {
         let zero = _mm_setzero_si128();
@@ -248,6 +273,9 @@ mod sse2 {
                 }
                 for (k, v) in p.iter().enumerate() {
                     _mm_storeu_si128(o.add(i + 4 * k).cast(), *v);
+                    if COPY {
+                        _mm_storeu_si128(o2.add(i + 4 * k).cast(), *v);
+                    }
                 }
             }
             i += BLOCK;
@@ -268,10 +296,11 @@ mod avx2 {
     /// # Safety
     /// As the SSE2 kernel, with AVX2.
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn kernel<const ABOVE: bool>(
+    pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
         t: *const u8,
         a: *const u32,
         o: *mut u32,
+        o2: *mut u32,
         n: usize,
     ) -> u32 {
         let mut carry = _mm256_setzero_si256();
@@ -298,6 +327,10 @@ mod avx2 {
                 }
                 _mm256_storeu_si256(o.add(i).cast(), lo);
                 _mm256_storeu_si256(o.add(i + 8).cast(), hi);
+                if COPY {
+                    _mm256_storeu_si256(o2.add(i).cast(), lo);
+                    _mm256_storeu_si256(o2.add(i + 8).cast(), hi);
+                }
             }
             i += BLOCK;
         }
@@ -338,10 +371,11 @@ mod avx512vnni {
     /// # Safety
     /// As the SSE2 kernel, with AVX-512F and AVX-512 VNNI.
     #[target_feature(enable = "avx512f,avx512vnni")]
-    pub(super) unsafe fn kernel<const ABOVE: bool>(
+    pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
         t: *const u8,
         a: *const u32,
         o: *mut u32,
+        o2: *mut u32,
         n: usize,
     ) -> u32 {
         let w = W.map(|g| {
@@ -367,6 +401,9 @@ mod avx512vnni {
                     v = _mm512_add_epi32(v, _mm512_loadu_si512(a.add(i).cast()));
                 }
                 _mm512_storeu_si512(o.add(i).cast(), v);
+                if COPY {
+                    _mm512_storeu_si512(o2.add(i).cast(), v);
+                }
             }
             i += BLOCK;
         }
@@ -435,12 +472,30 @@ mod tests {
                     if let Some(a) = a {
                         inplace[..w].copy_from_slice(a);
                     }
+                    let mut copy = [9u32; MAX];
+                    let first = a.is_none();
+                    let mut again = inplace;
                     assert!(build_row_in_place::<u8, u32, 1>(
                         t,
                         &mut inplace[..w],
-                        a.is_none()
+                        first,
+                        None
                     ));
                     assert_eq!(inplace[..w], want[..w], "in place, w {w} pattern {pattern}");
+                    let c = Some(&mut copy[..w]);
+                    assert!(build_row_in_place::<u8, u32, 1>(
+                        t,
+                        &mut again[..w],
+                        first,
+                        c
+                    ));
+                    assert_eq!(
+                        again[..w],
+                        want[..w],
+                        "in place + copy, w {w} pattern {pattern}"
+                    );
+                    assert_eq!(copy[..w], want[..w], "the copy, w {w} pattern {pattern}");
+                    assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
                 }
             }
         }

@@ -587,7 +587,7 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     first: bool,
 ) -> Result<(), ()> {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first) {
+    if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first, None) {
         return Ok(());
     }
     let mut run = [E::ZERO; C];
@@ -599,6 +599,38 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
             } else {
                 add::<E, CHECKED>(*r, *o)?
             };
+        }
+    }
+    Ok(())
+}
+
+/// [`build_row_in_place`] that also writes the new row to `copy` (as long as `row`), in the same
+/// pass: what a caller storing the table would otherwise do with a second pass over the row.
+#[inline]
+fn build_row_in_place_copy<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
+    texels: &[T],
+    row: &mut [E],
+    first: bool,
+    copy: &mut [E],
+) -> Result<(), ()> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first, Some(copy)) {
+        return Ok(());
+    }
+    let mut run = [E::ZERO; C];
+    for ((o, t), c) in row
+        .chunks_exact_mut(C)
+        .zip(texels.chunks_exact(C))
+        .zip(copy.chunks_exact_mut(C))
+    {
+        for (((o, t), c), r) in o.iter_mut().zip(t).zip(c).zip(run.iter_mut()) {
+            *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+            *o = if first {
+                *r
+            } else {
+                add::<E, CHECKED>(*r, *o)?
+            };
+            *c = *o;
         }
     }
     Ok(())
@@ -661,6 +693,44 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             self.rows_done += 1;
         }
         Ok(self.row)
+    }
+
+    /// [`RowStreamBuilder::push_row`] that also writes the finished table row into `out`
+    /// (`width * C` entries, for instance the row's place in a table), in the same pass over the
+    /// row: the same entries as `push_row` followed by `out.copy_from_slice(row)`, without the
+    /// second pass. Nothing is written to `out` if the row is refused.
+    pub fn push_row_into<T: Texel>(&mut self, texels: &[T], out: &mut [E]) -> Result<(), Error> {
+        if self.rows_done >= self.height {
+            return Err(Error::TooManyRows);
+        }
+        if texels.len() != self.row.len() {
+            return Err(Error::RowLength {
+                expected: self.row.len(),
+                got: texels.len(),
+            });
+        }
+        if out.len() != self.row.len() {
+            return Err(Error::StorageTooSmall {
+                needed: self.row.len(),
+                got: out.len(),
+            });
+        }
+        let overflow = entry_overflow::<E>();
+        let first = self.rows_done == 0;
+        if T::BITS <= self.texel_bits {
+            build_row_in_place_copy::<T, E, C, false>(texels, self.row, first, out)
+        } else {
+            build_row_in_place_copy::<T, E, C, true>(texels, self.row, first, out)
+        }
+        .map_err(|_| overflow)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "rows_done < height (checked above)"
+        )]
+        {
+            self.rows_done += 1;
+        }
+        Ok(())
     }
 
     /// Width of the texture in texels.

@@ -7,6 +7,7 @@
 
 use proptest::prelude::*;
 use texsat::{RowStreamBuilder, Sat, Texture};
+use texsat_host_tests::RngExt;
 
 /// Inclusive 2-D prefix sums in `u64`, one channel: the textbook recurrence, nothing shared
 /// with the crate.
@@ -42,15 +43,22 @@ fn check(w: usize, h: usize, t: &[u8]) -> Result<(), TestCaseError> {
     let want = reference(t, w, h);
     let texture = Texture::<u8>::new(t, w, h).unwrap();
     let mut storage = vec![0xDEAD_BEEFu32; w * h + 3];
-    let sat = Sat::build(&texture, &mut storage).unwrap();
+    let mut storage2 = storage.clone();
+    let sat = Sat::build(&texture, &mut storage2).unwrap();
     for (i, (&got, &want)) in sat.entries().iter().zip(&want).enumerate() {
         prop_assert_eq!(u64::from(got), want, "entry {} of {}x{}", i, w, h);
     }
     prop_assert_eq!(&storage[w * h..], &[0xDEAD_BEEF; 3], "wrote past the table");
     let mut row = vec![0x5555_5555u32; w];
     let mut b = RowStreamBuilder::<u32>::new(w, h, 8, &mut row).unwrap();
+    let mut row2 = vec![0x5555_5555u32; w];
+    let mut b2 = RowStreamBuilder::<u32>::new(w, h, 8, &mut row2).unwrap();
+    let mut table = vec![0xDEAD_BEEFu32; w * h];
     for y in 0..h {
-        let got = b.push_row(&t[y * w..(y + 1) * w]).unwrap();
+        let texels = &t[y * w..(y + 1) * w];
+        b2.push_row_into(texels, &mut table[y * w..(y + 1) * w])
+            .unwrap();
+        let got = b.push_row(texels).unwrap();
         for (x, (&got, &want)) in got.iter().zip(&want[y * w..(y + 1) * w]).enumerate() {
             prop_assert_eq!(
                 u64::from(got),
@@ -63,6 +71,8 @@ fn check(w: usize, h: usize, t: &[u8]) -> Result<(), TestCaseError> {
             );
         }
     }
+    prop_assert_eq!(b2.finish().unwrap(), b.finish().unwrap());
+    prop_assert_eq!(&table[..], sat.entries(), "push_row_into's table");
     Ok(())
 }
 
@@ -96,4 +106,33 @@ fn wide_rows() {
         .map(|i| if i % 97 == 0 { 0 } else { 255 })
         .collect();
     check(w, h, &t).unwrap();
+}
+
+/// `push_row_into` on the portable path (u16 texels, 3 channels, u64 entries): the same rows as
+/// `push_row` and a copy, and a refused `out` (wrong length) leaves `out` and the builder as they
+/// were.
+#[test]
+fn push_row_into_equals_push_row_and_a_copy() {
+    let (w, h) = (13, 5);
+    let mut rng = texsat_host_tests::rng(7);
+    let t: Vec<u16> = (0..w * h * 3)
+        .map(|_| rng.random_range(0..=u16::MAX))
+        .collect();
+    let mut row = vec![0u64; w * 3];
+    let mut row2 = vec![0u64; w * 3];
+    let mut a = RowStreamBuilder::<u64, 3>::new(w, h, 16, &mut row).unwrap();
+    let mut b = RowStreamBuilder::<u64, 3>::new(w, h, 16, &mut row2).unwrap();
+    for y in 0..h {
+        let texels = &t[y * w * 3..(y + 1) * w * 3];
+        let mut short = vec![7u64; w * 3 - 1];
+        assert!(b.push_row_into(texels, &mut short).is_err());
+        assert!(short.iter().all(|&v| v == 7));
+        let mut out = vec![7u64; w * 3];
+        b.push_row_into(texels, &mut out).unwrap();
+        assert_eq!(out, a.push_row(texels).unwrap(), "row {y}");
+    }
+    assert!(b
+        .push_row_into(&t[..w * 3], &mut vec![0u64; w * 3])
+        .is_err());
+    assert_eq!(a.finish().unwrap(), b.finish().unwrap());
 }

@@ -14,7 +14,8 @@
 //!   texel, as any build must; the compiler vectorizes it).
 //! * `build`: `Sat::build`; `checked`: `Sat::build_checked` (every addition checked).
 //! * `stream`: `RowStreamBuilder::push_row`, each finished row copied into the table (as a caller
-//!   keeping the table would); `stream_nocopy`: the same without the copy.
+//!   keeping the table would); `stream_nocopy`: the same without the copy; `stream_into`:
+//!   `RowStreamBuilder::push_row_into`, which writes each row into the table in the same pass.
 //! * `tiled`: `Tiled::build` with 8 x 8 tiles; `modular`: `Modular::build` with the modulus for
 //!   65 x 65 boxes of 8-bit texels.
 //! * `imageproc`: `imageproc::integral_image::integral_image` (allocates its (w+1) x (h+1)
@@ -37,6 +38,7 @@ const METHODS: &[&str] = &[
     "checked",
     "stream",
     "stream_nocopy",
+    "stream_into",
     "tiled",
     "modular",
     "imageproc",
@@ -127,6 +129,13 @@ impl Case {
                 }
                 black_box(b.finish().expect("finish"));
             }
+            "stream_into" => {
+                let mut b = RowStreamBuilder::<u32>::new(n, n, 8, &mut self.row).expect("stream");
+                for (src, dst) in self.tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
+                    b.push_row_into(src, dst).expect("push_row_into");
+                }
+                black_box(b.finish().expect("finish"));
+            }
             "tiled" => {
                 black_box(
                     Tiled::<u32>::build(&texture, self.spec, &mut self.words, &mut self.scratch)
@@ -164,7 +173,7 @@ impl Case {
         let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
         match method {
             "floor" | "stream_nocopy" => {}
-            "build" | "checked" | "stream" => {
+            "build" | "checked" | "stream" | "stream_into" => {
                 assert!(self.table == self.reference, "{method}: table differs");
             }
             "tiled" => {
