@@ -561,6 +561,272 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     }
 }
 
+/// Most strips [`Sat::build_strips`] cuts a texture into (its jobs live on the stack).
+pub const MAX_STRIPS: usize = 64;
+
+/// One unit of work of [`Sat::build_strips`], for the caller's executor: call
+/// [`StripJob::run`] on every job it is given, in any order, on any threads.
+///
+/// A job borrows the texture and its own disjoint part of the table storage; it is `Send` when
+/// the texel and entry types are (always, for the crate's types).
+#[derive(Debug)]
+pub struct StripJob<'t, 's, T: Texel, E: Entry, const C: usize> {
+    texture: &'t Texture<'t, T, C>,
+    /// Texture rows `y0..y1`.
+    y0: usize,
+    y1: usize,
+    kind: JobKind<'s, E>,
+    done: bool,
+}
+
+#[derive(Debug)]
+enum JobKind<'s, E> {
+    /// Column sums of the strip's rows into `out` (`w C` entries).
+    ColumnSums { out: &'s mut [E] },
+    /// The table rows `y0..y1` onto the table row `above` (none for the first strip).
+    Rows {
+        above: Option<&'s [E]>,
+        out: &'s mut [E],
+    },
+    /// No work (the only row of a one-row strip is done by the carry pass).
+    Empty,
+}
+
+impl<'t, 's, T: Texel, E: Entry, const C: usize> StripJob<'t, 's, T, E, C> {
+    /// A job with nothing to do (the unused slots of the job array).
+    fn empty(texture: &'t Texture<'t, T, C>) -> Self {
+        StripJob {
+            texture,
+            y0: 0,
+            y1: 0,
+            kind: JobKind::Empty,
+            done: false,
+        }
+    }
+
+    /// Does the job (again, harmlessly, if run twice). Additions are unchecked:
+    /// [`Sat::build_strips`] proved the whole texture's worst case first, and every value
+    /// formed is the sum over a sub-rectangle of it.
+    pub fn run(&mut self) {
+        match &mut self.kind {
+            JobKind::ColumnSums { out } => {
+                out.fill(E::ZERO);
+                for y in self.y0..self.y1 {
+                    if let Some(row) = self.texture.row(y) {
+                        for (o, t) in out.iter_mut().zip(row) {
+                            if let Ok(v) = add::<E, false>(*o, E::from(t.to_u16())) {
+                                *o = v;
+                            }
+                        }
+                    }
+                }
+            }
+            JobKind::Rows { above, out } => {
+                let rows = self.y1.saturating_sub(self.y0);
+                let row_len = out.len().checked_div(rows).unwrap_or(0);
+                let mut above: Option<&[E]> = *above;
+                let mut rest: &mut [E] = out;
+                for y in self.y0..self.y1 {
+                    let (Some(texels), Some((row, tail))) =
+                        (self.texture.row(y), rest.split_at_mut_checked(row_len))
+                    else {
+                        return;
+                    };
+                    if build_row::<T, E, C, false>(texels, above, row).is_err() {
+                        return;
+                    }
+                    above = Some(row);
+                    rest = tail;
+                }
+            }
+            JobKind::Empty => {}
+        }
+        self.done = true;
+    }
+
+    /// Texture rows `(first, end)` the job covers.
+    pub fn rows(&self) -> (usize, usize) {
+        (self.y0, self.y1)
+    }
+}
+
+impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
+    /// [`Sat::build`] cut into `strips` horizontal strips whose work the caller's `execute`
+    /// runs (on threads, say): `execute` gets a slice of jobs and must call [`StripJob::run`] on
+    /// each, in any order, before it returns. The table is identical to [`Sat::build`]'s.
+    ///
+    /// Two rounds of jobs and one pass over the table: (1) each strip sums its columns into the
+    /// storage of its own last table row; then here, in order, each of those rows becomes the
+    /// strip's last table row: the last row of the strip above plus the prefix sums of the
+    /// column sums along x (`O(w strips)` additions); (2) each strip builds its other rows onto
+    /// the last row of the strip above. The width proof is [`Sat::build`]'s, for the whole
+    /// texture, before anything is written; every value formed is a sum over a sub-rectangle.
+    /// `strips` is clamped to `1..=min(h, MAX_STRIPS)`. A job left unrun is
+    /// [`Error::MissingRows`] (the table is then incomplete and no `Sat` is returned).
+    ///
+    /// ```
+    /// use texsat::{Sat, Texture};
+    /// let texels: Vec<u8> = (0..64 * 48).map(|i| (i * 7 % 256) as u8).collect();
+    /// let texture = Texture::<u8>::new(&texels, 64, 48)?;
+    /// let (mut a, mut b) = (vec![0u32; 64 * 48], vec![0u32; 64 * 48]);
+    /// // One thread here; with rayon: `|jobs| jobs.par_iter_mut().for_each(|j| j.run())`.
+    /// let s = Sat::build_strips(&texture, &mut a, 5, |jobs| jobs.iter_mut().for_each(|j| j.run()))?;
+    /// assert_eq!(s.entries(), Sat::build(&texture, &mut b)?.entries());
+    /// # Ok::<(), texsat::Error>(())
+    /// ```
+    pub fn build_strips<T: Texel, X>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+        strips: usize,
+        mut execute: X,
+    ) -> Result<Self, Error>
+    where
+        X: for<'t, 's> FnMut(&mut [StripJob<'t, 's, T, E, C>]),
+    {
+        let (w, h) = (texture.width(), texture.height());
+        width::check_entry_worst_case(T::BITS, w, h, E::BITS)?;
+        let needed = entries_needed::<C>(w, h)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w C <= w h C = needed, which entries_needed computed without overflow"
+        )]
+        let row_len = w * C;
+        let got = storage.len();
+        let Some(table) = storage.get_mut(..needed) else {
+            return Err(Error::StorageTooSmall { needed, got });
+        };
+        let n = strips.clamp(1, h.clamp(1, MAX_STRIPS));
+        // Strip k covers rows [k h / n, (k + 1) h / n): n <= h, so none is empty.
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "k <= n <= 64 and h < 2^31: k h < 2^37 fits u64; n >= 1; usize -> u64 is \
+                      lossless"
+        )]
+        let bound = |k: usize| -> usize {
+            let v = (k as u64) * (h as u64) / (n as u64);
+            usize::try_from(v).unwrap_or(h)
+        };
+        let missing = |done: usize| Error::MissingRows {
+            got: done,
+            expected: h,
+        };
+
+        // Round 1: each strip's column sums into its last row.
+        {
+            let mut rest: &mut [E] = &mut *table;
+            let mut jobs: [StripJob<'_, '_, T, E, C>; MAX_STRIPS] = core::array::from_fn(|k| {
+                let mut job = StripJob::empty(texture);
+                if k < n {
+                    let (y0, y1) = (bound(k), bound(k.saturating_add(1)));
+                    let rows = y1.saturating_sub(y0).saturating_sub(1);
+                    let taken = core::mem::take(&mut rest);
+                    if let Some((_, after)) =
+                        taken.split_at_mut_checked(rows.saturating_mul(row_len))
+                    {
+                        if let Some((last, tail)) = after.split_at_mut_checked(row_len) {
+                            job = StripJob {
+                                texture,
+                                y0,
+                                y1,
+                                kind: JobKind::ColumnSums { out: last },
+                                done: false,
+                            };
+                            rest = tail;
+                        }
+                    }
+                }
+                job
+            });
+            run_round(&mut jobs, n, &mut execute).map_err(missing)?;
+        }
+
+        // The carry pass: each strip's last row, in order.
+        {
+            let mut above: Option<&[E]> = None;
+            let mut rest: &mut [E] = &mut *table;
+            for k in 0..n {
+                let (y0, y1) = (bound(k), bound(k.saturating_add(1)));
+                let rows = y1.saturating_sub(y0).saturating_sub(1);
+                let taken = core::mem::take(&mut rest);
+                let Some((_, after)) = taken.split_at_mut_checked(rows.saturating_mul(row_len))
+                else {
+                    return Err(missing(y0));
+                };
+                let Some((last, tail)) = after.split_at_mut_checked(row_len) else {
+                    return Err(missing(y0));
+                };
+                let mut run = [E::ZERO; C];
+                // Unchecked additions (the proof): each value is a sum over rows 0..y1.
+                for (i, o) in last.chunks_exact_mut(C).enumerate() {
+                    let a = above.and_then(|a| a.get(i.saturating_mul(C)..)?.first_chunk::<C>());
+                    for (c, (o, r)) in o.iter_mut().zip(run.iter_mut()).enumerate() {
+                        *r = add::<E, false>(*r, *o).map_err(|_| missing(y0))?;
+                        let up = a.and_then(|a| a.get(c)).copied().unwrap_or(E::ZERO);
+                        *o = add::<E, false>(*r, up).map_err(|_| missing(y0))?;
+                    }
+                }
+                above = Some(last);
+                rest = tail;
+            }
+        }
+
+        // Round 2: each strip's other rows onto the last row of the strip above.
+        {
+            let mut above: Option<&[E]> = None;
+            let mut rest: &mut [E] = &mut *table;
+            let mut jobs: [StripJob<'_, '_, T, E, C>; MAX_STRIPS] = core::array::from_fn(|k| {
+                let mut job = StripJob::empty(texture);
+                if k < n {
+                    let (y0, y1) = (bound(k), bound(k.saturating_add(1)));
+                    let rows = y1.saturating_sub(y0).saturating_sub(1);
+                    let taken = core::mem::take(&mut rest);
+                    if let Some((body, after)) =
+                        taken.split_at_mut_checked(rows.saturating_mul(row_len))
+                    {
+                        if let Some((last, tail)) = after.split_at_mut_checked(row_len) {
+                            job = StripJob {
+                                texture,
+                                y0,
+                                y1: y0.saturating_add(rows),
+                                kind: if rows == 0 {
+                                    JobKind::Empty
+                                } else {
+                                    JobKind::Rows { above, out: body }
+                                },
+                                done: false,
+                            };
+                            above = Some(last);
+                            rest = tail;
+                        }
+                    }
+                }
+                job
+            });
+            run_round(&mut jobs, n, &mut execute).map_err(missing)?;
+        }
+        let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
+        Self::from_parts(table, w, h, T::BITS)
+    }
+}
+
+/// Hands the first `n` jobs to `execute`; `Err(first row of the first job left unrun)`.
+fn run_round<T: Texel, E: Entry, const C: usize, X>(
+    jobs: &mut [StripJob<'_, '_, T, E, C>; MAX_STRIPS],
+    n: usize,
+    execute: &mut X,
+) -> Result<(), usize>
+where
+    X: for<'t, 's> FnMut(&mut [StripJob<'t, 's, T, E, C>]),
+{
+    let live = jobs.get_mut(..n).unwrap_or(&mut []);
+    execute(live);
+    match jobs.iter().take(n).find(|j| !j.done) {
+        Some(j) => Err(j.y0),
+        None => Ok(()),
+    }
+}
+
 /// Builds a table one texture row at a time, holding only the previous table row.
 ///
 /// For sources larger than RAM (a sensor, a flash image): push each texture row; each call
