@@ -9,6 +9,8 @@ under $CARGO_TARGET_DIR (default `target`)/build-speed/:
   native    `--features simd` with RUSTFLAGS="-C target-cpu=native": the widest kernel this CPU
             has (AVX-512 VNNI or AVX2); its floor is compiled with the same flags
 
+(each also with `parallel`, for the all-cores build)
+
 starts each as a server, and times every (variant, method, side) and OpenCV's `cv2.integral`
 (32-bit signed sums into a reused output array, (w+1) x (h+1)) in interleaved rounds: each round
 runs every measurement once, in a shuffled order. Reports medians in ns per texel, each figure's
@@ -36,9 +38,9 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 VARIANTS = {
-    "portable": ([], ""),
-    "simd": (["--features", "simd"], ""),
-    "native": (["--features", "simd"], "-C target-cpu=native"),
+    "portable": (["--features", "parallel"], ""),
+    "simd": (["--features", "simd,parallel"], ""),
+    "native": (["--features", "simd,parallel"], "-C target-cpu=native"),
 }
 
 
@@ -101,7 +103,7 @@ def loadavg():
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--variants", default="portable,simd,native")
-    ap.add_argument("--methods", default="floor,build,checked,stream,stream_nocopy,stream_into,tiled,modular,imageproc",
+    ap.add_argument("--methods", default="floor,build,checked,stream,stream_nocopy,stream_into,tiled,modular,imageproc,parallel",
                     help="server methods to time (comma-separated)")
     ap.add_argument("--sides", default="1024,4096")
     ap.add_argument("--rounds", type=int, default=21, help="interleaved rounds (medians over these)")

@@ -20,6 +20,8 @@
 //!   65 x 65 boxes of 8-bit texels.
 //! * `imageproc`: `imageproc::integral_image::integral_image` (allocates its (w+1) x (h+1)
 //!   output every call).
+//! * `parallel` (feature `parallel`): `texsat_tools::parallel::build_parallel`, the strip build
+//!   on rayon's pool (all cores).
 //!
 //! Run it through the driver: `python3 tools/examples/build_speed.py` (see there).
 
@@ -42,6 +44,8 @@ const METHODS: &[&str] = &[
     "tiled",
     "modular",
     "imageproc",
+    #[cfg(feature = "parallel")]
+    "parallel",
 ];
 
 /// The widen-copy floor.
@@ -173,7 +177,7 @@ impl Case {
         let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
         match method {
             "floor" | "stream_nocopy" => {}
-            "build" | "checked" | "stream" | "stream_into" => {
+            "build" | "checked" | "stream" | "stream_into" | "parallel" => {
                 assert!(self.table == self.reference, "{method}: table differs");
             }
             "tiled" => {
