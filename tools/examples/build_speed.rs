@@ -157,6 +157,11 @@ impl Case {
                     &self.gray,
                 ));
             }
+            #[cfg(feature = "parallel")]
+            "parallel" => {
+                texsat_tools::parallel::build_parallel(&texture, black_box(&mut self.table))
+                    .expect("parallel");
+            }
             other => panic!("unknown method {other}"),
         }
         let ns = start.elapsed().as_nanos() as f64 / (n * n) as f64;
