@@ -215,6 +215,26 @@ def main():
             cv = med.get(("opencv", "cv2.integral", n))
             cells += [f"{x:.3f}", f"{x / fl:.2f}" if fl else "", f"{x / cv:.2f}" if cv else ""]
         print(f"| {v} | {m} | " + " | ".join(cells) + " |")
+    # Paired ratios: the same round's two figures divided, then the median and quartiles over
+    # the rounds (robust to the machine's drift between rounds).
+    def paired(a, b):
+        xs, ys = samples.get(a), samples.get(b)
+        if not xs or not ys:
+            return None
+        r = sorted(x / y for x, y in zip(xs, ys))
+        q = statistics.quantiles(r, n=4) if len(r) >= 2 else [r[0]] * 3
+        return q[0], statistics.median(r), q[2]
+
+    print("\npaired ratios, median over rounds [quartiles]; per side: / floor, / cv2.integral")
+    for v, m in rows:
+        if v == "opencv":
+            continue
+        cells = []
+        for n in sides:
+            for ref in [(v, "floor", n), ("opencv", "cv2.integral", n)]:
+                pr = paired((v, m, n), ref)
+                cells.append(f"{pr[1]:.2f} [{pr[0]:.2f}, {pr[2]:.2f}]" if pr else "")
+        print(f"| {v} | {m} | " + " | ".join(cells) + " |")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"kernels": {s.variant: s.kernel for s in servers},
