@@ -98,18 +98,18 @@ pub use texel::{Acc, Entry, Texel};
 pub use texture::Texture;
 pub use wide::Wide;
 
-/// The vectorized build kernel compiled in: `"avx512vnni"`, `"avx2"` or `"sse2"` on x86-64 with
-/// the `simd` feature (chosen from the target features at compile time), `"portable"` otherwise.
-pub const BUILD_KERNEL: &str = {
+/// The build kernel in use: `"avx512vnni"`, `"avx2"` or `"sse2"` on x86-64 with the `simd`
+/// feature (the widest this CPU runs, detected once at run time), `"portable"` otherwise.
+pub fn build_kernel() -> &'static str {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     {
-        simd::KERNEL
+        simd::kernel_name()
     }
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
     {
         "portable"
     }
-};
+}
 
 /// The default corner type: `F = 8` fractional bits, like a GPU's sub-texel precision
 /// (`fixed::types::I24F8`, range about +-8.4 million texels). Any `fixed` type whose raw bits fit

@@ -11,10 +11,11 @@
 //! bit for bit (tests below compare them exhaustively on small sizes; host-tests by proptest).
 //!
 //! Covered: `u8` texels into `u32` entries, one channel, the unchecked build (after the width
-//! proof) of [`crate::Sat::build`] and [`crate::RowStreamBuilder`]. Everything else (and
-//! [`crate::Sat::build_checked`]) takes the portable path. Kernels, chosen at compile time from
-//! the target features (`no_std` has no run-time detection; build with `-C target-cpu=native`
-//! or `-C target-feature=...` to get the wider ones):
+//! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
+//! and the modular builder's rows. Everything else (and [`crate::Sat::build_checked`]) takes the
+//! portable path. The kernel is the widest this CPU runs, detected once at run time from CPUID
+//! and XGETBV (no `std` needed), as OpenCV and the standard library's
+//! `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
 //! * AVX-512 VNNI (`avx512f` + `avx512vnni`): the 16 prefix sums of a block are four `vpdpbusd`
 //!   dot products of a broadcast group of 4 texels with a constant triangle of 0/1 weights,
@@ -28,10 +29,12 @@
 //!
 //! # Safety argument
 //!
-//! 1. *Target features.* Each kernel is a `#[target_feature]` function compiled only under
-//!    `cfg(target_feature = ...)` for the same features, so the binary was built for CPUs that
-//!    have them (the same contract as any code the compiler itself vectorizes with them); SSE2 is
-//!    part of the x86-64 baseline. Calling them is the only reason [`row_u8_u32`] has `unsafe`.
+//! 1. *Target features.* Each kernel is a `#[target_feature]` function; it is called only as
+//!    [`Kernel::best`], the widest kernel whose features CPUID reports and whose registers the
+//!    operating system saves (XCR0), per the Intel SDM's detection procedure (SSE2 is part of
+//!    the x86-64 baseline). Under Miri, which cannot execute CPUID, the kernel is the one the
+//!    build's target features enable. Calling the kernels (and XGETBV, after CPUID reports
+//!    OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
 //! 2. *Memory.* [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
@@ -55,8 +58,8 @@
 )]
 
 use core::any::TypeId;
-#[cfg(target_arch = "x86_64")]
 use core::arch::x86_64::*;
+use core::sync::atomic::{AtomicU8, Ordering};
 
 use crate::texel::{Entry, Texel};
 
@@ -83,9 +86,9 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
         return false;
     };
     match above {
-        None => row_u8_u32(t, &[], out, Above::Zero, None),
+        None => row_u8_u32(Kernel::best(), t, &[], out, Above::Zero, None),
         Some(a) => match as_u32(a) {
-            Some(a) => row_u8_u32(t, a, out, Above::Slice, None),
+            Some(a) => row_u8_u32(Kernel::best(), t, a, out, Above::Slice, None),
             None => return false,
         },
     }
@@ -113,7 +116,7 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
         },
     };
     let mode = if first { Above::Zero } else { Above::InPlace };
-    row_u8_u32(t, &[], row, mode, copy);
+    row_u8_u32(Kernel::best(), t, &[], row, mode, copy);
     true
 }
 
@@ -144,10 +147,11 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
     }
 }
 
-/// One row with the widest kernel the build targets; `above` is read only for
+/// One row with `kernel` (which must be [`Kernel::available`]); `above` is read only for
 /// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too.
 #[inline]
 fn row_u8_u32(
+    kernel: Kernel,
     texels: &[u8],
     above: &[u32],
     out: &mut [u32],
@@ -172,14 +176,15 @@ fn row_u8_u32(
         Above::Slice => above.as_ptr(),
         Above::InPlace => o.cast_const(),
     };
-    // SAFETY: the target features are enabled at compile time (argument 1); `t`, `a` (when
-    // read) and `o` are valid for `n` elements (argument 2) and alias only as argument 3 allows.
+    // SAFETY: the CPU has the kernel's features (argument 1: every caller passes an available
+    // kernel); `t`, `a` (when read), `o` and `o2` (when written) are valid for `n` elements
+    // (argument 2) and alias only as argument 3 allows.
     let run = unsafe {
         match (mode, o2.is_null()) {
-            (Above::Zero, true) => kernel::<false, false>(t, a, o, o2, n),
-            (Above::Zero, false) => kernel::<false, true>(t, a, o, o2, n),
-            (Above::Slice | Above::InPlace, true) => kernel::<true, false>(t, a, o, o2, n),
-            (Above::Slice | Above::InPlace, false) => kernel::<true, true>(t, a, o, o2, n),
+            (Above::Zero, true) => kernel.run::<false, false>(t, a, o, o2, n),
+            (Above::Zero, false) => kernel.run::<false, true>(t, a, o, o2, n),
+            (Above::Slice | Above::InPlace, true) => kernel.run::<true, false>(t, a, o, o2, n),
+            (Above::Slice | Above::InPlace, false) => kernel.run::<true, true>(t, a, o, o2, n),
         }
     };
     // The tail after the last full block, portable: the same two additions per entry.
@@ -201,31 +206,143 @@ fn row_u8_u32(
 /// Lanes a kernel handles per step.
 const BLOCK: usize = 16;
 
-#[cfg(all(target_feature = "avx512f", target_feature = "avx512vnni"))]
-use avx512vnni::kernel;
+/// A build kernel: the widest one the CPU runs is chosen once, at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kernel {
+    /// SSE2: every x86-64 CPU.
+    Sse2,
+    /// AVX2.
+    Avx2,
+    /// AVX-512F with AVX-512 VNNI.
+    Avx512Vnni,
+}
 
-#[cfg(all(
-    target_feature = "avx2",
-    not(all(target_feature = "avx512f", target_feature = "avx512vnni"))
-))]
-use avx2::kernel;
+/// The detected kernel: 0 before the first detection, else `1 + Kernel as u8`.
+static DETECTED: AtomicU8 = AtomicU8::new(0);
 
-#[cfg(not(target_feature = "avx2"))]
-use sse2::kernel;
+impl Kernel {
+    /// Every kernel, narrowest first.
+    #[cfg(test)]
+    pub(crate) const ALL: [Kernel; 3] = [Kernel::Sse2, Kernel::Avx2, Kernel::Avx512Vnni];
 
-/// The kernel's name, for benchmarks and reports.
-pub const KERNEL: &str = if cfg!(all(
-    target_feature = "avx512f",
-    target_feature = "avx512vnni"
-)) {
-    "avx512vnni"
-} else if cfg!(target_feature = "avx2") {
-    "avx2"
-} else {
-    "sse2"
-};
+    /// Its name, for benchmarks and reports.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Kernel::Sse2 => "sse2",
+            Kernel::Avx2 => "avx2",
+            Kernel::Avx512Vnni => "avx512vnni",
+        }
+    }
 
-#[cfg(not(target_feature = "avx2"))]
+    /// Whether this CPU (and its operating system, which must save the wider registers) runs
+    /// the kernel: CPUID and XGETBV, read once; under Miri, which cannot run CPUID, the target
+    /// features the build enables. (The tests run every available kernel.)
+    #[cfg(test)]
+    pub(crate) fn available(self) -> bool {
+        let best = Kernel::best();
+        match self {
+            Kernel::Sse2 => true,
+            Kernel::Avx2 => best != Kernel::Sse2,
+            Kernel::Avx512Vnni => best == Kernel::Avx512Vnni,
+        }
+    }
+
+    /// The widest kernel this CPU runs (detected on the first call, then cached: a relaxed
+    /// atomic, every thread detects the same).
+    #[inline]
+    pub(crate) fn best() -> Kernel {
+        match DETECTED.load(Ordering::Relaxed) {
+            1 => Kernel::Sse2,
+            2 => Kernel::Avx2,
+            3 => Kernel::Avx512Vnni,
+            _ => {
+                let k = detect();
+                DETECTED.store(1 + k as u8, Ordering::Relaxed);
+                k
+            }
+        }
+    }
+
+    /// Runs the kernel over the full blocks of a row.
+    ///
+    /// # Safety
+    /// `self` is [`Kernel::available`]; the pointers as the kernels require.
+    #[inline]
+    unsafe fn run<const ABOVE: bool, const COPY: bool>(
+        self,
+        t: *const u8,
+        a: *const u32,
+        o: *mut u32,
+        o2: *mut u32,
+        n: usize,
+    ) -> u32 {
+        // SAFETY: forwarded (the caller's contract).
+        unsafe {
+            match self {
+                Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+                Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+                Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+            }
+        }
+    }
+}
+
+/// The build kernel in use (detected at run time), for benchmarks and reports.
+pub fn kernel_name() -> &'static str {
+    Kernel::best().name()
+}
+
+/// CPUID leaf 1 ECX: OSXSAVE (27) and AVX (28); leaf 7 EBX: AVX2 (5), AVX-512F (16); leaf 7
+/// ECX: AVX-512 VNNI (11). XCR0: SSE and AVX state (bits 1, 2) for AVX2; also opmask and the
+/// upper ZMM state (5, 6, 7) for AVX-512. (Intel SDM vol. 1 §13.3 and §15.2, "Detection of
+/// AVX-512 instructions".)
+#[cfg(not(miri))]
+fn detect() -> Kernel {
+    let bit = |v: u32, b: u32| (v >> b) & 1 == 1;
+    let max_leaf = __cpuid(0).eax;
+    let l1 = __cpuid(1);
+    if max_leaf < 7 || !bit(l1.ecx, 27) || !bit(l1.ecx, 28) {
+        return Kernel::Sse2;
+    }
+    // SAFETY: OSXSAVE (checked above) means XGETBV is supported and enabled.
+    let xcr0 = unsafe { xgetbv0() };
+    let l7 = __cpuid_count(7, 0);
+    let ymm = xcr0 & 0b110 == 0b110;
+    let zmm = xcr0 & 0b1110_0110 == 0b1110_0110;
+    if zmm && bit(l7.ebx, 16) && bit(l7.ecx, 11) {
+        Kernel::Avx512Vnni
+    } else if ymm && bit(l7.ebx, 5) {
+        Kernel::Avx2
+    } else {
+        Kernel::Sse2
+    }
+}
+
+/// XCR0.
+///
+/// # Safety
+/// The CPU supports XGETBV (CPUID.1:ECX.OSXSAVE).
+#[cfg(not(miri))]
+#[target_feature(enable = "xsave")]
+unsafe fn xgetbv0() -> u64 {
+    _xgetbv(0)
+}
+
+/// Under Miri: the kernels the build's target features enable.
+#[cfg(miri)]
+fn detect() -> Kernel {
+    if cfg!(all(
+        target_feature = "avx512f",
+        target_feature = "avx512vnni"
+    )) {
+        Kernel::Avx512Vnni
+    } else if cfg!(target_feature = "avx2") {
+        Kernel::Avx2
+    } else {
+        Kernel::Sse2
+    }
+}
+
 mod sse2 {
     use super::*;
 
@@ -284,10 +401,6 @@ mod sse2 {
     }
 }
 
-#[cfg(all(
-    target_feature = "avx2",
-    not(all(target_feature = "avx512f", target_feature = "avx512vnni"))
-))]
 mod avx2 {
     use super::*;
 
@@ -338,7 +451,6 @@ mod avx2 {
     }
 }
 
-#[cfg(all(target_feature = "avx512f", target_feature = "avx512vnni"))]
 mod avx512vnni {
     use super::*;
 
@@ -412,6 +524,11 @@ mod avx512vnni {
 }
 
 #[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::panic,
+    reason = "tests: a panic is a failed test"
+)]
 mod tests {
     use super::*;
 
@@ -431,74 +548,105 @@ mod tests {
         (*seed >> 24) as u8
     }
 
-    /// Every width up to 4 blocks and a tail, texels all 0, all 255, a ramp and random, above
-    /// rows with large entries (near u32::MAX, as a width-proved table can hold): separate, in
-    /// place and first row, against the reference.
+    /// Every kernel this CPU runs (under Miri: those the build enables), every width up to 4
+    /// blocks and a tail, texels all 0, all 255, a ramp and random, rows above with large
+    /// entries (near u32::MAX, as a width-proved table can hold): separate, in place, in place
+    /// with a copy, and first row, against the reference. Then the same through the dispatching
+    /// entry points.
     #[test]
     fn rows_equal_the_portable_rows() {
         const MAX: usize = 4 * BLOCK + 7;
         let mut seed = 0x9e37_79b9_7f4a_7c15;
-        for w in 0..=MAX {
-            for pattern in 0..4 {
-                let mut t = [0u8; MAX];
-                for (i, t) in t.iter_mut().enumerate() {
-                    *t = match pattern {
-                        0 => 0,
-                        1 => 255,
-                        2 => (i % 256) as u8,
-                        _ => rng(&mut seed),
-                    };
-                }
-                let t = &t[..w];
-                let base = u32::MAX - 255 * 1024;
-                let mut above = [0u32; MAX];
-                for (i, a) in above.iter_mut().enumerate() {
-                    *a = base + 255 * i as u32;
-                }
-                let above = &above[..w];
-                for a in [None, Some(above)] {
-                    let mut want = [0u32; MAX];
-                    reference(t, a, &mut want[..w]);
-                    let mut got = [7u32; MAX];
-                    assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
-                    assert_eq!(
-                        got[..w],
-                        want[..w],
-                        "w {w} pattern {pattern} above {}",
-                        a.is_some()
-                    );
-                    assert!(got[w..].iter().all(|&v| v == 7), "wrote past the row");
-                    let mut inplace = [7u32; MAX];
-                    if let Some(a) = a {
-                        inplace[..w].copy_from_slice(a);
+        let mut ran = 0;
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
+            ran += 1;
+            for w in 0..=MAX {
+                for pattern in 0..4 {
+                    let mut t = [0u8; MAX];
+                    for (i, t) in t.iter_mut().enumerate() {
+                        *t = match pattern {
+                            0 => 0,
+                            1 => 255,
+                            2 => (i % 256) as u8,
+                            _ => rng(&mut seed),
+                        };
                     }
-                    let mut copy = [9u32; MAX];
-                    let first = a.is_none();
-                    let mut again = inplace;
-                    assert!(build_row_in_place::<u8, u32, 1>(
-                        t,
-                        &mut inplace[..w],
-                        first,
-                        None
-                    ));
-                    assert_eq!(inplace[..w], want[..w], "in place, w {w} pattern {pattern}");
-                    let c = Some(&mut copy[..w]);
-                    assert!(build_row_in_place::<u8, u32, 1>(
-                        t,
-                        &mut again[..w],
-                        first,
-                        c
-                    ));
-                    assert_eq!(
-                        again[..w],
-                        want[..w],
-                        "in place + copy, w {w} pattern {pattern}"
-                    );
-                    assert_eq!(copy[..w], want[..w], "the copy, w {w} pattern {pattern}");
-                    assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
+                    let t = &t[..w];
+                    let base = u32::MAX - 255 * 1024;
+                    let mut above = [0u32; MAX];
+                    for (i, a) in above.iter_mut().enumerate() {
+                        *a = base + 255 * i as u32;
+                    }
+                    let above = &above[..w];
+                    for a in [None, Some(above)] {
+                        let what = |how: &str| (kernel.name(), w, pattern, a.is_some(), how.len());
+                        let mut want = [0u32; MAX];
+                        reference(t, a, &mut want[..w]);
+                        // Separate rows.
+                        let mut got = [7u32; MAX];
+                        let mode = if a.is_some() {
+                            Above::Slice
+                        } else {
+                            Above::Zero
+                        };
+                        row_u8_u32(kernel, t, a.unwrap_or(&[]), &mut got[..w], mode, None);
+                        assert_eq!(got[..w], want[..w], "{:?}", what("separate"));
+                        assert!(got[w..].iter().all(|&v| v == 7), "wrote past the row");
+                        // In place, without and with a copy.
+                        let mut inplace = [7u32; MAX];
+                        if let Some(a) = a {
+                            inplace[..w].copy_from_slice(a);
+                        }
+                        let mode = if a.is_some() {
+                            Above::InPlace
+                        } else {
+                            Above::Zero
+                        };
+                        let mut again = inplace;
+                        row_u8_u32(kernel, t, &[], &mut inplace[..w], mode, None);
+                        assert_eq!(inplace[..w], want[..w], "{:?}", what("in place"));
+                        let mut copy = [9u32; MAX];
+                        let c = Some(&mut copy[..w]);
+                        row_u8_u32(kernel, t, &[], &mut again[..w], mode, c);
+                        assert_eq!(again[..w], want[..w], "{:?}", what("in place + copy"));
+                        assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
+                        assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
+                        // The dispatching entry points (the best kernel).
+                        let what =
+                            |how: &str| (Kernel::best().name(), w, pattern, a.is_some(), how.len());
+                        let mut got = [7u32; MAX];
+                        assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
+                        assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
+                        let mut inplace = [7u32; MAX];
+                        if let Some(a) = a {
+                            inplace[..w].copy_from_slice(a);
+                        }
+                        let first = a.is_none();
+                        assert!(build_row_in_place::<u8, u32, 1>(
+                            t,
+                            &mut inplace[..w],
+                            first,
+                            None
+                        ));
+                        assert_eq!(inplace[..w], want[..w], "{:?}", what("build_row_in_place"));
+                    }
                 }
             }
         }
+        assert!(ran >= 1 && Kernel::Sse2.available());
+    }
+
+    /// The detected kernel is available, and so is every narrower one.
+    #[test]
+    fn detection_is_consistent() {
+        let best = Kernel::best();
+        assert!(best.available());
+        assert_eq!(Kernel::best(), best, "cached");
+        let rank = |k: Kernel| Kernel::ALL.iter().position(|&x| x == k).unwrap();
+        for k in Kernel::ALL {
+            assert_eq!(k.available(), rank(k) <= rank(best), "{k:?}");
+        }
+        assert_eq!(kernel_name(), best.name());
     }
 
     /// Other types and channel counts are left to the portable path, untouched.

@@ -3,7 +3,7 @@
 //! tails, texels biased to 0 and 255 (the 16-bit in-block sums at their largest), tall tables
 //! whose entries approach the width proof's bound. Without the feature the same tests check the
 //! portable path. Run with the kernels: `cargo test -p texsat-host-tests --features simd --test
-//! simd_build` (add `RUSTFLAGS="-C target-cpu=native"` for the AVX2 / AVX-512 VNNI kernels).
+//! simd_build` (the widest kernel this CPU runs; the core's unit tests run every one).
 
 use proptest::prelude::*;
 use texsat::{RowStreamBuilder, Sat, Texture};

@@ -5,9 +5,10 @@ Builds `tools/examples/build_speed.rs` in up to three variants, each in its own 
 under $CARGO_TARGET_DIR (default `target`)/build-speed/:
 
   portable  no `simd` feature, default target (x86-64 baseline): the forbid(unsafe_code) build
-  simd      `--features simd`, default target: the SSE2 kernel
-  native    `--features simd` with RUSTFLAGS="-C target-cpu=native": the widest kernel this CPU
-            has (AVX-512 VNNI or AVX2); its floor is compiled with the same flags
+  simd      `--features simd`, default target: the widest kernel the CPU runs, chosen at run time
+            (the floor, compiled by LLVM, is baseline SSE2 code)
+  native    `--features simd` with RUSTFLAGS="-C target-cpu=native": the same kernel; the floor
+            and the rest of the code compiled for this CPU (AVX-512 here)
 
 (each also with `parallel`, for the all-cores build)
 

@@ -4,7 +4,7 @@
 //!
 //! Protocol: one request per line on stdin, `<method> <side>`; the answer is one line on stdout,
 //! the wall time of that one build in nanoseconds per texel. `methods` lists the methods;
-//! `kernel` names the build kernel compiled in ([`texsat::BUILD_KERNEL`]); `dump <side> <file>`
+//! `kernel` names the build kernel compiled in ([`texsat::build_kernel`]); `dump <side> <file>`
 //! writes the texture's bytes to a file (the driver times OpenCV on the same texels). Every method's table
 //! is compared with `Sat::build`'s (or, for the layouts, their corners with its entries) before
 //! its first timing. Storage is allocated and touched once per side and reused.
@@ -248,7 +248,7 @@ fn main() {
         let words: Vec<&str> = line.split_whitespace().collect();
         let answer = match words.as_slice() {
             ["methods"] => METHODS.join(" "),
-            ["kernel"] => texsat::BUILD_KERNEL.to_string(),
+            ["kernel"] => texsat::build_kernel().to_string(),
             ["path"] => std::env::current_exe().expect("exe").display().to_string(),
             ["dump", side, path] => {
                 let side: usize = side.parse().expect("side");
