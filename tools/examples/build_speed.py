@@ -104,7 +104,7 @@ def loadavg():
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--variants", default="portable,simd,native")
-    ap.add_argument("--methods", default="floor,build,checked,stream,stream_nocopy,stream_into,tiled,modular,imageproc,parallel",
+    ap.add_argument("--methods", default="floor,build,checked,stream,stream_nocopy,stream_into,tiled,modular,imageproc,strips_seq,parallel",
                     help="server methods to time (comma-separated)")
     ap.add_argument("--sides", default="1024,4096")
     ap.add_argument("--rounds", type=int, default=21, help="interleaved rounds (medians over these)")

@@ -21,7 +21,8 @@
 //! * `imageproc`: `imageproc::integral_image::integral_image` (allocates its (w+1) x (h+1)
 //!   output every call).
 //! * `parallel` (feature `parallel`): `texsat_tools::parallel::build_parallel`, the strip build
-//!   on rayon's pool (all cores).
+//!   on rayon's pool (all cores); `strips_seq`: `Sat::build_strips` with 4 strips run one after
+//!   the other on the calling thread (the strip build's own cost: column sums and carries).
 //!
 //! Run it through the driver: `python3 tools/examples/build_speed.py` (see there).
 
@@ -44,6 +45,7 @@ const METHODS: &[&str] = &[
     "tiled",
     "modular",
     "imageproc",
+    "strips_seq",
     #[cfg(feature = "parallel")]
     "parallel",
 ];
@@ -157,6 +159,12 @@ impl Case {
                     &self.gray,
                 ));
             }
+            "strips_seq" => {
+                Sat::build_strips(&texture, black_box(&mut self.table), 4, |jobs| {
+                    jobs.iter_mut().for_each(|j| j.run())
+                })
+                .expect("strips");
+            }
             #[cfg(feature = "parallel")]
             "parallel" => {
                 texsat_tools::parallel::build_parallel(&texture, black_box(&mut self.table))
@@ -182,7 +190,7 @@ impl Case {
         let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
         match method {
             "floor" | "stream_nocopy" => {}
-            "build" | "checked" | "stream" | "stream_into" | "parallel" => {
+            "build" | "checked" | "stream" | "stream_into" | "strips_seq" | "parallel" => {
                 assert!(self.table == self.reference, "{method}: table differs");
             }
             "tiled" => {
