@@ -90,12 +90,24 @@ fn run<L: BatchLookup<1, Value = u32>, M: EdgeMode>(
                 Method::Stable => layout.box_sums_raw(&raw[y], f, Stable, mode, &mut NoCount, o),
             };
         } else {
-            for (i, (r, ir)) in row.iter().enumerate() {
-                o[i] = match method {
-                    Method::Sat4 => layout.box_sum_int(ir, mode, &mut NoCount),
-                    Method::Paper => layout.box_sum_raw(r, f, Paper, mode, &mut NoCount),
-                    Method::Stable => layout.box_sum_raw(r, f, Stable, mode, &mut NoCount),
-                };
+            // The method chosen outside the loop, as for the batch: one lookup per iteration.
+            let pairs = row.iter().zip(o.iter_mut());
+            match method {
+                Method::Sat4 => {
+                    for ((_, ir), o) in pairs {
+                        *o = layout.box_sum_int(ir, mode, &mut NoCount);
+                    }
+                }
+                Method::Paper => {
+                    for ((r, _), o) in pairs {
+                        *o = layout.box_sum_raw(r, f, Paper, mode, &mut NoCount);
+                    }
+                }
+                Method::Stable => {
+                    for ((r, _), o) in pairs {
+                        *o = layout.box_sum_raw(r, f, Stable, mode, &mut NoCount);
+                    }
+                }
             }
         }
     }
