@@ -105,7 +105,7 @@ cargo +nightly miri test -p texsat --lib --features filters --locked -- filters:
 step "Miri: the core's doctests with --features filters"
 cargo +nightly miri test -p texsat --doc --features filters --locked
 
-step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI; about 25, 70 and 120 s)"
+step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI; 0.5 to 2 min each)"
 # src/simd.rs is the crate's only unsafe code: its exhaustive small-size tests under Miri, which
 # emulates the intrinsics (the CPU need not have them) but not CPUID, so the kernels are those the
 # target features enable: each run tests every kernel up to its flags, in its own target dir.
