@@ -47,7 +47,10 @@
 //! assert_eq!(s.mean_rounded(0, 1, &mut tally).unwrap(), 3); // mean 1.5 = 3 / 2^1
 //! ```
 #![no_std]
-#![forbid(unsafe_code)]
+// No `unsafe` anywhere, except the vectorized build rows behind the `simd` feature, which live in
+// one module (`src/simd.rs`, with its safety argument) and are denied everywhere else.
+#![cfg_attr(not(feature = "simd"), forbid(unsafe_code))]
+#![cfg_attr(feature = "simd", deny(unsafe_code))]
 // docs.rs (and `RUSTDOCFLAGS="--cfg docsrs" cargo +nightly doc --all-features`) shows which
 // cargo feature each gated item needs.
 #![cfg_attr(docsrs, feature(doc_cfg))]
@@ -74,6 +77,8 @@ pub mod layouts;
 pub mod lookup;
 pub mod plan;
 mod rect;
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+mod simd;
 pub mod table;
 pub mod texel;
 mod texture;
@@ -92,6 +97,19 @@ pub use table::{RowStreamBuilder, Sat};
 pub use texel::{Acc, Entry, Texel};
 pub use texture::Texture;
 pub use wide::Wide;
+
+/// The build kernel in use: `"avx512vnni"`, `"avx2"` or `"sse2"` on x86-64 with the `simd`
+/// feature (the widest this CPU runs, detected once at run time), `"portable"` otherwise.
+pub fn build_kernel() -> &'static str {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    {
+        simd::kernel_name()
+    }
+    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+    {
+        "portable"
+    }
+}
 
 /// The default corner type: `F = 8` fractional bits, like a GPU's sub-texel precision
 /// (`fixed::types::I24F8`, range about +-8.4 million texels). Any `fixed` type whose raw bits fit

@@ -65,6 +65,10 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     above: Option<&[E]>,
     out: &mut [E],
 ) -> Result<(), ()> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if !CHECKED && crate::simd::build_row::<T, E, C>(texels, above, out) {
+        return Ok(());
+    }
     let mut run = [E::ZERO; C];
     match above {
         None => {
@@ -590,6 +594,290 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     }
 }
 
+/// Most strips [`Sat::build_strips`] cuts a texture into (its jobs live on the stack).
+pub const MAX_STRIPS: usize = 64;
+
+/// One unit of work of [`Sat::build_strips`], for the caller's executor: call
+/// [`StripJob::run`] on every job it is given, in any order, on any threads.
+///
+/// A job borrows the texture and its own disjoint part of the table storage; it is `Send` when
+/// the texel and entry types are (always, for the crate's types).
+#[derive(Debug)]
+pub struct StripJob<'t, 's, T: Texel, E: Entry, const C: usize> {
+    texture: &'t Texture<'t, T, C>,
+    /// Texture rows `y0..y1`.
+    y0: usize,
+    y1: usize,
+    kind: JobKind<'s, E>,
+    done: bool,
+}
+
+#[derive(Debug)]
+enum JobKind<'s, E> {
+    /// Column sums of the strip's rows into `out` (`w C` entries).
+    ColumnSums { out: &'s mut [E] },
+    /// The table rows `y0..y1` onto the table row `above` (none for the first strip).
+    Rows {
+        above: Option<&'s [E]>,
+        out: &'s mut [E],
+    },
+    /// No work (the only row of a one-row strip is done by the carry pass).
+    Empty,
+}
+
+impl<'t, 's, T: Texel, E: Entry, const C: usize> StripJob<'t, 's, T, E, C> {
+    /// A job with nothing to do (the unused slots of the job array).
+    fn empty(texture: &'t Texture<'t, T, C>) -> Self {
+        StripJob {
+            texture,
+            y0: 0,
+            y1: 0,
+            kind: JobKind::Empty,
+            done: false,
+        }
+    }
+
+    /// Does the job (again, harmlessly, if run twice). Additions are unchecked:
+    /// [`Sat::build_strips`] proved the whole texture's worst case first, and every value
+    /// formed is the sum over a sub-rectangle of it.
+    pub fn run(&mut self) {
+        match &mut self.kind {
+            JobKind::ColumnSums { out } => {
+                out.fill(E::ZERO);
+                // Four rows per pass over `out` (a quarter of its reads and writes; the texel
+                // sums vectorize): every partial sum is a column strip's, at most the total.
+                let t = |a: &T| E::from(a.to_u16());
+                let mut y = self.y0;
+                while y.saturating_add(4) <= self.y1 {
+                    let row = |k: usize| self.texture.row(y.saturating_add(k)).unwrap_or(&[]);
+                    let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
+                    for ((((o, a), b), c), d) in out.iter_mut().zip(r0).zip(r1).zip(r2).zip(r3) {
+                        let four = add::<E, false>(t(a), t(b))
+                            .and_then(|ab| add::<E, false>(ab, t(c)))
+                            .and_then(|abc| add::<E, false>(abc, t(d)))
+                            .and_then(|abcd| add::<E, false>(*o, abcd));
+                        if let Ok(v) = four {
+                            *o = v;
+                        }
+                    }
+                    y = y.saturating_add(4);
+                }
+                for y in y..self.y1 {
+                    if let Some(row) = self.texture.row(y) {
+                        for (o, a) in out.iter_mut().zip(row) {
+                            if let Ok(v) = add::<E, false>(*o, t(a)) {
+                                *o = v;
+                            }
+                        }
+                    }
+                }
+            }
+            JobKind::Rows { above, out } => {
+                let rows = self.y1.saturating_sub(self.y0);
+                let row_len = out.len().checked_div(rows).unwrap_or(0);
+                let mut above: Option<&[E]> = *above;
+                let mut rest: &mut [E] = out;
+                for y in self.y0..self.y1 {
+                    let (Some(texels), Some((row, tail))) =
+                        (self.texture.row(y), rest.split_at_mut_checked(row_len))
+                    else {
+                        return;
+                    };
+                    if build_row::<T, E, C, false>(texels, above, row).is_err() {
+                        return;
+                    }
+                    above = Some(row);
+                    rest = tail;
+                }
+            }
+            JobKind::Empty => {}
+        }
+        self.done = true;
+    }
+
+    /// Texture rows `(first, end)` the job covers.
+    pub fn rows(&self) -> (usize, usize) {
+        (self.y0, self.y1)
+    }
+}
+
+impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
+    /// [`Sat::build`] cut into `strips` horizontal strips whose work the caller's `execute`
+    /// runs (on threads, say): `execute` gets a slice of jobs and must call [`StripJob::run`] on
+    /// each, in any order, before it returns. The table is identical to [`Sat::build`]'s.
+    ///
+    /// Two rounds of jobs and one pass over the table: (1) each strip sums its columns into the
+    /// storage of its own last table row; then here, in order, each of those rows becomes the
+    /// strip's last table row: the last row of the strip above plus the prefix sums of the
+    /// column sums along x (`O(w strips)` additions); (2) each strip builds its other rows onto
+    /// the last row of the strip above. The width proof is [`Sat::build`]'s, for the whole
+    /// texture, before anything is written; every value formed is a sum over a sub-rectangle.
+    /// `strips` is clamped to `1..=min(h, MAX_STRIPS)`. A job left unrun is
+    /// [`Error::MissingRows`] (the table is then incomplete and no `Sat` is returned).
+    ///
+    /// ```
+    /// use texsat::{Sat, Texture};
+    /// let texels: Vec<u8> = (0..64 * 48).map(|i| (i * 7 % 256) as u8).collect();
+    /// let texture = Texture::<u8>::new(&texels, 64, 48)?;
+    /// let (mut a, mut b) = (vec![0u32; 64 * 48], vec![0u32; 64 * 48]);
+    /// // One thread here; with rayon: `|jobs| jobs.par_iter_mut().for_each(|j| j.run())`.
+    /// let s = Sat::build_strips(&texture, &mut a, 5, |jobs| jobs.iter_mut().for_each(|j| j.run()))?;
+    /// assert_eq!(s.entries(), Sat::build(&texture, &mut b)?.entries());
+    /// # Ok::<(), texsat::Error>(())
+    /// ```
+    pub fn build_strips<T: Texel, X>(
+        texture: &Texture<'_, T, C>,
+        storage: &'a mut [E],
+        strips: usize,
+        mut execute: X,
+    ) -> Result<Self, Error>
+    where
+        X: for<'t, 's> FnMut(&mut [StripJob<'t, 's, T, E, C>]),
+    {
+        let (w, h) = (texture.width(), texture.height());
+        width::check_entry_worst_case(T::BITS, w, h, E::BITS)?;
+        let needed = entries_needed::<C>(w, h)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "w C <= w h C = needed, which entries_needed computed without overflow"
+        )]
+        let row_len = w * C;
+        let got = storage.len();
+        let Some(table) = storage.get_mut(..needed) else {
+            return Err(Error::StorageTooSmall { needed, got });
+        };
+        let n = strips.clamp(1, h.clamp(1, MAX_STRIPS));
+        // Strip k covers rows [k h / n, (k + 1) h / n): n <= h, so none is empty.
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "k <= n <= 64 and h < 2^31: k h < 2^37 fits u64; n >= 1; usize -> u64 is \
+                      lossless"
+        )]
+        let bound = |k: usize| -> usize {
+            let v = (k as u64) * (h as u64) / (n as u64);
+            usize::try_from(v).unwrap_or(h)
+        };
+        let missing = |done: usize| Error::MissingRows {
+            got: done,
+            expected: h,
+        };
+
+        // Round 1: each strip's column sums into its last row.
+        {
+            let mut rest: &mut [E] = &mut *table;
+            let mut jobs: [StripJob<'_, '_, T, E, C>; MAX_STRIPS] = core::array::from_fn(|k| {
+                let mut job = StripJob::empty(texture);
+                if k < n {
+                    let (y0, y1) = (bound(k), bound(k.saturating_add(1)));
+                    let rows = y1.saturating_sub(y0).saturating_sub(1);
+                    let taken = core::mem::take(&mut rest);
+                    if let Some((_, after)) =
+                        taken.split_at_mut_checked(rows.saturating_mul(row_len))
+                    {
+                        if let Some((last, tail)) = after.split_at_mut_checked(row_len) {
+                            job = StripJob {
+                                texture,
+                                y0,
+                                y1,
+                                kind: JobKind::ColumnSums { out: last },
+                                done: false,
+                            };
+                            rest = tail;
+                        }
+                    }
+                }
+                job
+            });
+            run_round(&mut jobs, n, &mut execute).map_err(missing)?;
+        }
+
+        // The carry pass: each strip's last row, in order.
+        {
+            let mut above: Option<&[E]> = None;
+            let mut rest: &mut [E] = &mut *table;
+            for k in 0..n {
+                let (y0, y1) = (bound(k), bound(k.saturating_add(1)));
+                let rows = y1.saturating_sub(y0).saturating_sub(1);
+                let taken = core::mem::take(&mut rest);
+                let Some((_, after)) = taken.split_at_mut_checked(rows.saturating_mul(row_len))
+                else {
+                    return Err(missing(y0));
+                };
+                let Some((last, tail)) = after.split_at_mut_checked(row_len) else {
+                    return Err(missing(y0));
+                };
+                let mut run = [E::ZERO; C];
+                // Unchecked additions (the proof): each value is a sum over rows 0..y1.
+                for (i, o) in last.chunks_exact_mut(C).enumerate() {
+                    let a = above.and_then(|a| a.get(i.saturating_mul(C)..)?.first_chunk::<C>());
+                    for (c, (o, r)) in o.iter_mut().zip(run.iter_mut()).enumerate() {
+                        *r = add::<E, false>(*r, *o).map_err(|_| missing(y0))?;
+                        let up = a.and_then(|a| a.get(c)).copied().unwrap_or(E::ZERO);
+                        *o = add::<E, false>(*r, up).map_err(|_| missing(y0))?;
+                    }
+                }
+                above = Some(last);
+                rest = tail;
+            }
+        }
+
+        // Round 2: each strip's other rows onto the last row of the strip above.
+        {
+            let mut above: Option<&[E]> = None;
+            let mut rest: &mut [E] = &mut *table;
+            let mut jobs: [StripJob<'_, '_, T, E, C>; MAX_STRIPS] = core::array::from_fn(|k| {
+                let mut job = StripJob::empty(texture);
+                if k < n {
+                    let (y0, y1) = (bound(k), bound(k.saturating_add(1)));
+                    let rows = y1.saturating_sub(y0).saturating_sub(1);
+                    let taken = core::mem::take(&mut rest);
+                    if let Some((body, after)) =
+                        taken.split_at_mut_checked(rows.saturating_mul(row_len))
+                    {
+                        if let Some((last, tail)) = after.split_at_mut_checked(row_len) {
+                            job = StripJob {
+                                texture,
+                                y0,
+                                y1: y0.saturating_add(rows),
+                                kind: if rows == 0 {
+                                    JobKind::Empty
+                                } else {
+                                    JobKind::Rows { above, out: body }
+                                },
+                                done: false,
+                            };
+                            above = Some(last);
+                            rest = tail;
+                        }
+                    }
+                }
+                job
+            });
+            run_round(&mut jobs, n, &mut execute).map_err(missing)?;
+        }
+        let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
+        Self::from_parts(table, w, h, T::BITS)
+    }
+}
+
+/// Hands the first `n` jobs to `execute`; `Err(first row of the first job left unrun)`.
+fn run_round<T: Texel, E: Entry, const C: usize, X>(
+    jobs: &mut [StripJob<'_, '_, T, E, C>; MAX_STRIPS],
+    n: usize,
+    execute: &mut X,
+) -> Result<(), usize>
+where
+    X: for<'t, 's> FnMut(&mut [StripJob<'t, 's, T, E, C>]),
+{
+    let live = jobs.get_mut(..n).unwrap_or(&mut []);
+    execute(live);
+    match jobs.iter().take(n).find(|j| !j.done) {
+        Some(j) => Err(j.y0),
+        None => Ok(()),
+    }
+}
+
 /// Builds a table one texture row at a time, holding only the previous table row.
 ///
 /// For sources larger than RAM (a sensor, a flash image): push each texture row; each call
@@ -615,6 +903,10 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     row: &mut [E],
     first: bool,
 ) -> Result<(), ()> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first, None) {
+        return Ok(());
+    }
     let mut run = [E::ZERO; C];
     for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
         for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
@@ -624,6 +916,38 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
             } else {
                 add::<E, CHECKED>(*r, *o)?
             };
+        }
+    }
+    Ok(())
+}
+
+/// [`build_row_in_place`] that also writes the new row to `copy` (as long as `row`), in the same
+/// pass: what a caller storing the table would otherwise do with a second pass over the row.
+#[inline]
+fn build_row_in_place_copy<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
+    texels: &[T],
+    row: &mut [E],
+    first: bool,
+    copy: &mut [E],
+) -> Result<(), ()> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first, Some(copy)) {
+        return Ok(());
+    }
+    let mut run = [E::ZERO; C];
+    for ((o, t), c) in row
+        .chunks_exact_mut(C)
+        .zip(texels.chunks_exact(C))
+        .zip(copy.chunks_exact_mut(C))
+    {
+        for (((o, t), c), r) in o.iter_mut().zip(t).zip(c).zip(run.iter_mut()) {
+            *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+            *o = if first {
+                *r
+            } else {
+                add::<E, CHECKED>(*r, *o)?
+            };
+            *c = *o;
         }
     }
     Ok(())
@@ -686,6 +1010,44 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             self.rows_done += 1;
         }
         Ok(self.row)
+    }
+
+    /// [`RowStreamBuilder::push_row`] that also writes the finished table row into `out`
+    /// (`width * C` entries, for instance the row's place in a table), in the same pass over the
+    /// row: the same entries as `push_row` followed by `out.copy_from_slice(row)`, without the
+    /// second pass. Nothing is written to `out` if the row is refused.
+    pub fn push_row_into<T: Texel>(&mut self, texels: &[T], out: &mut [E]) -> Result<(), Error> {
+        if self.rows_done >= self.height {
+            return Err(Error::TooManyRows);
+        }
+        if texels.len() != self.row.len() {
+            return Err(Error::RowLength {
+                expected: self.row.len(),
+                got: texels.len(),
+            });
+        }
+        if out.len() != self.row.len() {
+            return Err(Error::StorageTooSmall {
+                needed: self.row.len(),
+                got: out.len(),
+            });
+        }
+        let overflow = entry_overflow::<E>();
+        let first = self.rows_done == 0;
+        if T::BITS <= self.texel_bits {
+            build_row_in_place_copy::<T, E, C, false>(texels, self.row, first, out)
+        } else {
+            build_row_in_place_copy::<T, E, C, true>(texels, self.row, first, out)
+        }
+        .map_err(|_| overflow)?;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "rows_done < height (checked above)"
+        )]
+        {
+            self.rows_done += 1;
+        }
+        Ok(())
     }
 
     /// Width of the texture in texels.

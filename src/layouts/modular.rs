@@ -26,7 +26,7 @@
 
 use super::packed::{
     bits_of_mul, check_dimensions, mask, read_field, read_masked, read_masked32, word_shift,
-    words_of_bits, write_field, USIZE_MAX64, WORD_BITS,
+    words_of_bits, BitWriter, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::{Counter, Region};
@@ -416,8 +416,9 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         })
     }
 
-    /// Consumes the next texture row. The additions wrap modulo `2^k` on purpose. A refused row
-    /// (wrong length, a texel wider than `texel_bits`) changes nothing.
+    /// Consumes the next texture row. The additions wrap modulo `2^k` on purpose; the row's
+    /// fields are packed a word at a time. A refused row (wrong length, a texel wider than
+    /// `texel_bits`, fields past the storage) changes nothing.
     pub fn push_row<T: Texel>(&mut self, texels: &[T]) -> Result<(), Error> {
         if self.rows_done >= self.height {
             return Err(Error::TooManyRows);
@@ -440,21 +441,48 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             }
         }
         let k = self.k;
-        let mut run = [E::ZERO; C];
         // rows_done < h: the row's fields end at or before total_bits (no wrap).
         #[allow(
             clippy::as_conversions,
             reason = "usize -> u64 is lossless (usize::BITS <= 64)"
         )]
-        let mut offset = (self.rows_done as u64).wrapping_mul(self.sizes.row_bits);
-        for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-            for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
-                *r = r.wrapping_add(E::from(tv.to_u16())).low_bits(k);
-                *ov = ov.wrapping_add(*r).low_bits(k);
-                write_field(self.words, offset, k, ov.to_u64())?;
-                offset = offset.wrapping_add(u64::from(k));
+        let offset = (self.rows_done as u64).wrapping_mul(self.sizes.row_bits);
+        if !BitWriter::fits(self.words, offset, self.row.len(), k) {
+            // The first field that does not fit, as a field-by-field write would report it
+            // (possible only with sizes that disagree with the storage: tests). Nothing is
+            // written.
+            let got = self.words.len();
+            let mut end = offset;
+            for _ in 0..self.row.len() {
+                end = end.saturating_add(u64::from(k));
+                let needed = words_of_bits(end, USIZE_MAX64).unwrap_or(usize::MAX);
+                if needed > got {
+                    return Err(Error::StorageTooSmall { needed, got });
+                }
             }
         }
+        // The row of the table modulo 2^E::BITS (wrapping additions: only the low k bits are
+        // kept, and those of a sum depend only on the low k bits of its terms); the same
+        // vectorized row as the flat build where it applies (`simd`).
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let done = crate::simd::build_row_in_place::<T, E, C>(texels, self.row, false, None);
+        #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+        let done = false;
+        if !done {
+            let mut run = [E::ZERO; C];
+            for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+                for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+                    *r = r.wrapping_add(E::from(tv.to_u16()));
+                    *ov = ov.wrapping_add(*r);
+                }
+            }
+        }
+        // Its low k bits, packed a word at a time.
+        let mut out = BitWriter::new(self.words, offset);
+        for v in self.row.iter() {
+            out.push(v.low_bits(k).to_u64(), k);
+        }
+        out.finish();
         #[allow(
             clippy::arithmetic_side_effects,
             reason = "rows_done < height (checked above)"

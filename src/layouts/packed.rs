@@ -316,6 +316,99 @@ pub(crate) fn write_field(
     })
 }
 
+/// Writes consecutive fields from a bit offset on, a word at a time: the builders' packing
+/// (each field costs a shift and an or; a word is stored once, when full), where
+/// [`write_field`] reads and writes up to three words per field. Same layout as
+/// [`write_bits`]: LSB first, little-endian words. Bits before the first field and after the last
+/// are kept. The caller checks first that every field fits the slice ([`BitWriter::fits`]); a
+/// word past the end would be dropped, never a panic.
+pub(crate) struct BitWriter<'w> {
+    words: &'w mut [u32],
+    /// The word the pending bits go to.
+    next: usize,
+    /// Pending bits (fewer than 32 between pushes), LSB first.
+    acc: u64,
+    bits: u32,
+}
+
+impl<'w> BitWriter<'w> {
+    /// Whether `count` fields of `len` bits from bit `offset` fit `words`.
+    pub(crate) fn fits(words: &[u32], offset: u64, count: usize, len: u32) -> bool {
+        let Ok(count) = u64::try_from(count) else {
+            return false;
+        };
+        count
+            .checked_mul(u64::from(len))
+            .and_then(|b| b.checked_add(offset))
+            .and_then(|end| words_of_bits(end, USIZE_MAX64))
+            .is_some_and(|n| n <= words.len())
+    }
+
+    /// A writer at bit `offset` (its word's lower bits kept).
+    #[inline]
+    pub(crate) fn new(words: &'w mut [u32], offset: u64) -> Self {
+        let next = usize::try_from(offset / WORD_BITS64).unwrap_or(usize::MAX);
+        let bits = word_shift(offset);
+        let acc = words.get(next).map_or(0, |&w| u64::from(w) & mask(bits));
+        BitWriter {
+            words,
+            next,
+            acc,
+            bits,
+        }
+    }
+
+    /// Appends the low `len <= 32` bits of `v` (`v < 2^len`).
+    #[inline(always)]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "bits < 32 and len <= 32 between pushes, so bits + len < 64, v << bits fits 64 \
+                  bits and bits - 32 >= 0 where formed; next < words.len() <= usize::MAX while \
+                  fields fit (checked by the caller), else the store is dropped and next \
+                  saturates; the u32 cast keeps the low word on purpose"
+    )]
+    pub(crate) fn push32(&mut self, v: u64, len: u32) {
+        self.acc |= v << self.bits;
+        self.bits += len;
+        if self.bits >= WORD_BITS {
+            if let Some(w) = self.words.get_mut(self.next) {
+                *w = self.acc as u32;
+            }
+            self.next = self.next.saturating_add(1);
+            self.acc >>= WORD_BITS;
+            self.bits -= WORD_BITS;
+        }
+    }
+
+    /// Appends a field of `len <= 64` bits (`v < 2^len`).
+    #[inline(always)]
+    #[allow(clippy::arithmetic_side_effects, reason = "len - 32 where len > 32")]
+    pub(crate) fn push(&mut self, v: u64, len: u32) {
+        if len <= WORD_BITS {
+            self.push32(v, len);
+        } else {
+            self.push32(v & mask(WORD_BITS), WORD_BITS);
+            self.push32(v >> WORD_BITS, len - WORD_BITS);
+        }
+    }
+
+    /// Stores the pending bits, keeping the word's bits above them.
+    #[inline]
+    #[allow(
+        clippy::as_conversions,
+        reason = "acc < 2^bits < 2^32: lossless; the mask's low word on purpose"
+    )]
+    pub(crate) fn finish(self) {
+        if self.bits > 0 {
+            if let Some(w) = self.words.get_mut(self.next) {
+                let keep = !(mask(self.bits) as u32);
+                *w = (*w & keep) | self.acc as u32;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 #[allow(
     clippy::indexing_slicing,
@@ -330,6 +423,46 @@ mod tests {
     extern crate std;
     use super::*;
     use std::vec::Vec;
+
+    /// The writer lays fields out exactly as `write_bits` does, for every field width at
+    /// several starting offsets, over words that start as noise (bits outside the fields kept).
+    #[test]
+    fn bit_writer_equals_write_bits() {
+        for len in 1..=64u32 {
+            for start in [0u64, 1, 5, 31, 32, 33, 63, 100] {
+                let mut seed = 0x1234_5678_9abc_def1u64 ^ u64::from(len);
+                let mut noise = [0u32; 40];
+                for w in noise.iter_mut() {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    *w = seed as u32;
+                }
+                let count = 9;
+                let fields: [u64; 9] = core::array::from_fn(|i| {
+                    (seed.rotate_left(7 * i as u32) ^ (i as u64 * 0x9e37_79b9)) & mask(len)
+                });
+                let (mut a, mut b) = (noise, noise);
+                for (i, &v) in fields.iter().enumerate() {
+                    assert!(write_bits(
+                        &mut a,
+                        start + i as u64 * u64::from(len),
+                        len,
+                        v
+                    ));
+                }
+                assert!(BitWriter::fits(&b, start, count, len));
+                let mut wr = BitWriter::new(&mut b, start);
+                for &v in &fields {
+                    wr.push(v, len);
+                }
+                wr.finish();
+                assert_eq!(a, b, "len {len} start {start}");
+            }
+        }
+        assert!(!BitWriter::fits(&[0u32; 2], 60, 1, 5));
+        assert!(BitWriter::fits(&[0u32; 2], 59, 1, 5));
+    }
 
     #[test]
     fn read_masked32_equals_the_64_bit_read() {

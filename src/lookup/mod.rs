@@ -21,12 +21,14 @@
     clippy::as_conversions
 )]
 
+mod batch;
 mod corners4;
 mod paper;
 mod shortcut;
 mod split;
 mod stable;
 
+pub use batch::BatchLookup;
 pub use shortcut::{Shortcut, ShortcutMean};
 
 use crate::cost::Counter;

@@ -3,8 +3,11 @@
 //! out of the core's own test build. The library holds what the tools share: [`budget`], the
 //! memory and work estimates every command checks before it allocates, and [`image_file`], the
 //! image reading under decoder limits (header first, samples after the budget check), and
-//! [`cache`], the memory-traffic and texel-cache models of a hardware texture unit.
+//! [`cache`], the memory-traffic and texel-cache models of a hardware texture unit. With the
+//! feature `parallel`, `parallel` builds large tables on all cores.
 
 pub mod budget;
 pub mod cache;
 pub mod image_file;
+#[cfg(feature = "parallel")]
+pub mod parallel;

@@ -1,0 +1,140 @@
+//! The build rows against an independent reference, sized and valued to exercise the vectorized
+//! kernels (feature `simd`, src/simd.rs): every width across several 16-texel blocks and their
+//! tails, texels biased to 0 and 255 (the 16-bit in-block sums at their largest), tall tables
+//! whose entries approach the width proof's bound. Without the feature the same tests check the
+//! portable path. Run with the kernels: `cargo test -p texsat-host-tests --features simd --test
+//! simd_build` (the widest kernel this CPU runs; the core's unit tests run every one).
+
+use proptest::prelude::*;
+use texsat::{RowStreamBuilder, Sat, Texture};
+use texsat_host_tests::RngExt;
+
+/// Inclusive 2-D prefix sums in `u64`, one channel: the textbook recurrence, nothing shared
+/// with the crate.
+fn reference(t: &[u8], w: usize, h: usize) -> Vec<u64> {
+    let mut s = vec![0u64; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let left = if x > 0 { s[y * w + x - 1] } else { 0 };
+            let up = if y > 0 { s[(y - 1) * w + x] } else { 0 };
+            let diag = if x > 0 && y > 0 {
+                s[(y - 1) * w + x - 1]
+            } else {
+                0
+            };
+            s[y * w + x] = u64::from(t[y * w + x]) + left + up - diag;
+        }
+    }
+    s
+}
+
+fn texel() -> impl Strategy<Value = u8> {
+    prop_oneof![Just(0u8), Just(255u8), any::<u8>()]
+}
+
+fn case() -> impl Strategy<Value = (usize, usize, Vec<u8>)> {
+    (1usize..=100, 1usize..=12)
+        .prop_flat_map(|(w, h)| (Just(w), Just(h), proptest::collection::vec(texel(), w * h)))
+}
+
+/// Builds with `Sat::build` and with `RowStreamBuilder`, into storage that starts dirty, and
+/// compares both with the reference.
+fn check(w: usize, h: usize, t: &[u8]) -> Result<(), TestCaseError> {
+    let want = reference(t, w, h);
+    let texture = Texture::<u8>::new(t, w, h).unwrap();
+    let mut storage = vec![0xDEAD_BEEFu32; w * h + 3];
+    let built = Sat::build(&texture, &mut storage)
+        .unwrap()
+        .entries()
+        .to_vec();
+    for (i, (&got, &want)) in built.iter().zip(&want).enumerate() {
+        prop_assert_eq!(u64::from(got), want, "entry {} of {}x{}", i, w, h);
+    }
+    prop_assert_eq!(&storage[w * h..], &[0xDEAD_BEEF; 3], "wrote past the table");
+    let mut row = vec![0x5555_5555u32; w];
+    let mut b = RowStreamBuilder::<u32>::new(w, h, 8, &mut row).unwrap();
+    let mut row2 = vec![0x5555_5555u32; w];
+    let mut b2 = RowStreamBuilder::<u32>::new(w, h, 8, &mut row2).unwrap();
+    let mut table = vec![0xDEAD_BEEFu32; w * h];
+    for y in 0..h {
+        let texels = &t[y * w..(y + 1) * w];
+        b2.push_row_into(texels, &mut table[y * w..(y + 1) * w])
+            .unwrap();
+        let got = b.push_row(texels).unwrap();
+        for (x, (&got, &want)) in got.iter().zip(&want[y * w..(y + 1) * w]).enumerate() {
+            prop_assert_eq!(
+                u64::from(got),
+                want,
+                "streamed ({}, {}) of {}x{}",
+                x,
+                y,
+                w,
+                h
+            );
+        }
+    }
+    prop_assert_eq!(b2.finish().unwrap(), b.finish().unwrap());
+    prop_assert_eq!(table, built, "push_row_into's table");
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn builds_equal_the_reference((w, h, t) in case()) {
+        check(w, h, &t)?;
+    }
+}
+
+/// Every width from 1 to 80 (five blocks) at a few heights, all texels 255: the largest sums
+/// every lane can see.
+#[test]
+fn saturated_textures_of_every_width() {
+    for w in 1..=80 {
+        for h in [1, 2, 17] {
+            check(w, h, &vec![255u8; w * h]).unwrap();
+        }
+    }
+}
+
+/// Wide rows (4104 texels, the widest square the width proof accepts for u32 entries, Crow §3.0)
+/// of mostly 255: hundreds of blocks per row carrying one running sum. (Entries near 2^32, where
+/// a wrap would show, are covered by the unit tests in src/simd.rs, whose rows above are.)
+#[test]
+fn wide_rows() {
+    let (w, h) = (4104, 64);
+    let t: Vec<u8> = (0..w * h)
+        .map(|i| if i % 97 == 0 { 0 } else { 255 })
+        .collect();
+    check(w, h, &t).unwrap();
+}
+
+/// `push_row_into` on the portable path (u16 texels, 3 channels, u64 entries): the same rows as
+/// `push_row` and a copy, and a refused `out` (wrong length) leaves `out` and the builder as they
+/// were.
+#[test]
+fn push_row_into_equals_push_row_and_a_copy() {
+    let (w, h) = (13, 5);
+    let mut rng = texsat_host_tests::rng(7);
+    let t: Vec<u16> = (0..w * h * 3)
+        .map(|_| rng.random_range(0..=u16::MAX))
+        .collect();
+    let mut row = vec![0u64; w * 3];
+    let mut row2 = vec![0u64; w * 3];
+    let mut a = RowStreamBuilder::<u64, 3>::new(w, h, 16, &mut row).unwrap();
+    let mut b = RowStreamBuilder::<u64, 3>::new(w, h, 16, &mut row2).unwrap();
+    for y in 0..h {
+        let texels = &t[y * w * 3..(y + 1) * w * 3];
+        let mut short = vec![7u64; w * 3 - 1];
+        assert!(b.push_row_into(texels, &mut short).is_err());
+        assert!(short.iter().all(|&v| v == 7));
+        let mut out = vec![7u64; w * 3];
+        b.push_row_into(texels, &mut out).unwrap();
+        assert_eq!(out, a.push_row(texels).unwrap(), "row {y}");
+    }
+    assert!(b
+        .push_row_into(&t[..w * 3], &mut vec![0u64; w * 3])
+        .is_err());
+    assert_eq!(a.finish().unwrap(), b.finish().unwrap());
+}

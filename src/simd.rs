@@ -1,0 +1,663 @@
+//! Vectorized build rows for x86-64 (cargo feature `simd`): the one module of the crate with
+//! `unsafe` code.
+//!
+//! The portable build ([`crate::table`]) keeps one running sum along the row, a chain of
+//! dependent additions that no compiler vectorizes: about one entry per cycle. Here a row is cut
+//! into blocks of 16 texels; each block's inclusive prefix sums are computed in registers,
+//! independently of the other blocks, and only the block total joins the running sum (one vector
+//! addition per 16 entries on the dependency chain). Each entry is then `prefix + running sum +
+//! entry above`: the same value as the portable build's `r(i, j) + entry(i, j - 1)` (integer
+//! addition is associative and, under the width proof, nothing wraps), so tables are identical
+//! bit for bit (tests below compare them exhaustively on small sizes; host-tests by proptest).
+//!
+//! Covered: `u8` texels into `u32` entries, one channel, the unchecked build (after the width
+//! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
+//! and the modular builder's rows. Everything else (and [`crate::Sat::build_checked`]) takes the
+//! portable path. The kernel is the widest this CPU runs, detected once at run time from CPUID
+//! and XGETBV (no `std` needed), as OpenCV and the standard library's
+//! `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
+//!
+//! * AVX-512 VNNI (`avx512f` + `avx512vnni`): the 16 prefix sums of a block are four `vpdpbusd`
+//!   dot products of a broadcast group of 4 texels with a constant triangle of 0/1 weights,
+//!   straight into 32-bit lanes: no shifts, no widening.
+//! * AVX2: texels widened to 16-bit lanes, prefix by three shift-and-adds per 128-bit half plus
+//!   one cross-half add, widened to 32 bits.
+//! * SSE2 (every x86-64): the same in two 8-lane halves.
+//!
+//! Why 16-bit lanes suffice for the in-block prefix: 16 texels of at most 255 sum to at most
+//! 4080 < 2^16.
+//!
+//! # Safety argument
+//!
+//! 1. *Target features.* Each kernel is a `#[target_feature]` function; it is called only as
+//!    [`Kernel::best`], the widest kernel whose features CPUID reports and whose registers the
+//!    operating system saves (XCR0), per the Intel SDM's detection procedure (SSE2 is part of
+//!    the x86-64 baseline). Under Miri, which cannot execute CPUID, the kernel is the one the
+//!    build's target features enable. Calling the kernels (and XGETBV, after CPUID reports
+//!    OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
+//! 2. *Memory.* [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
+//!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
+//!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
+//!    `read_unaligned` for the 4-byte groups), then finishes the tail `i..n` with checked
+//!    indexing. Every pointer is derived from its slice and stays in bounds.
+//! 3. *Aliasing.* `above` and `out` are separate slices (`&[u32]`, `&mut [u32]`) except in the
+//!    in-place streaming row, where the kernel gets the single `&mut [u32]` and reads the row
+//!    above through the same pointer it writes: each block reads `row[i..i + 16]` before it
+//!    writes those same entries, and no block reads what another wrote. The optional copy of
+//!    the streamed row is a third, separate `&mut [u32]` (at least `n` long). No reference is
+//!    created from the raw pointers.
+//! 4. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]` and `&mut [E]` to `&mut [u32]` only after
+//!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length.
+#![allow(unsafe_code)]
+#![allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "x86-64 host code (never the firmware): indices and offsets are bounded by `n` as the \
+              safety argument states; `as` casts reinterpret lanes between i32 and u32"
+)]
+
+use core::any::TypeId;
+use core::arch::x86_64::*;
+use core::sync::atomic::{AtomicU8, Ordering};
+
+use crate::texel::{Entry, Texel};
+
+/// Where the row above comes from.
+#[derive(Clone, Copy)]
+enum Above {
+    /// The first row: zero above.
+    Zero,
+    /// A separate slice of the same length.
+    Slice,
+    /// The output row itself (in-place streaming).
+    InPlace,
+}
+
+/// `out = prefix sums of texels + above` for `u8` texels, `u32` entries and one channel;
+/// `false` (nothing written) for any other types, which then take the portable path.
+#[inline]
+pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    above: Option<&[E]>,
+    out: &mut [E],
+) -> bool {
+    let (Some(t), Some(out)) = (as_u8(texels), as_u32_mut::<E, C>(out)) else {
+        return false;
+    };
+    match above {
+        None => row_u8_u32(Kernel::best(), t, &[], out, Above::Zero, None),
+        Some(a) => match as_u32(a) {
+            Some(a) => row_u8_u32(Kernel::best(), t, a, out, Above::Slice, None),
+            None => return false,
+        },
+    }
+    true
+}
+
+/// [`build_row`] in place: `row` holds the row above on entry (ignored if `first`) and the new
+/// row on exit; with `copy`, the new row is also written there (same length as `row`) in the
+/// same pass.
+#[inline]
+pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    row: &mut [E],
+    first: bool,
+    copy: Option<&mut [E]>,
+) -> bool {
+    let (Some(t), Some(row)) = (as_u8(texels), as_u32_mut::<E, C>(row)) else {
+        return false;
+    };
+    let copy = match copy {
+        None => None,
+        Some(c) => match as_u32_mut::<E, C>(c) {
+            Some(c) if c.len() == row.len() => Some(c),
+            _ => return false,
+        },
+    };
+    let mode = if first { Above::Zero } else { Above::InPlace };
+    row_u8_u32(Kernel::best(), t, &[], row, mode, copy);
+    true
+}
+
+fn as_u8<T: Texel>(s: &[T]) -> Option<&[u8]> {
+    if TypeId::of::<T>() == TypeId::of::<u8>() {
+        // SAFETY: T is u8 (TypeId equality): same layout, same length.
+        Some(unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u8>(), s.len()) })
+    } else {
+        None
+    }
+}
+
+fn as_u32<E: Entry>(s: &[E]) -> Option<&[u32]> {
+    if TypeId::of::<E>() == TypeId::of::<u32>() {
+        // SAFETY: E is u32 (TypeId equality): same layout, same length.
+        Some(unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u32>(), s.len()) })
+    } else {
+        None
+    }
+}
+
+fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
+    if C == 1 && TypeId::of::<E>() == TypeId::of::<u32>() {
+        // SAFETY: E is u32 (TypeId equality): same layout, same length; the borrow is moved.
+        Some(unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().cast::<u32>(), s.len()) })
+    } else {
+        None
+    }
+}
+
+/// One row with `kernel` (which must be [`Kernel::available`]); `above` is read only for
+/// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too.
+#[inline]
+fn row_u8_u32(
+    kernel: Kernel,
+    texels: &[u8],
+    above: &[u32],
+    out: &mut [u32],
+    mode: Above,
+    mut copy: Option<&mut [u32]>,
+) {
+    let mut n = out.len().min(texels.len());
+    if let Above::Slice = mode {
+        n = n.min(above.len());
+    }
+    if let Some(c) = &copy {
+        n = n.min(c.len());
+    }
+    let t = texels.as_ptr();
+    let o = out.as_mut_ptr();
+    let o2: *mut u32 = match &mut copy {
+        Some(c) => c.as_mut_ptr(),
+        None => core::ptr::null_mut(),
+    };
+    let a: *const u32 = match mode {
+        Above::Zero => core::ptr::null(),
+        Above::Slice => above.as_ptr(),
+        Above::InPlace => o.cast_const(),
+    };
+    // SAFETY: the CPU has the kernel's features (argument 1: every caller passes an available
+    // kernel); `t`, `a` (when read), `o` and `o2` (when written) are valid for `n` elements
+    // (argument 2) and alias only as argument 3 allows.
+    let run = unsafe {
+        match (mode, o2.is_null()) {
+            (Above::Zero, true) => kernel.run::<false, false>(t, a, o, o2, n),
+            (Above::Zero, false) => kernel.run::<false, true>(t, a, o, o2, n),
+            (Above::Slice | Above::InPlace, true) => kernel.run::<true, false>(t, a, o, o2, n),
+            (Above::Slice | Above::InPlace, false) => kernel.run::<true, true>(t, a, o, o2, n),
+        }
+    };
+    // The tail after the last full block, portable: the same two additions per entry.
+    let mut r = run;
+    for i in n - n % BLOCK..n {
+        r = r.wrapping_add(u32::from(texels[i]));
+        let up = match mode {
+            Above::Zero => 0,
+            Above::Slice => above.get(i).copied().unwrap_or(0),
+            Above::InPlace => out[i],
+        };
+        out[i] = r.wrapping_add(up);
+        if let Some(c) = &mut copy {
+            c[i] = out[i];
+        }
+    }
+}
+
+/// Lanes a kernel handles per step.
+const BLOCK: usize = 16;
+
+/// A build kernel: the widest one the CPU runs is chosen once, at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kernel {
+    /// SSE2: every x86-64 CPU.
+    Sse2,
+    /// AVX2.
+    Avx2,
+    /// AVX-512F with AVX-512 VNNI.
+    Avx512Vnni,
+}
+
+/// The detected kernel: 0 before the first detection, else `1 + Kernel as u8`.
+static DETECTED: AtomicU8 = AtomicU8::new(0);
+
+impl Kernel {
+    /// Every kernel, narrowest first.
+    #[cfg(test)]
+    pub(crate) const ALL: [Kernel; 3] = [Kernel::Sse2, Kernel::Avx2, Kernel::Avx512Vnni];
+
+    /// Its name, for benchmarks and reports.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Kernel::Sse2 => "sse2",
+            Kernel::Avx2 => "avx2",
+            Kernel::Avx512Vnni => "avx512vnni",
+        }
+    }
+
+    /// Whether this CPU (and its operating system, which must save the wider registers) runs
+    /// the kernel: CPUID and XGETBV, read once; under Miri, which cannot run CPUID, the target
+    /// features the build enables. (The tests run every available kernel.)
+    #[cfg(test)]
+    pub(crate) fn available(self) -> bool {
+        let best = Kernel::best();
+        match self {
+            Kernel::Sse2 => true,
+            Kernel::Avx2 => best != Kernel::Sse2,
+            Kernel::Avx512Vnni => best == Kernel::Avx512Vnni,
+        }
+    }
+
+    /// The widest kernel this CPU runs (detected on the first call, then cached: a relaxed
+    /// atomic, every thread detects the same).
+    #[inline]
+    pub(crate) fn best() -> Kernel {
+        match DETECTED.load(Ordering::Relaxed) {
+            1 => Kernel::Sse2,
+            2 => Kernel::Avx2,
+            3 => Kernel::Avx512Vnni,
+            _ => {
+                let k = detect();
+                DETECTED.store(1 + k as u8, Ordering::Relaxed);
+                k
+            }
+        }
+    }
+
+    /// Runs the kernel over the full blocks of a row.
+    ///
+    /// # Safety
+    /// `self` is [`Kernel::available`]; the pointers as the kernels require.
+    #[inline]
+    unsafe fn run<const ABOVE: bool, const COPY: bool>(
+        self,
+        t: *const u8,
+        a: *const u32,
+        o: *mut u32,
+        o2: *mut u32,
+        n: usize,
+    ) -> u32 {
+        // SAFETY: forwarded (the caller's contract).
+        unsafe {
+            match self {
+                Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+                Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+                Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+            }
+        }
+    }
+}
+
+/// The build kernel in use (detected at run time), for benchmarks and reports.
+pub fn kernel_name() -> &'static str {
+    Kernel::best().name()
+}
+
+/// CPUID leaf 1 ECX: OSXSAVE (27) and AVX (28); leaf 7 EBX: AVX2 (5), AVX-512F (16); leaf 7
+/// ECX: AVX-512 VNNI (11). XCR0: SSE and AVX state (bits 1, 2) for AVX2; also opmask and the
+/// upper ZMM state (5, 6, 7) for AVX-512. (Intel SDM vol. 1 §13.3 and §15.2, "Detection of
+/// AVX-512 instructions".)
+#[cfg(not(miri))]
+fn detect() -> Kernel {
+    let bit = |v: u32, b: u32| (v >> b) & 1 == 1;
+    let max_leaf = __cpuid(0).eax;
+    let l1 = __cpuid(1);
+    if max_leaf < 7 || !bit(l1.ecx, 27) || !bit(l1.ecx, 28) {
+        return Kernel::Sse2;
+    }
+    // SAFETY: OSXSAVE (checked above) means XGETBV is supported and enabled.
+    let xcr0 = unsafe { xgetbv0() };
+    let l7 = __cpuid_count(7, 0);
+    let ymm = xcr0 & 0b110 == 0b110;
+    let zmm = xcr0 & 0b1110_0110 == 0b1110_0110;
+    if zmm && bit(l7.ebx, 16) && bit(l7.ecx, 11) {
+        Kernel::Avx512Vnni
+    } else if ymm && bit(l7.ebx, 5) {
+        Kernel::Avx2
+    } else {
+        Kernel::Sse2
+    }
+}
+
+/// XCR0.
+///
+/// # Safety
+/// The CPU supports XGETBV (CPUID.1:ECX.OSXSAVE).
+#[cfg(not(miri))]
+#[target_feature(enable = "xsave")]
+unsafe fn xgetbv0() -> u64 {
+    _xgetbv(0)
+}
+
+/// Under Miri: the kernels the build's target features enable.
+#[cfg(miri)]
+fn detect() -> Kernel {
+    if cfg!(all(
+        target_feature = "avx512f",
+        target_feature = "avx512vnni"
+    )) {
+        Kernel::Avx512Vnni
+    } else if cfg!(target_feature = "avx2") {
+        Kernel::Avx2
+    } else {
+        Kernel::Sse2
+    }
+}
+
+mod sse2 {
+    use super::*;
+
+    /// Blocks of 16 while `i + 16 <= n`; returns the running sum after the last full block.
+    ///
+    /// # Safety
+    /// SSE2 (x86-64 baseline); `t`, `o`, (if `ABOVE`) `a` and (if `COPY`) `o2` valid for `n`
+    /// elements; `a` may equal `o` (each block reads before it writes); `o2` aliases nothing.
+    #[target_feature(enable = "sse2")]
+    pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
+        t: *const u8,
+        a: *const u32,
+        o: *mut u32,
+        o2: *mut u32,
+        n: usize,
+    ) -> u32 {
+        let zero = _mm_setzero_si128();
+        let mut carry = _mm_setzero_si128();
+        let mut i = 0;
+        while i + BLOCK <= n {
+            // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
+            unsafe {
+                let v = _mm_loadu_si128(t.add(i).cast());
+                let mut lo = _mm_unpacklo_epi8(v, zero);
+                let mut hi = _mm_unpackhi_epi8(v, zero);
+                lo = _mm_add_epi16(lo, _mm_slli_si128(lo, 2));
+                hi = _mm_add_epi16(hi, _mm_slli_si128(hi, 2));
+                lo = _mm_add_epi16(lo, _mm_slli_si128(lo, 4));
+                hi = _mm_add_epi16(hi, _mm_slli_si128(hi, 4));
+                lo = _mm_add_epi16(lo, _mm_slli_si128(lo, 8));
+                hi = _mm_add_epi16(hi, _mm_slli_si128(hi, 8));
+                // Lane 7 of the low half (its total) into every lane of the high half.
+                hi = _mm_add_epi16(hi, _mm_shuffle_epi32(_mm_shufflehi_epi16(lo, 0xff), 0xff));
+                let mut p = [
+                    _mm_add_epi32(_mm_unpacklo_epi16(lo, zero), carry),
+                    _mm_add_epi32(_mm_unpackhi_epi16(lo, zero), carry),
+                    _mm_add_epi32(_mm_unpacklo_epi16(hi, zero), carry),
+                    _mm_add_epi32(_mm_unpackhi_epi16(hi, zero), carry),
+                ];
+                carry = _mm_shuffle_epi32(p[3], 0xff);
+                if ABOVE {
+                    for (k, v) in p.iter_mut().enumerate() {
+                        *v = _mm_add_epi32(*v, _mm_loadu_si128(a.add(i + 4 * k).cast()));
+                    }
+                }
+                for (k, v) in p.iter().enumerate() {
+                    _mm_storeu_si128(o.add(i + 4 * k).cast(), *v);
+                    if COPY {
+                        _mm_storeu_si128(o2.add(i + 4 * k).cast(), *v);
+                    }
+                }
+            }
+            i += BLOCK;
+        }
+        _mm_cvtsi128_si32(carry) as u32
+    }
+}
+
+mod avx2 {
+    use super::*;
+
+    /// See the SSE2 kernel; one 16-lane vector of 16-bit prefix sums per block.
+    ///
+    /// # Safety
+    /// As the SSE2 kernel, with AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
+        t: *const u8,
+        a: *const u32,
+        o: *mut u32,
+        o2: *mut u32,
+        n: usize,
+    ) -> u32 {
+        let mut carry = _mm256_setzero_si256();
+        let last = _mm256_set1_epi32(7);
+        let mut i = 0;
+        while i + BLOCK <= n {
+            // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
+            unsafe {
+                let mut p = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+                p = _mm256_add_epi16(p, _mm256_slli_si256(p, 2));
+                p = _mm256_add_epi16(p, _mm256_slli_si256(p, 4));
+                p = _mm256_add_epi16(p, _mm256_slli_si256(p, 8));
+                // The low half's total (its lane 7) into every lane of the high half.
+                let b = _mm256_shuffle_epi32(_mm256_shufflehi_epi16(p, 0xff), 0xff);
+                p = _mm256_add_epi16(p, _mm256_permute2x128_si256(b, b, 0x08));
+                let mut lo =
+                    _mm256_add_epi32(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(p)), carry);
+                let mut hi =
+                    _mm256_add_epi32(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(p, 1)), carry);
+                carry = _mm256_permutevar8x32_epi32(hi, last);
+                if ABOVE {
+                    lo = _mm256_add_epi32(lo, _mm256_loadu_si256(a.add(i).cast()));
+                    hi = _mm256_add_epi32(hi, _mm256_loadu_si256(a.add(i + 8).cast()));
+                }
+                _mm256_storeu_si256(o.add(i).cast(), lo);
+                _mm256_storeu_si256(o.add(i + 8).cast(), hi);
+                if COPY {
+                    _mm256_storeu_si256(o2.add(i).cast(), lo);
+                    _mm256_storeu_si256(o2.add(i + 8).cast(), hi);
+                }
+            }
+            i += BLOCK;
+        }
+        _mm256_cvtsi256_si32(carry) as u32
+    }
+}
+
+mod avx512vnni {
+    use super::*;
+
+    /// The 0/1 weights of texel group `g` (texels `4g..4g + 4` of the block): byte `j` of lane
+    /// `k` is 1 when texel `4g + j` is at or before texel `k`, so
+    /// `sum_g dot(group g, weights g)` in lane `k` is the inclusive prefix sum up to `k`.
+    const fn weights(g: usize) -> [i32; 16] {
+        let mut w = [0i32; 16];
+        let mut k = 0;
+        while k < 16 {
+            let mut lane = 0u32;
+            let mut j = 0;
+            while j < 4 {
+                if 4 * g + j <= k {
+                    lane |= 1 << (8 * j);
+                }
+                j += 1;
+            }
+            w[k] = lane as i32;
+            k += 1;
+        }
+        w
+    }
+
+    const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
+
+    /// One `vpdpbusd` per group of 4 texels (unsigned texel bytes times signed 0/1 weights,
+    /// summed per 32-bit lane; each lane at most 16 x 255, far from any saturation).
+    ///
+    /// # Safety
+    /// As the SSE2 kernel, with AVX-512F and AVX-512 VNNI.
+    #[target_feature(enable = "avx512f,avx512vnni")]
+    pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
+        t: *const u8,
+        a: *const u32,
+        o: *mut u32,
+        o2: *mut u32,
+        n: usize,
+    ) -> u32 {
+        let w = W.map(|g| {
+            let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
+            _mm512_setr_epi32(
+                a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
+            )
+        });
+        let last = _mm512_set1_epi32(15);
+        let zero = _mm512_setzero_si512();
+        let mut carry = zero;
+        let mut i = 0;
+        while i + BLOCK <= n {
+            // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
+            unsafe {
+                let tp = t.add(i);
+                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
+                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                let mut v = _mm512_add_epi32(p, carry);
+                carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                if ABOVE {
+                    v = _mm512_add_epi32(v, _mm512_loadu_si512(a.add(i).cast()));
+                }
+                _mm512_storeu_si512(o.add(i).cast(), v);
+                if COPY {
+                    _mm512_storeu_si512(o2.add(i).cast(), v);
+                }
+            }
+            i += BLOCK;
+        }
+        _mm512_cvtsi512_si32(carry) as u32
+    }
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::unwrap_used,
+    clippy::panic,
+    reason = "tests: a panic is a failed test"
+)]
+mod tests {
+    use super::*;
+
+    /// The portable row (the reference): running sum plus the entry above.
+    fn reference(t: &[u8], above: Option<&[u32]>, out: &mut [u32]) {
+        let mut r = 0u32;
+        for (i, (o, &t)) in out.iter_mut().zip(t).enumerate() {
+            r = r.wrapping_add(u32::from(t));
+            *o = r.wrapping_add(above.map_or(0, |a| a[i]));
+        }
+    }
+
+    fn rng(seed: &mut u64) -> u8 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        (*seed >> 24) as u8
+    }
+
+    /// Every kernel this CPU runs (under Miri: those the build enables), every width up to 4
+    /// blocks and a tail, texels all 0, all 255, a ramp and random, rows above with large
+    /// entries (near u32::MAX, as a width-proved table can hold): separate, in place, in place
+    /// with a copy, and first row, against the reference. Then the same through the dispatching
+    /// entry points.
+    #[test]
+    fn rows_equal_the_portable_rows() {
+        const MAX: usize = 4 * BLOCK + 7;
+        let mut seed = 0x9e37_79b9_7f4a_7c15;
+        let mut ran = 0;
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
+            ran += 1;
+            for w in 0..=MAX {
+                for pattern in 0..4 {
+                    let mut t = [0u8; MAX];
+                    for (i, t) in t.iter_mut().enumerate() {
+                        *t = match pattern {
+                            0 => 0,
+                            1 => 255,
+                            2 => (i % 256) as u8,
+                            _ => rng(&mut seed),
+                        };
+                    }
+                    let t = &t[..w];
+                    let base = u32::MAX - 255 * 1024;
+                    let mut above = [0u32; MAX];
+                    for (i, a) in above.iter_mut().enumerate() {
+                        *a = base + 255 * i as u32;
+                    }
+                    let above = &above[..w];
+                    for a in [None, Some(above)] {
+                        let what = |how: &str| (kernel.name(), w, pattern, a.is_some(), how.len());
+                        let mut want = [0u32; MAX];
+                        reference(t, a, &mut want[..w]);
+                        // Separate rows.
+                        let mut got = [7u32; MAX];
+                        let mode = if a.is_some() {
+                            Above::Slice
+                        } else {
+                            Above::Zero
+                        };
+                        row_u8_u32(kernel, t, a.unwrap_or(&[]), &mut got[..w], mode, None);
+                        assert_eq!(got[..w], want[..w], "{:?}", what("separate"));
+                        assert!(got[w..].iter().all(|&v| v == 7), "wrote past the row");
+                        // In place, without and with a copy.
+                        let mut inplace = [7u32; MAX];
+                        if let Some(a) = a {
+                            inplace[..w].copy_from_slice(a);
+                        }
+                        let mode = if a.is_some() {
+                            Above::InPlace
+                        } else {
+                            Above::Zero
+                        };
+                        let mut again = inplace;
+                        row_u8_u32(kernel, t, &[], &mut inplace[..w], mode, None);
+                        assert_eq!(inplace[..w], want[..w], "{:?}", what("in place"));
+                        let mut copy = [9u32; MAX];
+                        let c = Some(&mut copy[..w]);
+                        row_u8_u32(kernel, t, &[], &mut again[..w], mode, c);
+                        assert_eq!(again[..w], want[..w], "{:?}", what("in place + copy"));
+                        assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
+                        assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
+                        // The dispatching entry points (the best kernel).
+                        let what =
+                            |how: &str| (Kernel::best().name(), w, pattern, a.is_some(), how.len());
+                        let mut got = [7u32; MAX];
+                        assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
+                        assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
+                        let mut inplace = [7u32; MAX];
+                        if let Some(a) = a {
+                            inplace[..w].copy_from_slice(a);
+                        }
+                        let first = a.is_none();
+                        assert!(build_row_in_place::<u8, u32, 1>(
+                            t,
+                            &mut inplace[..w],
+                            first,
+                            None
+                        ));
+                        assert_eq!(inplace[..w], want[..w], "{:?}", what("build_row_in_place"));
+                    }
+                }
+            }
+        }
+        assert!(ran >= 1 && Kernel::Sse2.available());
+    }
+
+    /// The detected kernel is available, and so is every narrower one.
+    #[test]
+    fn detection_is_consistent() {
+        let best = Kernel::best();
+        assert!(best.available());
+        assert_eq!(Kernel::best(), best, "cached");
+        let rank = |k: Kernel| Kernel::ALL.iter().position(|&x| x == k).unwrap();
+        for k in Kernel::ALL {
+            assert_eq!(k.available(), rank(k) <= rank(best), "{k:?}");
+        }
+        assert_eq!(kernel_name(), best.name());
+    }
+
+    /// Other types and channel counts are left to the portable path, untouched.
+    #[test]
+    fn other_types_are_declined() {
+        let mut out16 = [5u16; 20];
+        assert!(!build_row::<u8, u16, 1>(&[1; 20], None, &mut out16));
+        assert_eq!(out16, [5; 20]);
+        let mut out32 = [5u32; 20];
+        assert!(!build_row::<u16, u32, 1>(&[1; 20], None, &mut out32));
+        assert!(!build_row::<u8, u32, 2>(&[1; 20], None, &mut out32));
+        assert_eq!(out32, [5; 20]);
+    }
+}

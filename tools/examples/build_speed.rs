@@ -1,0 +1,278 @@
+//! Build-speed bench server (issue 13): times table builds of a square `u8` texture into `u32`
+//! entries, one at a time on request, so that a driver can interleave them with builds it times
+//! itself (OpenCV in `tools/examples/build_speed.py`, which starts this binary).
+//!
+//! Protocol: one request per line on stdin, `<method> <side>`; the answer is one line on stdout,
+//! the wall time of that one build in nanoseconds per texel. `methods` lists the methods;
+//! `kernel` names the build kernel compiled in ([`texsat::build_kernel`]); `dump <side> <file>`
+//! writes the texture's bytes to a file (the driver times OpenCV on the same texels). Every method's table
+//! is compared with `Sat::build`'s (or, for the layouts, their corners with its entries) before
+//! its first timing. Storage is allocated and touched once per side and reused.
+//!
+//! Methods:
+//! * `floor`: the widen-copy floor, `out[i] = u32::from(texel[i])` (reads 1 byte and writes 4 per
+//!   texel, as any build must; the compiler vectorizes it).
+//! * `build`: `Sat::build`; `checked`: `Sat::build_checked` (every addition checked).
+//! * `stream`: `RowStreamBuilder::push_row`, each finished row copied into the table (as a caller
+//!   keeping the table would); `stream_nocopy`: the same without the copy; `stream_into`:
+//!   `RowStreamBuilder::push_row_into`, which writes each row into the table in the same pass.
+//! * `tiled`: `Tiled::build` with 8 x 8 tiles; `modular`: `Modular::build` with the modulus for
+//!   65 x 65 boxes of 8-bit texels.
+//! * `imageproc`: `imageproc::integral_image::integral_image` (allocates its (w+1) x (h+1)
+//!   output every call).
+//! * `parallel` (feature `parallel`): `texsat_tools::parallel::build_parallel`, the strip build
+//!   on rayon's pool (all cores); `strips_seq`: `Sat::build_strips` with 4 strips run one after
+//!   the other on the calling thread (the strip build's own cost: column sums and carries).
+//!
+//! Run it through the driver: `python3 tools/examples/build_speed.py` (see there).
+
+use std::collections::HashMap;
+use std::hint::black_box;
+use std::io::{BufRead, Write};
+use std::time::Instant;
+
+use image::GrayImage;
+use texsat::layouts::{modulus_bits_for, Modular, Tiled, TiledSpec};
+use texsat::{NoCount, RowStreamBuilder, Sat, Texture};
+
+const METHODS: &[&str] = &[
+    "floor",
+    "build",
+    "checked",
+    "stream",
+    "stream_nocopy",
+    "stream_into",
+    "tiled",
+    "modular",
+    "imageproc",
+    "strips_seq",
+    #[cfg(feature = "parallel")]
+    "parallel",
+];
+
+/// The widen-copy floor.
+#[inline(never)]
+fn floor(t: &[u8], out: &mut [u32]) {
+    for (o, t) in out.iter_mut().zip(t) {
+        *o = u32::from(*t);
+    }
+}
+
+/// One side's texture and reused storage.
+struct Case {
+    side: usize,
+    tex: Vec<u8>,
+    gray: GrayImage,
+    reference: Vec<u32>,
+    table: Vec<u32>,
+    row: Vec<u32>,
+    spec: TiledSpec,
+    words: Vec<u32>,
+    scratch: Vec<u32>,
+    k: u32,
+    mwords: Vec<u32>,
+    checked: HashMap<&'static str, bool>,
+}
+
+impl Case {
+    fn new(side: usize) -> Self {
+        // xorshift64 noise, uniform bytes (the same generator as benches/sat.rs's texels).
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let tex: Vec<u8> = (0..side * side)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                (s >> 24) as u8
+            })
+            .collect();
+        let gray = GrayImage::from_raw(side as u32, side as u32, tex.clone()).expect("image");
+        let mut reference = vec![0u32; side * side];
+        let texture = Texture::<u8>::new(&tex, side, side).expect("texture");
+        Sat::build(&texture, &mut reference).expect("build");
+        let spec = TiledSpec::tiles(8, 8).expect("spec");
+        let words = vec![0u32; Tiled::<u32>::words_needed(spec, side, side, 8).expect("words")];
+        let scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, side).expect("scratch")];
+        let k = modulus_bits_for(8, 65 * 65);
+        let mwords = vec![0u32; Modular::<u32>::words_needed(side, side, k).expect("words")];
+        Case {
+            side,
+            tex,
+            gray,
+            reference,
+            table: vec![1u32; side * side],
+            row: vec![1u32; side],
+            spec,
+            words,
+            scratch,
+            k,
+            mwords,
+            checked: HashMap::new(),
+        }
+    }
+
+    /// Runs `method` once; checks its output against the reference the first time.
+    fn run(&mut self, method: &str) -> f64 {
+        let n = self.side;
+        let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
+        let start = Instant::now();
+        match method {
+            "floor" => floor(black_box(&self.tex), black_box(&mut self.table)),
+            "build" => {
+                Sat::build(&texture, black_box(&mut self.table)).expect("build");
+            }
+            "checked" => {
+                Sat::build_checked(&texture, black_box(&mut self.table)).expect("build");
+            }
+            "stream" | "stream_nocopy" => {
+                let copy = method == "stream";
+                let mut b = RowStreamBuilder::<u32>::new(n, n, 8, &mut self.row).expect("stream");
+                for (src, dst) in self.tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
+                    let row = b.push_row(src).expect("push_row");
+                    if copy {
+                        dst.copy_from_slice(row);
+                    }
+                }
+                black_box(b.finish().expect("finish"));
+            }
+            "stream_into" => {
+                let mut b = RowStreamBuilder::<u32>::new(n, n, 8, &mut self.row).expect("stream");
+                for (src, dst) in self.tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
+                    b.push_row_into(src, dst).expect("push_row_into");
+                }
+                black_box(b.finish().expect("finish"));
+            }
+            "tiled" => {
+                black_box(
+                    Tiled::<u32>::build(&texture, self.spec, &mut self.words, &mut self.scratch)
+                        .expect("tiled"),
+                );
+            }
+            "modular" => {
+                black_box(
+                    Modular::<u32>::build(&texture, self.k, &mut self.mwords, &mut self.row)
+                        .expect("modular"),
+                );
+            }
+            "imageproc" => {
+                black_box(imageproc::integral_image::integral_image::<_, u32>(
+                    &self.gray,
+                ));
+            }
+            "strips_seq" => {
+                Sat::build_strips(&texture, black_box(&mut self.table), 4, |jobs| {
+                    jobs.iter_mut().for_each(|j| j.run())
+                })
+                .expect("strips");
+            }
+            #[cfg(feature = "parallel")]
+            "parallel" => {
+                texsat_tools::parallel::build_parallel(&texture, black_box(&mut self.table))
+                    .expect("parallel");
+            }
+            other => panic!("unknown method {other}"),
+        }
+        let ns = start.elapsed().as_nanos() as f64 / (n * n) as f64;
+        let key = METHODS
+            .iter()
+            .find(|m| **m == method)
+            .copied()
+            .expect("method");
+        if !self.checked.contains_key(key) {
+            self.check(method);
+            self.checked.insert(key, true);
+        }
+        ns
+    }
+
+    fn check(&mut self, method: &str) {
+        let n = self.side;
+        let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
+        match method {
+            "floor" | "stream_nocopy" => {}
+            "build" | "checked" | "stream" | "stream_into" | "strips_seq" | "parallel" => {
+                assert!(self.table == self.reference, "{method}: table differs");
+            }
+            "tiled" => {
+                let t =
+                    Tiled::<u32>::build(&texture, self.spec, &mut self.words, &mut self.scratch)
+                        .expect("tiled");
+                use texsat::Layout;
+                let get = |x, y| t.corner(x, y, &mut NoCount)[0];
+                check_corners(&self.reference, n, u32::MAX, get, method);
+            }
+            "modular" => {
+                use texsat::Layout;
+                let m = Modular::<u32>::build(&texture, self.k, &mut self.mwords, &mut self.row)
+                    .expect("modular");
+                let mask = if self.k >= 32 {
+                    u32::MAX
+                } else {
+                    (1 << self.k) - 1
+                };
+                let get = |x, y| m.corner(x, y, &mut NoCount)[0];
+                check_corners(&self.reference, n, mask, get, method);
+            }
+            "imageproc" => {
+                let ip = imageproc::integral_image::integral_image::<_, u32>(&self.gray);
+                for y in 0..n {
+                    let row = &ip.as_raw()[(y + 1) * (n + 1) + 1..(y + 2) * (n + 1)];
+                    assert!(
+                        row == &self.reference[y * n..(y + 1) * n],
+                        "imageproc row {y}"
+                    );
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Compares a layout's corners `S(x, y)` (via `get`, modulo `mask + 1` for a modular layout)
+/// with the flat table on a grid of rows and columns (every 7th, and the last).
+fn check_corners(
+    reference: &[u32],
+    n: usize,
+    mask: u32,
+    get: impl Fn(usize, usize) -> u32,
+    what: &str,
+) {
+    let idx = |v: usize| (1..=n).filter(move |i| i % 7 == 0 || *i == v);
+    for y in idx(n) {
+        for x in idx(n) {
+            let want = reference[(y - 1) * n + (x - 1)] & mask;
+            let got = get(x, y) & mask;
+            assert!(got == want, "{what}: S({x}, {y}) {got} != {want}");
+        }
+    }
+}
+
+fn main() {
+    let stdin = std::io::stdin();
+    let mut stdout = std::io::stdout().lock();
+    let mut cases: HashMap<usize, Case> = HashMap::new();
+    for line in stdin.lock().lines() {
+        let line = line.expect("stdin");
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let answer = match words.as_slice() {
+            ["methods"] => METHODS.join(" "),
+            ["kernel"] => texsat::build_kernel().to_string(),
+            ["path"] => std::env::current_exe().expect("exe").display().to_string(),
+            ["dump", side, path] => {
+                let side: usize = side.parse().expect("side");
+                let case = cases.entry(side).or_insert_with(|| Case::new(side));
+                std::fs::write(path, &case.tex).expect("write texture");
+                "ok".to_string()
+            }
+            [method, side] => {
+                let side: usize = side.parse().expect("side");
+                let case = cases.entry(side).or_insert_with(|| Case::new(side));
+                format!("{}", case.run(method))
+            }
+            [] => continue,
+            _ => panic!("bad request {line:?}"),
+        };
+        writeln!(stdout, "{answer}").expect("stdout");
+        stdout.flush().expect("stdout");
+    }
+}
