@@ -14,6 +14,10 @@
 //! Units: a fixed-point coordinate with `F` fractional bits is the integer `raw = value * 2^F`;
 //! exact box integrals are returned scaled by `2^2F` (the product of two raw lengths), which is
 //! exactly the unit of [`texsat::BoxSum::scaled_sum`].
+// A host-only package: on a bare-metal target (the workspace root's default members, built
+// with `--target thumbv7em-none-eabihf`) the library is empty and `no_std`.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg(not(target_os = "none"))]
 #![warn(missing_docs)]
 
 pub mod crow_literal;

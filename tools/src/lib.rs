@@ -5,6 +5,10 @@
 //! image reading under decoder limits (header first, samples after the budget check), and
 //! [`cache`], the memory-traffic and texel-cache models of a hardware texture unit. With the
 //! feature `parallel`, `parallel` builds large tables on all cores.
+// A host-only package: on a bare-metal target (the workspace root's default members, built
+// with `--target thumbv7em-none-eabihf`) the library is empty and `no_std`.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg(not(target_os = "none"))]
 
 pub mod budget;
 pub mod cache;
