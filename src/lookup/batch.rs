@@ -11,15 +11,12 @@
 //! reads between neighbouring boxes: footprints of a perspective scene overlap without sharing
 //! exact corners.
 
-use super::{
-    check_acc, check_modular, in_range_wide_inline, split, sum_int, BoxLookup, BoxSum, Form, WideOf,
-};
+use super::{check_acc, sum_int, sum_raw_with, BoxLookup, BoxSum, Form, WideOf};
 use crate::cost::Counter;
-use crate::edge::{place_axis, width_u64, AxisPlan, EdgeMode};
+use crate::edge::EdgeMode;
 use crate::error::Error;
 use crate::layouts::Layout;
-use crate::rect::{FracBits, RawBox, Rect};
-use crate::wide::Wide;
+use crate::rect::{FracBits, Rect};
 
 /// Box lookups over a slice of boxes: implemented for every layout.
 pub trait BatchLookup<const C: usize>: BoxLookup<C> {
@@ -41,7 +38,7 @@ pub trait BatchLookup<const C: usize>: BoxLookup<C> {
         let acc = check_acc(self, form, f);
         let mut n = 0usize;
         for (r, o) in rects.iter().zip(out.iter_mut()) {
-            *o = one_raw(self, r, f, form, mode, acc, k);
+            *o = sum_raw_with::<Self, Fm, M, K, _, C, true>(self, r, f, form, mode, || acc, k);
             n = n.saturating_add(1);
         }
         n
@@ -67,47 +64,3 @@ pub trait BatchLookup<const C: usize>: BoxLookup<C> {
 }
 
 impl<const C: usize, L: Layout<C>> BatchLookup<C> for L {}
-
-/// `sum_raw` with the accumulator check's result given and the in-range lookup inlined.
-#[inline(always)]
-fn one_raw<L: Layout<C>, Fm: Form, M: EdgeMode, K: Counter, const C: usize>(
-    layout: &L,
-    r: &Rect<i64>,
-    f: u32,
-    form: Fm,
-    mode: M,
-    acc: Result<(), Error>,
-    k: &mut K,
-) -> Result<BoxSum<WideOf<L, C>, C>, Error> {
-    if r.x1 < r.x0 || r.y1 < r.y0 {
-        return Err(Error::InvertedBox);
-    }
-    let mut out = BoxSum {
-        sums: [<WideOf<L, C> as Wide>::ZERO; C],
-        frac_bits: f,
-        width_raw: width_u64(r.x0, r.x1),
-        height_raw: width_u64(r.y0, r.y1),
-    };
-    if out.width_raw == 0 || out.height_raw == 0 {
-        return Ok(out);
-    }
-    let kind = mode.kind();
-    let px = place_axis(kind, r.x0, r.x1, layout.width(), f)?;
-    let py = place_axis(kind, r.y0, r.y1, layout.height(), f)?;
-    match (px, py) {
-        (AxisPlan::Empty, _) | (_, AxisPlan::Empty) => {}
-        (AxisPlan::InRange(x0, x1), AxisPlan::InRange(y0, y1)) => {
-            let b = RawBox { x0, y0, x1, y1 };
-            let placed = Rect::new(x0, y0, x1, y1);
-            check_modular(layout, &placed, f, form.modular_headroom_bits(f))?;
-            acc?;
-            out.sums = in_range_wide_inline(layout, &b, f, form, k)?;
-        }
-        (px, py) => {
-            check_modular(layout, r, f, form.modular_headroom_bits(f))?;
-            acc?;
-            out.sums = split::sum(layout, px, py, f, form, mode, k)?;
-        }
-    }
-    Ok(out)
-}

@@ -643,6 +643,42 @@ pub(crate) fn sum_raw<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const
     mode: M,
     k: &mut K,
 ) -> Result<BoxSum<WideOf<L, C>, C>, Error> {
+    sum_raw_with::<L, Fm, M, K, _, C, false>(
+        layout,
+        r,
+        f,
+        form,
+        mode,
+        || check_acc(layout, form, f),
+        k,
+    )
+}
+
+/// [`sum_raw`] with the accumulator check given as `acc` (evaluated only where a box needs it,
+/// so errors come in the same order; the batch passes the result it computed once), and with
+/// `INLINE` the in-range lookup inlined into the caller instead of its one out-of-line copy.
+#[inline(always)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "sum_raw's arguments plus the acc check"
+)]
+pub(crate) fn sum_raw_with<
+    L: Layout<C>,
+    Fm: FormImpl,
+    M: EdgeMode,
+    K: Counter,
+    A: Fn() -> Result<(), Error>,
+    const C: usize,
+    const INLINE: bool,
+>(
+    layout: &L,
+    r: &Rect<i64>,
+    f: u32,
+    form: Fm,
+    mode: M,
+    acc: A,
+    k: &mut K,
+) -> Result<BoxSum<WideOf<L, C>, C>, Error> {
     if r.x1 < r.x0 || r.y1 < r.y0 {
         return Err(Error::InvertedBox);
     }
@@ -664,12 +700,16 @@ pub(crate) fn sum_raw<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const
             let b = RawBox { x0, y0, x1, y1 };
             let placed = Rect::new(x0, y0, x1, y1);
             check_modular(layout, &placed, f, form.modular_headroom_bits(f))?;
-            check_acc(layout, form, f)?;
-            out.sums = in_range_wide(layout, &b, f, form, k)?;
+            acc()?;
+            out.sums = if INLINE {
+                in_range_wide_inline(layout, &b, f, form, k)?
+            } else {
+                in_range_wide(layout, &b, f, form, k)?
+            };
         }
         (px, py) => {
             check_modular(layout, r, f, form.modular_headroom_bits(f))?;
-            check_acc(layout, form, f)?;
+            acc()?;
             out.sums = split::sum(layout, px, py, f, form, mode, k)?;
         }
     }
