@@ -25,6 +25,11 @@ pub enum Quantity {
     ModularBox,
     /// A field of a packed layout.
     Field,
+    /// The rounded mean itself, for [`crate::BoxSum::mean_rounded_u32`]: it must fit 32 bits.
+    Mean,
+    /// The mean's divisor, the box's area in units of `2^-2F`, for
+    /// [`crate::BoxSum::mean_rounded_u32`]: it must fit 32 bits (one hardware divide step).
+    MeanArea,
 }
 
 /// Why a build or a lookup was refused.
@@ -152,6 +157,8 @@ impl fmt::Display for Quantity {
             Quantity::MeanNumerator => "mean numerator",
             Quantity::ModularBox => "box sum on the modular layout",
             Quantity::Field => "packed field",
+            Quantity::Mean => "32-bit mean",
+            Quantity::MeanArea => "32-bit mean's area",
         })
     }
 }

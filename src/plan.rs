@@ -53,6 +53,10 @@
 //!    table's bits).
 //! 3. The smallest table wins (fewest bytes; on a tie, fewest reads, then the earlier in the list
 //!    above). Every other candidate is listed in [`Plan::rejected`] with its reason.
+//! 4. The mean's word: [`Plan::mean_fits_u32`] when the largest box's area (in units of
+//!    `2^-2F`) and the largest mean (`(2^b - 1) 2^g`) both fit 32 bits; then
+//!    [`crate::BoxSum::mean_rounded_u32`] answers every box of the scene with one 64-by-32-bit
+//!    division, and a firmware that calls it links none of the wide mean's fallbacks.
 //!
 //! Costs are worst cases per sample (all channels): reads of table values (a tiled corner reads
 //! up to 4 fields, each counted), multiplies, divides and additive operations as the lookups
@@ -428,6 +432,7 @@ pub struct Plan {
     table_bytes: u64,
     costs: PlanCosts,
     max_error: (u64, u64),
+    mean_fits_u32: bool,
     rejected: [Option<Rejection>; MAX_CANDIDATES],
 }
 
@@ -525,6 +530,7 @@ impl Plan {
             table_bytes: chosen.bytes,
             costs: chosen.costs,
             max_error: max_error(facts, lookup),
+            mean_fits_u32: mean_fits_u32(facts),
             rejected,
         })
     }
@@ -597,6 +603,15 @@ impl Plan {
     /// `(1, 2)` for the exact lookups.
     pub const fn max_error(&self) -> (u64, u64) {
         self.max_error
+    }
+
+    /// Whether [`crate::BoxSum::mean_rounded_u32`] answers every box of the facts: the largest
+    /// box's area `W H` (in units of `2^-2F`) and the largest mean `(2^b - 1) 2^g` both fit 32
+    /// bits (then the numerator, at most `(2^b - 1) W H 2^g`, fits 64). A firmware calls it
+    /// instead of [`crate::BoxSum::mean_rounded`] (the same value) and leaves out the wide
+    /// mean's fallbacks (about 1 KiB on a Cortex-M4, docs/firmware.md); otherwise the wide mean.
+    pub const fn mean_fits_u32(&self) -> bool {
+        self.mean_fits_u32
     }
 
     /// The cargo features the firmware needs for this plan: none (box lookups, every layout
@@ -766,6 +781,20 @@ const fn shortcut_error(f: &SceneFacts) -> Option<(u64, u64)> {
         return None;
     };
     Some((num, den2))
+}
+
+/// [`Plan::mean_fits_u32`]: `W H < 2^32` for the largest box and `b + g <= 32`.
+const fn mean_fits_u32(f: &SceneFacts) -> bool {
+    let [w, h] = f.max_box;
+    let area_fits = match w.checked_mul(h) {
+        Some(a) => a <= 0xFFFF_FFFF,
+        None => false,
+    };
+    let mean_fits = match 32u32.checked_sub(f.texel_bits) {
+        Some(room) => f.mean_frac_bits <= room,
+        None => false,
+    };
+    area_fits && mean_fits
 }
 
 const fn max_error(f: &SceneFacts, lookup: PlanLookup) -> (u64, u64) {

@@ -37,6 +37,8 @@ pub trait Wide:
     /// `round(self * 2^g / (w * h))`, ties up; `w, h >= 1`. Refuses (as
     /// [`Quantity::MeanNumerator`]) a result that does not fit the word.
     fn div_round_area(self, g: u32, w: u64, h: u64) -> Result<Self, Error>;
+    /// The value as `u64`, if it fits.
+    fn to_u64(self) -> Option<u64>;
 }
 
 mod sealed {
@@ -165,6 +167,94 @@ fn div_round_long(num: u64, g: u32, w: u64, h: u64) -> Result<u64, Error> {
     Ok(q)
 }
 
+/// `round(n * 2^g / (w * h))`, ties up, as a 32-bit word: the mean of
+/// [`crate::BoxSum::mean_rounded_u32`]. `w, h >= 1` (the caller checks).
+///
+/// Only the narrow case exists here: the numerator `n 2^g` fits 64 bits, the area `w h` fits 32
+/// bits and so does the rounded quotient. Then the quotient and remainder come from one
+/// 64-by-32-bit division ([`crate::div::div_u64_by_u32`]: two hardware 32-bit divides on a
+/// 32-bit core, one instruction on a 64-bit host) and the rounding is one comparison,
+/// `r >= area - r` (that is `2 r >= area` without forming `2 r`). Anything wider is refused with
+/// the quantity and the bits it needs, so the general fallbacks of [`Wide::div_round_area`]
+/// (a 64-bit divisor, restoring long division) are never linked into a firmware that calls only
+/// this: a plan whose facts keep every box's area and mean below `2^32`
+/// ([`crate::plan::Plan::mean_fits_u32`]) uses it.
+#[inline]
+pub(crate) fn div_round_area_u32<W: Wide>(n: W, g: u32, w: u64, h: u64) -> Result<u32, Error> {
+    narrow_round_area(n, g, w, h).ok_or_else(|| refuse_u32(n, g, w, h))
+}
+
+/// The narrow case of [`div_round_area_u32`] inline with no bit counting (`None` past it: the
+/// cold [`refuse_u32`] then works out which quantity and how many bits).
+#[inline(always)]
+#[allow(clippy::arithmetic_side_effects, reason = "r < area, so area - r >= 1")]
+fn narrow_round_area<W: Wide>(n: W, g: u32, w: u64, h: u64) -> Option<u32> {
+    let n = n.to_u64()?;
+    if n == 0 {
+        return Some(0);
+    }
+    // `n << g` keeps every bit: g < 64 and the top g bits are zero.
+    if g >= 64 || n.leading_zeros() < g {
+        return None;
+    }
+    let num = n << g;
+    let area = u32::try_from(w).ok()?.checked_mul(u32::try_from(h).ok()?)?;
+    #[cfg(any(not(target_pointer_width = "64"), test))]
+    let (q, r) = crate::div::div_u64_by_u32(num, area)?;
+    #[cfg(all(target_pointer_width = "64", not(test)))]
+    let (q, r) = div_u64_native(num, u64::from(area))?;
+    if r >= area - r {
+        q.checked_add(1)
+    } else {
+        Some(q)
+    }
+}
+
+/// `(n / d, n % d)` as 32-bit words by the host's native 64-bit division; `None` for `d = 0`
+/// or a quotient past 32 bits.
+#[cfg(all(target_pointer_width = "64", not(test)))]
+#[inline(always)]
+fn div_u64_native(n: u64, d: u64) -> Option<(u32, u32)> {
+    let d = core::num::NonZeroU64::new(d)?;
+    Some((u32::try_from(n / d).ok()?, u32::try_from(n % d).ok()?))
+}
+
+/// Why [`div_round_area_u32`] refuses `n 2^g / (w h)`: the numerator past 64 bits, else the
+/// area past 32 bits, else the rounded mean past 32 bits, with the bits each needs (for the
+/// mean a lower bound: the quotient is at least `2^(bits(n 2^g) - 1 - bits(area))`, so it needs
+/// at least `bits(n 2^g) - bits(area)` bits, and 33 once it does not fit).
+#[cold]
+#[inline(never)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "bits64 <= 64 and g < 64 (checked first) in the sums of bit counts; w, h >= 1 (the \
+              caller checks), so bits64(w) + bits64(h) >= 2"
+)]
+fn refuse_u32<W: Wide>(n: W, g: u32, w: u64, h: u64) -> Error {
+    let too = |what, bits_needed: u32| Error::TooWide {
+        what,
+        bits_needed,
+        bits_available: 32,
+    };
+    let Some(n) = n.to_u64() else {
+        return too_wide(n.bits().saturating_add(g), 64);
+    };
+    if g >= 64 || bits64(n) + g > 64 {
+        return too_wide(bits64(n).saturating_add(g), 64);
+    }
+    let (Ok(w32), Ok(h32)) = (u32::try_from(w), u32::try_from(h)) else {
+        return too(Quantity::MeanArea, bits64(w) + bits64(h) - 1);
+    };
+    let area = u64::from(w32) * u64::from(h32);
+    if area > u64::from(u32::MAX) {
+        return too(Quantity::MeanArea, bits64(area));
+    }
+    too(
+        Quantity::Mean,
+        bits64(n << g).saturating_sub(bits64(area)).max(33),
+    )
+}
+
 impl Wide for u64 {
     const BITS: u32 = 64;
     const ZERO: Self = 0;
@@ -183,6 +273,10 @@ impl Wide for u64 {
     #[inline(always)]
     fn checked_add(self, o: Self) -> Option<Self> {
         u64::checked_add(self, o)
+    }
+    #[inline(always)]
+    fn to_u64(self) -> Option<u64> {
+        Some(self)
     }
     #[inline]
     #[allow(
@@ -254,6 +348,10 @@ impl Wide for u128 {
     #[inline(always)]
     fn checked_add(self, o: Self) -> Option<Self> {
         u128::checked_add(self, o)
+    }
+    #[inline(always)]
+    fn to_u64(self) -> Option<u64> {
+        u64::try_from(self).ok()
     }
     #[allow(
         clippy::arithmetic_side_effects,
@@ -507,5 +605,105 @@ mod tests {
         assert_eq!(u64::MAX.div_round_area(64, u64::MAX, u64::MAX), Ok(1));
         assert!(u64::MAX.div_round_area(8, 1, 1).is_err());
         assert_eq!(0u64.div_round_area(200, 1, 1), Ok(0));
+    }
+
+    /// The 32-bit mean: equal to the reference wherever the numerator fits 64 bits and the area
+    /// and the rounded mean fit 32 bits, refused (with the quantity that does not fit) exactly
+    /// where one of them does not.
+    fn check_u32(num: u64, g: u32, w: u64, h: u64) {
+        let got = div_round_area_u32(num, g, w, h);
+        let n_fits = num == 0 || (g < 64 && 64 - num.leading_zeros() + g <= 64);
+        let area = w as u128 * h as u128;
+        let want = reference(num, g, w, h);
+        if num == 0 {
+            assert_eq!(got, Ok(0));
+        } else if !n_fits {
+            assert!(
+                matches!(
+                    got,
+                    Err(Error::TooWide {
+                        what: Quantity::MeanNumerator,
+                        ..
+                    })
+                ),
+                "{num} {g} {w} {h}: {got:?}"
+            );
+        } else if area > u32::MAX as u128 {
+            assert!(
+                matches!(got, Err(Error::TooWide { what: Quantity::MeanArea, bits_needed, bits_available: 32 }) if bits_needed > 32),
+                "{num} {g} {w} {h}: {got:?}"
+            );
+        } else {
+            match want {
+                Some(v) if v <= u32::MAX as u128 => {
+                    assert_eq!(got, Ok(v as u32), "{num} {g} {w} {h}")
+                }
+                _ => assert!(
+                    matches!(got, Err(Error::TooWide { what: Quantity::Mean, bits_needed, bits_available: 32 }) if bits_needed > 32),
+                    "{num} {g} {w} {h}: {got:?}"
+                ),
+            }
+        }
+        // Where it answers, the general mean answers the same.
+        if let Ok(v) = got {
+            assert_eq!(num.div_round_area(g, w, h), Ok(u64::from(v)));
+        }
+    }
+
+    #[test]
+    fn u32_mean_exhaustive_small() {
+        // Under Miri (about 10^4 times slower) a coarse grid.
+        let (nums, step) = if cfg!(miri) { (40u64, 7) } else { (300, 1) };
+        for num in (0..nums).step_by(step) {
+            for g in 0..6 {
+                for w in 1..=20 {
+                    for h in (1..=20).step_by(step) {
+                        check_u32(num, g, w, h);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn u32_mean_random_and_edges() {
+        let mut s = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let cases = if cfg!(miri) { 300 } else { 50_000 };
+        for _ in 0..cases {
+            let num = next() >> (next() % 64);
+            let g = (next() % 40) as u32;
+            let w = (next() >> (next() % 64)).max(1);
+            let h = (next() >> (next() % 64)).max(1);
+            check_u32(num, g, w, h);
+        }
+        let max = u64::from(u32::MAX);
+        for (num, g, w, h) in [
+            (max, 0, 1, 1),           // the largest mean
+            (max, 1, 2, 1),           // the same, scaled
+            (2 * max, 0, 2, 1),       // 2^33 - 2 over 2: fits
+            (2 * max + 1, 0, 2, 1),   // a tie just above 2^32 - 1: refused
+            (max, 0, max, 1),         // the largest area
+            (max, 0, 65_536, 65_536), // area 2^32: refused
+            (1, 0, 1 << 32, 1),       // a side past 32 bits
+            (u64::MAX, 0, max, max),  // the numerator at 64 bits
+            (u64::MAX, 1, max, max),  // ... and one past
+        ] {
+            check_u32(num, g, w, h);
+        }
+        // A u128 sum past 64 bits is refused as the numerator.
+        assert!(matches!(
+            div_round_area_u32(1u128 << 64, 0, 1, 1),
+            Err(Error::TooWide {
+                what: Quantity::MeanNumerator,
+                ..
+            })
+        ));
+        assert_eq!(div_round_area_u32(1000u128, 3, 10, 10), Ok(80));
     }
 }

@@ -127,12 +127,50 @@ fn check_fixed<X: Fixed + Coord, T: RefTexel, E: Entry, const C: usize>(
                     b
                 );
                 prop_assert_eq!(all[c].into(), m);
+                check_mean_u32(&p, c, g, sum, area, m)?;
             }
             prop_assert_eq!(
                 p.mean_rounded(C, g, &mut NoCount),
                 Err(Error::NoSuchChannel)
             );
         }
+    }
+    Ok(())
+}
+
+/// `mean_rounded_u32` gives `mean_rounded`'s value `m` where the numerator `sum 2^g` fits 64
+/// bits and the area and `m` fit 32 bits, and otherwise refuses with the quantity that does not
+/// fit (the numerator first, then the area, then the mean).
+fn check_mean_u32<W: texsat::wide::Wide, const C: usize>(
+    p: &texsat::BoxSum<W, C>,
+    c: usize,
+    g: u32,
+    sum: u128,
+    area: u128,
+    m: u128,
+) -> Result<(), TestCaseError> {
+    let got = p.mean_rounded_u32(c, g, &mut NoCount);
+    let numerator_fits = sum == 0 || bits_of(sum) + g <= 64;
+    let what = if !numerator_fits {
+        Some(Quantity::MeanNumerator)
+    } else if sum != 0 && area > u128::from(u32::MAX) {
+        Some(Quantity::MeanArea)
+    } else if m > u128::from(u32::MAX) {
+        Some(Quantity::Mean)
+    } else {
+        None
+    };
+    match what {
+        None => prop_assert_eq!(got, Ok(m as u32)),
+        Some(q) => prop_assert!(
+            matches!(got, Err(Error::TooWide { what, bits_needed, .. }) if what == q && bits_needed > if q == Quantity::MeanNumerator { 64 } else { 32 }),
+            "{:?} for sum {} area {} g {}: {:?}",
+            q,
+            sum,
+            area,
+            g,
+            got
+        ),
     }
     Ok(())
 }
@@ -205,6 +243,7 @@ fn check_int<T: RefTexel, E: Entry, const C: usize>(
         if area > 0 {
             let m = got.mean_rounded(0, g, &mut NoCount).unwrap();
             prop_assert!(is_rounded_mean(want[0], area, g, m.into()));
+            check_mean_u32(&got, 0, g, want[0], area, m.into())?;
         }
     }
     Ok(())

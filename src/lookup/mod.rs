@@ -22,6 +22,7 @@
 )]
 
 mod batch;
+mod clamp_int;
 mod corners4;
 mod paper;
 mod shortcut;
@@ -261,6 +262,33 @@ impl<W: Wide, const C: usize> BoxSum<W, C> {
         k.muls(1);
         k.divs(1);
         s.div_round_area(out_frac_bits, self.width_raw, self.height_raw)
+    }
+
+    /// [`BoxSum::mean_rounded`] as a 32-bit word, for firmware whose boxes keep the area and the
+    /// mean narrow: the same value, `round(sum * 2^g / area)` with ties up, computed by one
+    /// 64-by-32-bit division (two hardware divides on a Cortex-M3/M4, no library routine), and
+    /// refused as [`Error::TooWide`] where [`BoxSum::mean_rounded`] would need more: `sum * 2^g`
+    /// past 64 bits ([`Quantity::MeanNumerator`](crate::Quantity::MeanNumerator)), the area
+    /// `W H` (in units of `2^-2F`) past 32 bits ([`Quantity::MeanArea`](crate::Quantity::MeanArea))
+    /// or the mean itself past 32 bits ([`Quantity::Mean`](crate::Quantity::Mean)).
+    ///
+    /// Why: the general mean carries fallbacks for huge areas and numerators (a 64-bit divisor,
+    /// long division), about 1.1 KiB of Cortex-M4 code a firmware never runs when its plan
+    /// proves every box narrow ([`crate::plan::Plan::mean_fits_u32`]); calling this instead
+    /// leaves them out. Counted as one multiply and one divide, like [`BoxSum::mean_rounded`].
+    pub fn mean_rounded_u32<K: Counter>(
+        &self,
+        c: usize,
+        out_frac_bits: u32,
+        k: &mut K,
+    ) -> Result<u32, Error> {
+        let Some(&s) = self.sums.get(c) else {
+            return Err(Error::NoSuchChannel);
+        };
+        self.check_area()?;
+        k.muls(1);
+        k.divs(1);
+        crate::wide::div_round_area_u32(s, out_frac_bits, self.width_raw, self.height_raw)
     }
 
     /// Every channel's mean (see [`BoxSum::mean_rounded`]): one multiply, `C` divides.
@@ -574,6 +602,12 @@ fn sum_int<L: Layout<C>, M: EdgeMode, K: Counter, const C: usize>(
     mode: M,
     k: &mut K,
 ) -> Result<BoxSum<WideOf<L, C>, C>, Error> {
+    // Clamp to edge on a layout without a modulus: every box through the one 32-bit clamp
+    // path (an in-range box is its single piece), as a hand-written clamp lookup does; no
+    // second, inlined copy of the in-range reads (smallest plan on a Cortex-M4: docs/firmware.md).
+    if mode.kind() == crate::EdgeKind::Clamp && layout.modulus().is_none() {
+        return clamp_int::sum(layout, r, k);
+    }
     // `cast_unsigned` of a non-negative `i32` (checked first: `&&` short-circuits) is its value.
     #[allow(
         clippy::as_conversions,

@@ -276,3 +276,65 @@ fn box_sum_inside_equals_box_sum_int_and_refuses_outside() {
         }
     }
 }
+
+/// The 32-bit clamp path (`clamp_int`: every integer box under `ClampToEdge` on a layout
+/// without a modulus) against the general driver (`sum_raw` with the 4-read form and the
+/// general split path it replaces there): the same result (sums, sides, refusals) and the same
+/// counted costs for every box with corners in `-3..=n + 3` on textures of 1 to 5 texels a
+/// side, 1 and 2 channels, `u16` and `u32` entries, and for boxes out to the `i32` limits
+/// (sums past the `u64` result word: refused alike).
+#[test]
+fn clamp_int_matches_the_general_split_path() {
+    fn check<E: crate::Entry, const C: usize>(w: usize, h: usize, limits: bool) {
+        let data: [u8; 50] = core::array::from_fn(|i| (i as u8).wrapping_mul(37).wrapping_add(11));
+        let t = Texture::<u8, C>::new(&data[..w * h * C], w, h).unwrap();
+        let mut st = [E::ZERO; 50];
+        let sat = Sat::<E, C>::build(&t, &mut st[..w * h * C]).unwrap();
+        let compare = |r: Rect<i32>| {
+            let (mut k1, mut k2) = (Tally::new(), Tally::new());
+            let got = super::clamp_int::sum(&sat, &r, &mut k1);
+            let want = super::sum_raw(
+                &sat,
+                &r.to_raw_int(),
+                0,
+                super::corners4::Corners4,
+                ClampToEdge,
+                &mut k2,
+            );
+            assert_eq!(got, want, "{w}x{h} C={C} {r:?}");
+            assert_eq!(k1, k2, "{w}x{h} C={C} {r:?}");
+            // The public entry point takes it.
+            assert_eq!(sat.box_sum_int(&r, ClampToEdge, &mut NoCount), want);
+        };
+        let (wi, hi) = (w as i32, h as i32);
+        for x0 in -3..=wi + 3 {
+            for x1 in -3..=wi + 3 {
+                for y0 in -3..=hi + 3 {
+                    for y1 in -3..=hi + 3 {
+                        compare(Rect::new(x0, y0, x1, y1));
+                    }
+                }
+            }
+        }
+        if limits {
+            let far = [i32::MIN, i32::MIN + 1, -70_000, -1, 0, 1, 70_000, i32::MAX];
+            for &x0 in &far {
+                for &x1 in &far {
+                    for &y0 in &far {
+                        for &y1 in &far {
+                            compare(Rect::new(x0, y0, x1, y1));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Under Miri (about 10^4 times slower) a few shapes.
+    let sides: &[usize] = if cfg!(miri) { &[1, 3] } else { &[1, 2, 3, 5] };
+    for &w in sides {
+        for &h in sides {
+            check::<u32, 1>(w, h, w == 3 && h == 3);
+            check::<u16, 2>(w, h, w == 1 && h == 5);
+        }
+    }
+}

@@ -280,3 +280,54 @@ fn invalid_facts_are_refused() {
         Err(Error::NoSuchChannel)
     );
 }
+
+/// `mean_fits_u32` says exactly when the largest box's area and the largest mean fit 32 bits,
+/// and where it says so, `mean_rounded_u32` answers the worst box of the scene (the largest
+/// box, reaching outside a texture of all-maximum texels under clamp, so the mean is the
+/// largest) with `mean_rounded`'s value; where the area or the mean is one bit too wide, it
+/// refuses that box.
+#[test]
+fn the_u32_mean_serves_every_box_of_a_plan_that_says_so() {
+    let (w, h) = (8usize, 6usize);
+    for (bits, g, side_texels, f) in [
+        (8u32, 8u32, 8u64, 8u32), // the demo's plans: small
+        (8, 24, 8, 8),            // mean exactly 32 bits
+        (8, 25, 8, 8),            // mean 33 bits: wide
+        (16, 16, 8, 0),           // 16-bit texels, 16 output bits: 32 bits
+        (8, 8, 256, 8),           // area (256 2^8)^2 = 2^32: wide
+        (8, 8, 255, 8),           // area just below 2^32
+    ] {
+        let facts = SceneFacts {
+            texel_bits: bits,
+            mean_frac_bits: g,
+            max_box: [side_texels << f, side_texels << f],
+            leaves_texture: true,
+            ..SceneFacts::new(w, h, bits, f, EdgeKind::Clamp)
+        };
+        let p = Plan::for_scene(&facts).unwrap();
+        let area = (side_texels << f) * (side_texels << f);
+        let fits = area <= u64::from(u32::MAX) && bits + g <= 32;
+        assert_eq!(p.mean_fits_u32(), fits, "{bits} {g} {side_texels} {f}");
+        let side = (side_texels << f) as i64;
+        let r = Rect::new(-3 << f, -2 << f, side - (3 << f), side - (2 << f));
+        assert_eq!(p.check_box(&r), Ok(()));
+        let fb = FracBits::new(f).unwrap();
+        let mut t = vec![0u64; w * h];
+        let (t8, t16) = (vec![u8::MAX; w * h], vec![u16::MAX; w * h]);
+        let s = if bits == 8 {
+            let sat = Sat::build(&Texture::<u8>::new(&t8, w, h).unwrap(), &mut t).unwrap();
+            sat.box_sum_raw(&r, fb, Stable, crate::ClampToEdge, &mut NoCount)
+        } else {
+            let sat = Sat::build(&Texture::<u16>::new(&t16, w, h).unwrap(), &mut t).unwrap();
+            sat.box_sum_raw(&r, fb, Stable, crate::ClampToEdge, &mut NoCount)
+        }
+        .unwrap();
+        let wide = s.mean_rounded(0, g, &mut NoCount).unwrap();
+        let narrow = s.mean_rounded_u32(0, g, &mut NoCount);
+        if fits {
+            assert_eq!(narrow.map(u128::from), Ok(wide));
+        } else {
+            assert!(matches!(narrow, Err(Error::TooWide { .. })), "{narrow:?}");
+        }
+    }
+}

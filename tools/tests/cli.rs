@@ -2018,12 +2018,15 @@ fn plan_prints_the_smallest_table_and_its_reasons() {
         "muls",
         "adds",
         "max_error",
+        "mean",
         "features",
         "rejected",
     ] {
         assert!(p.get(key).is_some(), "missing {key}: {p}");
     }
     assert_eq!(p["edge"], "repeat");
+    // Boxes up to 8 x 8 texels at F = 8: area 2^22, mean 8 + 8 bits: the 32-bit mean.
+    assert_eq!(p["mean"], "u32");
     assert_eq!(p["lookup"], "stable");
     assert_eq!(p["max_error"], 0.5);
     // Every rejected candidate that serves is at least as large as the plan's table.

@@ -7,9 +7,9 @@
 //!
 //! | feature | texsat | hand-written |
 //! |---|---|---|
-//! | `flash-int4` / `flash-int4-hand` | `Sat::build` (u32), `box_sum_int` under `ClampToEdge`, mean | the same in `hand.rs` |
+//! | `flash-int4` / `flash-int4-hand` | `Sat::build` (u32), `box_sum_int` under `ClampToEdge`, the plan's mean (`mean_rounded_u32`) | the same in `hand.rs` (a `u64` mean) |
 //! | `flash-inside` / `flash-inside-hand` | `Sat::build` (u32), `Sat::box_sum_inside` | the same |
-//! | `flash-stable-repeat` / `flash-stable-repeat-hand` | `Sat::build` (u32), `box_sum` Stable under `Repeat` (split boxes included), `mean_rounded` | the same for boxes inside one period |
+//! | `flash-stable-repeat` / `flash-stable-repeat-hand` | `Sat::build` (u32), `box_sum` Stable under `Repeat` (split boxes included), the plan's mean (`mean_rounded_u32`) | the same for boxes inside one period |
 //! | `flash-all` | every cargo feature: the Stable + Repeat plan, `box_sum_raw` with the form and mode at run time, and every filter's raw sampler | |
 //!
 //! Inputs and results go through `black_box`, so nothing is folded away; the panic handler is
@@ -47,6 +47,21 @@ fn exit() -> ! {
 
 static mut TEXELS: [u8; W * H] = [0; W * H];
 static mut TABLE: [u32; W * H] = [0; W * H];
+
+/// The plan of a 64 x 64 scene of 8-bit texels at `F = f` under `edge`, boxes up to the
+/// texture's size that may leave it, 8 output bits of the mean: computed by the compiler.
+#[allow(dead_code)]
+const fn plan(f: u32, edge: texsat::EdgeKind) -> texsat::plan::Plan {
+    let facts = texsat::plan::SceneFacts {
+        max_box: [(W as u64) << f, (H as u64) << f],
+        leaves_texture: true,
+        ..texsat::plan::SceneFacts::new(W, H, 8, f, edge)
+    };
+    match texsat::plan::Plan::for_scene(&facts) {
+        Ok(p) => p,
+        Err(_) => panic!("no plan"),
+    }
+}
 
 /// Box corners from the (opaque) loop counter: raw `F = 8` values.
 fn corners(i: u32) -> [i32; 4] {
@@ -97,7 +112,10 @@ fn main() -> ! {
 #[cfg(feature = "flash-int4")]
 mod int4 {
     use super::*;
-    use texsat::{ClampToEdge, NoCount, Rect, Sat, Texture};
+    use texsat::{ClampToEdge, EdgeKind, NoCount, Rect, Sat, Texture};
+
+    /// The smallest plan's scene: integer boxes up to the texture's size, leaving it, clamp.
+    const PLAN: texsat::plan::Plan = super::plan(0, EdgeKind::Clamp);
 
     pub fn run(texels: &[u8], table: &mut [u32], w: usize, h: usize, c: [i32; 4]) {
         let Ok(t) = Texture::<u8>::new(texels, w, h) else {
@@ -108,7 +126,12 @@ mod int4 {
         };
         let r = Rect::new(c[0] >> 8, c[1] >> 8, c[2] >> 8, c[3] >> 8);
         if let Ok(sum) = sat.box_sum_int(&r, ClampToEdge, &mut NoCount) {
-            let _ = black_box(sum.mean_rounded(0, 8, &mut NoCount));
+            // The plan's mean (a constant branch: one of the two is compiled).
+            if PLAN.mean_fits_u32() {
+                let _ = black_box(sum.mean_rounded_u32(0, 8, &mut NoCount));
+            } else {
+                let _ = black_box(sum.mean_rounded(0, 8, &mut NoCount));
+            }
         }
     }
 }
@@ -175,7 +198,10 @@ mod inside_hand {
 #[cfg(any(feature = "flash-stable-repeat", feature = "flash-all"))]
 mod stable_repeat {
     use super::*;
-    use texsat::{DefaultCoord as I24F8, NoCount, Rect, Repeat, Sat, Stable, Texture};
+    use texsat::{DefaultCoord as I24F8, EdgeKind, NoCount, Rect, Repeat, Sat, Stable, Texture};
+
+    /// The Stable + Repeat plan's scene: boxes at `F = 8` up to the texture's size, Repeat.
+    const PLAN: texsat::plan::Plan = super::plan(8, EdgeKind::Repeat);
 
     pub fn run(texels: &[u8], table: &mut [u32], w: usize, h: usize, c: [i32; 4]) {
         let Ok(t) = Texture::<u8>::new(texels, w, h) else {
@@ -191,7 +217,12 @@ mod stable_repeat {
             I24F8::from_bits(c[3]),
         );
         if let Ok(sum) = sat.box_sum(&r, Stable, Repeat, &mut NoCount) {
-            let _ = black_box(sum.mean_rounded(0, 8, &mut NoCount));
+            // The plan's mean (a constant branch: one of the two is compiled).
+            if PLAN.mean_fits_u32() {
+                let _ = black_box(sum.mean_rounded_u32(0, 8, &mut NoCount));
+            } else {
+                let _ = black_box(sum.mean_rounded(0, 8, &mut NoCount));
+            }
         }
     }
 }

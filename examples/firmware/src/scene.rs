@@ -171,7 +171,13 @@ where
         let fb = FracBits::new(f.frac_bits)?;
         l.box_sum_raw(&r, fb, plan.lookup().form(), f.edge, &mut NoCount)?
     };
-    Ok(s.mean_rounded(0, G, &mut NoCount)?.into())
+    // The plan's mean: the 32-bit one where its facts keep every box's area and mean narrow
+    // (the same value; the wide mean's fallbacks are then left out of the firmware).
+    if plan.mean_fits_u32() {
+        Ok(s.mean_rounded_u32(0, G, &mut NoCount)?.into())
+    } else {
+        Ok(s.mean_rounded(0, G, &mut NoCount)?.into())
+    }
 }
 
 /// Every pixel of the image under `plan` on `l`.

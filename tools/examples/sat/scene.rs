@@ -3,7 +3,8 @@
 //!
 //! The JSON holds the plan's choices (`layout`, `entry`, `frac_bits`, `lookup`, `edge`), its
 //! costs (`table_bytes`, `bits_per_entry`, `reads`, `muls`, `divs`, `adds`, `max_error` in units
-//! of the mean's last bit), `features`, `rejected` (`[{layout, entry, why}]`) and the `facts` it
+//! of the mean's last bit), `mean` (`u32`: `BoxSum::mean_rounded_u32` serves every box of the
+//! facts; `wide`: `BoxSum::mean_rounded`), `features`, `rejected` (`[{layout, entry, why}]`) and the `facts` it
 //! was made from. `sat query --plan` re-plans from those facts and refuses a file whose choices
 //! differ (edited by hand, or written by another version), so a query runs exactly the plan's
 //! configuration.
@@ -171,6 +172,10 @@ pub fn to_json(p: &Plan) -> Value {
     o.insert("divs".into(), json!(c.divs));
     o.insert("adds".into(), json!(c.adds));
     o.insert("max_error".into(), json!(en as f64 / ed as f64));
+    o.insert(
+        "mean".into(),
+        json!(if p.mean_fits_u32() { "u32" } else { "wide" }),
+    );
     o.insert("features".into(), json!(p.features()));
     o.insert("rejected".into(), Value::Array(rejected));
     o.insert(
@@ -279,7 +284,7 @@ pub fn read(path: &Path) -> Result<Plan, String> {
     let plan = Plan::for_scene(&facts)
         .map_err(|e| format!("--plan {}: no plan for its facts: {e}", path.display()))?;
     let want = to_json(&plan);
-    for key in ["layout", "entry", "frac_bits", "lookup", "edge"] {
+    for key in ["layout", "entry", "frac_bits", "lookup", "edge", "mean"] {
         if v.get(key) != want.get(key) {
             return Err(format!(
                 "--plan {}: its {key} is {}, but its facts plan {} (edited by hand, or written \
