@@ -223,8 +223,10 @@ def demo_table(between):
     """run.sh's DEMO_COUNT table: per plan, build (per entry) and render (per sample)."""
     entries, samples = 64 * 64, 32 * 24
     plans = ["small", "repeat", "tiled", "mip (for comparison)"]
-    if len(between) < 3 * len(plans):
-        sys.exit(f"count_insns: expected at least {3 * len(plans)} regions between demo marks, found {len(between)}")
+    # Per plan: a mark, the build, a mark, the render, a mark, the report (the last plan's report
+    # ends at exit, with no mark after it).
+    if len(between) != 3 * len(plans) - 1:
+        sys.exit(f"count_insns: expected {3 * len(plans) - 1} regions between demo marks, found {len(between)}")
     print("| plan | build: instructions per entry | render: instructions per sample (footprint, lookup, mean, checksum) |")
     print("|---|---:|---:|")
     for i, name in enumerate(plans):
