@@ -21,7 +21,7 @@
 # `texsat_count_mark` calls: (11 calls - 1 call) / 10, minus the same for an empty wrapper. It
 # first checks the self-check region (assembly, count known from the disassembly) and fails
 # if it is off. The fallback, `-singlestep -d exec,nochain` (one TB per instruction, one log line
-# per executed TB), gives the same counts 30 to 50 times slower. Not part of the link gate; does
+# per executed TB), gives the same counts, several times slower. Not part of the link gate; does
 # not touch its builds' outputs.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -36,6 +36,11 @@ die() {
   printf 'count-insns: ERROR: %s\n' "$*" >&2
   exit 1
 }
+METHOD=${COUNT_METHOD:-auto}
+case "$METHOD" in
+  auto | plugin | singlestep | both) ;;
+  *) die "COUNT_METHOD must be auto, plugin, singlestep or both (got $METHOD)" ;;
+esac
 command -v cargo >/dev/null || die "cargo not found"
 command -v python3 >/dev/null || die "python3 not found"
 command -v "$QEMU" >/dev/null || die "$QEMU not found (Debian: apt-get install qemu-system-arm)"
@@ -69,11 +74,6 @@ if ! CARGO_TARGET_DIR=$TARGET_DIR cargo build --release --locked --target "$TARG
 fi
 cp "$TARGET_DIR/$TARGET/release/$BIN" "$ELF"
 
-METHOD=${COUNT_METHOD:-auto}
-case "$METHOD" in
-  auto | plugin | singlestep | both) ;;
-  *) die "COUNT_METHOD must be auto, plugin, singlestep or both (got $METHOD)" ;;
-esac
 loud() {
   printf '%s\n' "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!" \
     "!!! count-insns: WARNING: $*" \

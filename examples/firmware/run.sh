@@ -148,7 +148,7 @@ if [ -n "${DEMO_COUNT:-}" ]; then
     fi
   fi
   if [ "$METHOD" = singlestep ] || [ "$METHOD" = both ] || [ "$use_singlestep" = 1 ]; then
-    # One TB per instruction, one log line per executed TB, read through a FIFO (about 800 MB).
+    # One TB per instruction, one log line per executed TB, read through a FIFO (about 1.1 GB).
     STEP="count instructions: run under QEMU -singlestep -d exec,nochain"
     FIFO=$OUT/exec.fifo
     rm -f "$FIFO"

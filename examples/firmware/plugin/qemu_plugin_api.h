@@ -13,9 +13,11 @@
  *   - The functions below are all exported by Debian's qemu-system-arm 7.2
  *     (`nm -D $(which qemu-system-arm) | grep qemu_plugin_`), which also exports
  *     qemu_plugin_n_vcpus: it speaks version 1.
- * The enum values matter (a wrong value silently does something else): in version 1 the
- * callback flags are NO_REGS = 0, R_REGS = 1, RW_REGS = 2, and the only inline operation is
- * INLINE_ADD_U64 = 0 (an add of a 64-bit immediate to a uint64_t in memory).
+ * The enum values: in version 1 the callback flags are NO_REGS = 0, R_REGS = 1, RW_REGS = 2,
+ * and the only inline operation is INLINE_ADD_U64 = 0 (an add of a 64-bit immediate to a
+ * uint64_t in memory). QEMU 7.2 emits that add whatever operation value it is given (built
+ * with INLINE_ADD_U64 = 1, the plugin counted the same), so the count cannot reveal a wrong
+ * value there: the values are copied from the header, not inferred.
  */
 #ifndef TEXSAT_QEMU_PLUGIN_API_H
 #define TEXSAT_QEMU_PLUGIN_API_H
