@@ -158,8 +158,10 @@ case "$METHOD" in
     count_singlestep --regions-out "$OUT/regions.singlestep" >"$OUT/table.singlestep"
     if ! diff "$OUT/regions.plugin" "$OUT/regions.singlestep" >"$OUT/regions.diff"; then
       head -n 20 "$OUT/regions.diff" >&2
-      die "the plugin and the -singlestep exec log disagree (regions between marks, one a line: $OUT/regions.plugin, $OUT/regions.singlestep)"
+      die "the plugin and the -singlestep exec log disagree" \
+        "(instructions per region between marks, one a line: $OUT/regions.plugin, $OUT/regions.singlestep)"
     fi
-    echo "count-insns: the plugin and the -singlestep exec log agree on all $(wc -l <"$OUT/regions.plugin") regions between marks" >&2
+    echo "count-insns: the plugin and the -singlestep exec log agree on all" \
+      "$(wc -l <"$OUT/regions.plugin") regions between marks" >&2
     ;;
 esac

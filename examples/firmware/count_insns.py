@@ -292,7 +292,10 @@ def main():
             f"count_insns: SELF-CHECK FAILED: the self-check's regions count {regions[1:3]} instructions, "
             f"its disassembly {expected}"
         )
-    print(f"count_insns: self-check passed: {regions[1]} and {regions[2]} instructions, as disassembled", file=sys.stderr)
+    print(
+        f"count_insns: self-check passed: {regions[1]} and {regions[2]} instructions, as disassembled",
+        file=sys.stderr,
+    )
     per_call = {}
     for i, (key, _, _) in enumerate(entries):
         if key == "selftest":

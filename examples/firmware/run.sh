@@ -169,7 +169,8 @@ if [ -n "${DEMO_COUNT:-}" ]; then
     STEP="count instructions: compare the plugin with the -singlestep exec log"
     diff "$OUT/regions.plugin" "$OUT/regions.singlestep" >&2 ||
       die "the two methods disagree (regions between marks: $OUT/regions.plugin, $OUT/regions.singlestep)"
-    echo "run.sh: the plugin and the -singlestep exec log agree on all $(wc -l <"$OUT/regions.plugin") regions between marks" >&2
+    echo "run.sh: the plugin and the -singlestep exec log agree on all" \
+      "$(wc -l <"$OUT/regions.plugin") regions between marks" >&2
   fi
 fi
 echo "run.sh: OK"
