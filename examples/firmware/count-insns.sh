@@ -5,14 +5,24 @@
 #   examples/firmware/count-insns.sh            prints a markdown table
 #   COUNT_PROFILE=1 examples/firmware/count-insns.sh   also instructions per call by function (stderr)
 #   COUNT_LINES=mip_trilinear ...          also that entry point's instructions per call by source line
-#   COUNT_KEEP_LOG=1 ...                        keeps QEMU's exec log (about 300 MB) in target/count-insns/
+#   COUNT_METHOD=both ...                  counts with the plugin and with the -singlestep exec log and
+#                                          fails unless every region agrees to the instruction
+#   COUNT_METHOD=plugin|singlestep ...     one method only (default `auto`: the plugin, falling back
+#                                          loudly to -singlestep if it cannot be built or loaded)
+#   COUNT_KEEP_LOG=1 ...                        keeps QEMU's -singlestep exec log (about 480 MB) in
+#                                               target/count-insns/ (methods singlestep, both)
 #
 # How: builds the `texsat-count` binary (src/count.rs, feature `count`, plus `filter-mip`) with
 # the firmware's release profile (opt-level "s", fat LTO, the link gate's panic handler: it links
-# only if panic-free), runs it under `qemu-system-arm -singlestep -d exec,nochain` (one TB per
-# instruction, one log line per executed TB: no TCG plugins needed) and count_insns.py counts the
-# instructions between the harness's `texsat_count_mark` calls: (11 calls - 1 call) / 10, minus
-# the same for an empty wrapper. Not part of the link gate; does not touch its builds' outputs.
+# only if panic-free) and the TCG plugin plugin/insn_count.c (gcc, plugin/build.sh), runs the
+# binary under `qemu-system-arm -plugin insn_count.so,mark=ADDR` (ADDR: `texsat_count_mark`; the
+# plugin counts every executed instruction with a per-instruction inline add and prints the
+# running count at each mark) and count_insns.py counts the instructions between the harness's
+# `texsat_count_mark` calls: (11 calls - 1 call) / 10, minus the same for an empty wrapper. It
+# first checks the self-check region (assembly, count known from the disassembly) and fails
+# if it is off. The fallback, `-singlestep -d exec,nochain` (one TB per instruction, one log line
+# per executed TB), gives the same counts, several times slower. Not part of the link gate; does
+# not touch its builds' outputs.
 set -euo pipefail
 cd "$(dirname "$0")"
 HERE=$(pwd)
@@ -26,6 +36,11 @@ die() {
   printf 'count-insns: ERROR: %s\n' "$*" >&2
   exit 1
 }
+METHOD=${COUNT_METHOD:-auto}
+case "$METHOD" in
+  auto | plugin | singlestep | both) ;;
+  *) die "COUNT_METHOD must be auto, plugin, singlestep or both (got $METHOD)" ;;
+esac
 command -v cargo >/dev/null || die "cargo not found"
 command -v python3 >/dev/null || die "python3 not found"
 command -v "$QEMU" >/dev/null || die "$QEMU not found (Debian: apt-get install qemu-system-arm)"
@@ -59,30 +74,94 @@ if ! CARGO_TARGET_DIR=$TARGET_DIR cargo build --release --locked --target "$TARG
 fi
 cp "$TARGET_DIR/$TARGET/release/$BIN" "$ELF"
 
-QEMU_ARGS=(-M mps2-an386 -display none -monitor none -serial none -semihosting
-  -singlestep -d exec,nochain -kernel "$ELF")
-PARSE_ARGS=("$ELF" --llvm-bin "$LLVM_BIN" --reps 11 --texels 4096 --mip)
-[ -n "${COUNT_PROFILE:-}" ] && PARSE_ARGS+=(--profile)
-[ -n "${COUNT_LINES:-}" ] && PARSE_ARGS+=(--lines "$COUNT_LINES")
+loud() {
+  printf '%s\n' "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!" \
+    "!!! count-insns: WARNING: $*" \
+    "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!" >&2
+}
 
-echo "count-insns: $("$QEMU" --version | head -n 1); $QEMU ${QEMU_ARGS[*]} -D <log>" >&2
-if [ -n "${COUNT_KEEP_LOG:-}" ]; then
-  LOG=$OUT/exec.log
-  rm -f "$LOG"
-  timeout 600 "$QEMU" "${QEMU_ARGS[@]}" -D "$LOG" || die "QEMU failed or timed out (status $?)"
-  python3 "$HERE/count_insns.py" "${PARSE_ARGS[0]}" "$LOG" "${PARSE_ARGS[@]:1}"
-else
-  # The log is read through a FIFO, so its ~300 MB never reach the disk.
-  FIFO=$OUT/exec.fifo
-  rm -f "$FIFO"
-  mkfifo "$FIFO"
-  timeout 600 "$QEMU" "${QEMU_ARGS[@]}" -D "$FIFO" &
-  QPID=$!
-  status=0
-  python3 "$HERE/count_insns.py" "${PARSE_ARGS[0]}" "$FIFO" "${PARSE_ARGS[@]:1}" || status=$?
-  qstatus=0
-  wait "$QPID" || qstatus=$?
-  rm -f "$FIFO"
-  [ "$qstatus" -eq 0 ] || die "QEMU failed or timed out (status $qstatus)"
-  [ "$status" -eq 0 ] || die "count_insns.py failed (status $status)"
+MARK=$("$LLVM_BIN/llvm-nm" "$ELF" | awk '$3 == "texsat_count_mark" { print $1 }')
+[ -n "$MARK" ] || die "texsat_count_mark not found in $ELF"
+QEMU_ARGS=(-M mps2-an386 -display none -monitor none -serial none -semihosting -kernel "$ELF")
+PARSE_ARGS=(--llvm-bin "$LLVM_BIN" --reps 11 --texels 4096 --mip)
+PCS=""
+if [ -n "${COUNT_PROFILE:-}" ]; then
+  PARSE_ARGS+=(--profile)
+  PCS=",pcs=on"
 fi
+if [ -n "${COUNT_LINES:-}" ]; then
+  PARSE_ARGS+=(--lines "$COUNT_LINES")
+  PCS=",pcs=on"
+fi
+echo "count-insns: $("$QEMU" --version | head -n 1)" >&2
+
+# The plugin: build it, run, parse. Returns 2 when the plugin could not be built or loaded
+# (the caller may fall back), dies on any other failure.
+count_plugin() {
+  local so plog="$OUT/insn_count.log" status=0
+  so=$(bash "$HERE/plugin/build.sh" "$OUT") || return 2
+  rm -f "$plog"
+  echo "count-insns: $QEMU ${QEMU_ARGS[*]} -plugin $so,mark=0x$MARK,out=$plog$PCS" >&2
+  timeout 600 "$QEMU" "${QEMU_ARGS[@]}" -plugin "$so,mark=0x$MARK,out=$plog$PCS" 2>"$OUT/qemu.log" ||
+    status=$?
+  if ! head -n 1 "$plog" 2>/dev/null | grep -qx 'insn_count 1'; then
+    cat "$OUT/qemu.log" >&2
+    echo "count-insns: QEMU did not load the plugin (status $status)" >&2
+    return 2
+  fi
+  [ "$status" -eq 0 ] || { cat "$OUT/qemu.log" >&2; die "QEMU with the plugin failed or timed out (status $status)"; }
+  python3 "$HERE/count_insns.py" "$ELF" --plugin-log "$plog" "${PARSE_ARGS[@]}" "$@" ||
+    die "count_insns.py failed on the plugin's log"
+}
+
+# The -singlestep exec log (one TB per instruction), read through a FIFO so its ~480 MB never
+# reach the disk (unless COUNT_KEEP_LOG is set).
+count_singlestep() {
+  local log status=0 qstatus=0 qpid
+  echo "count-insns: $QEMU ${QEMU_ARGS[*]} -singlestep -d exec,nochain -D <log>" >&2
+  if [ -n "${COUNT_KEEP_LOG:-}" ]; then
+    log=$OUT/exec.log
+    rm -f "$log"
+    timeout 600 "$QEMU" "${QEMU_ARGS[@]}" -singlestep -d exec,nochain -D "$log" ||
+      die "QEMU failed or timed out (status $?)"
+    python3 "$HERE/count_insns.py" "$ELF" --exec-log "$log" "${PARSE_ARGS[@]}" "$@" ||
+      die "count_insns.py failed (status $?)"
+  else
+    log=$OUT/exec.fifo
+    rm -f "$log"
+    mkfifo "$log"
+    timeout 600 "$QEMU" "${QEMU_ARGS[@]}" -singlestep -d exec,nochain -D "$log" &
+    qpid=$!
+    python3 "$HERE/count_insns.py" "$ELF" --exec-log "$log" "${PARSE_ARGS[@]}" "$@" || status=$?
+    wait "$qpid" || qstatus=$?
+    rm -f "$log"
+    [ "$qstatus" -eq 0 ] || die "QEMU failed or timed out (status $qstatus)"
+    [ "$status" -eq 0 ] || die "count_insns.py failed (status $status)"
+  fi
+}
+
+case "$METHOD" in
+  singlestep) count_singlestep ;;
+  plugin) count_plugin || die "the insn_count plugin could not be built or loaded (COUNT_METHOD=plugin: no fallback)" ;;
+  auto)
+    status=0
+    count_plugin || status=$?
+    if [ "$status" -eq 2 ]; then
+      loud "the insn_count TCG plugin could not be built or loaded (see above):" \
+        "counting from QEMU's -singlestep exec log instead (same counts, much slower)"
+      count_singlestep
+    fi
+    ;;
+  both)
+    count_plugin --regions-out "$OUT/regions.plugin" ||
+      die "the insn_count plugin could not be built or loaded (COUNT_METHOD=both)"
+    count_singlestep --regions-out "$OUT/regions.singlestep" >"$OUT/table.singlestep"
+    if ! diff "$OUT/regions.plugin" "$OUT/regions.singlestep" >"$OUT/regions.diff"; then
+      head -n 20 "$OUT/regions.diff" >&2
+      die "the plugin and the -singlestep exec log disagree" \
+        "(instructions per region between marks, one a line: $OUT/regions.plugin, $OUT/regions.singlestep)"
+    fi
+    echo "count-insns: the plugin and the -singlestep exec log agree on all" \
+      "$(wc -l <"$OUT/regions.plugin") regions between marks" >&2
+    ;;
+esac

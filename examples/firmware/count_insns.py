@@ -1,24 +1,35 @@
 #!/usr/bin/env python3
-"""Executed instructions per call, from a QEMU exec log of the `texsat-count` firmware.
+"""Executed instructions per call, from a QEMU run of the `texsat-count` (or `texsat-demo`) firmware.
 
-    count_insns.py ELF LOG --llvm-bin DIR [--reps 11] [--texels 4096] [--mip]
+    count_insns.py ELF (--plugin-log LOG | --exec-log LOG) --llvm-bin DIR [--reps 11]
+                   [--texels 4096] [--mip] [--demo] [--regions-out FILE]
 
-The log comes from `qemu-system-arm -singlestep -d exec,nochain`: one TB per instruction, one
-`Trace` line per executed TB, whose second bracketed field is the PC. The firmware (src/count.rs)
-calls per entry point: a mark, the call once, a mark, the call REPS times, a mark. So the regions
-between consecutive marks come in triples (setup since the last mark, 1 call, REPS calls) and
-(count(REPS) - count(1)) / (REPS - 1) is the per-call count without the setup; the baseline
-entry (an empty wrapper of the same shape) is subtracted from the others.
+Two sources, the same figures (count-insns.sh COUNT_METHOD=both checks that they agree to the
+instruction on every region):
+- `--plugin-log`: the output of the TCG plugin plugin/insn_count.c, a `mark ADDR TOTAL` line
+  each time the marker's first instruction runs (TOTAL: instructions executed so far, markers
+  not included) and, with the plugin's `pcs=on`, `pc ADDR N` lines before each mark line;
+- `--exec-log`: the log of `qemu-system-arm -singlestep -d exec,nochain`: one TB per
+  instruction, one `Trace` line per executed TB, whose second bracketed field is the PC.
+The harness (src/count.rs) calls per entry point: a mark, the call once, a mark, the call REPS
+times, a mark. So the regions between consecutive marks come in triples (setup since the last
+mark, 1 call, REPS calls) and (count(REPS) - count(1)) / (REPS - 1) is the per-call count
+without the setup; the baseline entry (an empty wrapper of the same shape) is subtracted from
+the others. The first triple is the self-check `texsat_count_selftest` (assembly): its two
+regions must hold exactly the instructions its disassembly shows, else this script fails.
+`--demo` prints run.sh's DEMO_COUNT table instead (marker `texsat_demo_mark`).
 """
 import argparse
-import shutil
 import re
+import shutil
 import subprocess
 import sys
+from collections import Counter
 
 # (key, label, key of the hand-written baseline measured for the same behaviour or None), in the
 # order src/count.rs measures them. Keys starting with `hand_` are baselines, shown beside texsat's.
 ENTRIES = [
+    ("selftest", "", None),
     ("baseline", "harness overhead per call (empty wrapper: loop, `bl`, `bx lr`, `black_box` of the arguments)", None),
     ("int_border", "1. `Sat::box_sum_int` Border, interior box (4 reads)", "hand_int_border"),
     ("hand_int_border", "", None),
@@ -45,6 +56,8 @@ MIP_ENTRIES = [
 ]
 
 TRACE = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
+INSN = re.compile(r"^\s+([0-9a-f]+):\s+(\S+)\s*(.*)$")
+BRANCH = re.compile(r"^(b|bl|blx|bx|cbn?z|tb[bh]|it[te]*|b(eq|ne|cs|hs|cc|lo|mi|pl|vs|vc|hi|ls|ge|lt|gt|le))(\.[wn])?$")
 
 
 def symbol_addr(llvm_bin, elf, name):
@@ -54,6 +67,94 @@ def symbol_addr(llvm_bin, elf, name):
         if len(parts) == 3 and parts[2] == name:
             return int(parts[0], 16) & ~1
     sys.exit(f"count_insns: symbol {name} not found in {elf}")
+
+
+def read_exec_log(path, mark, want_pcs):
+    """Instructions (and, if wanted, the PCs) between consecutive marks, from a -singlestep exec log."""
+    between, pcs = [], []
+    cur, cur_pcs = None, None
+    with open(path, errors="replace") as f:
+        for line in f:
+            m = TRACE.match(line)
+            if not m:
+                continue
+            pc = int(m.group(1), 16)
+            if pc == mark:
+                if cur is not None:
+                    between.append(cur)
+                    pcs.append(cur_pcs)
+                cur, cur_pcs = 0, Counter()
+            elif cur is not None:
+                cur += 1
+                if want_pcs:
+                    cur_pcs[pc] += 1
+    return between, pcs
+
+
+def read_plugin_log(path, mark, want_pcs):
+    """The same, from the plugin's output (`mark ADDR TOTAL` lines, `pc ADDR N` with pcs=on)."""
+    between, pcs = [], []
+    last, cur_pcs, header, ended = None, Counter(), False, False
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if w[:2] == ["insn_count", "1"]:
+                header = True
+            elif w[0] == "pc":
+                cur_pcs[int(w[1], 16)] += int(w[2])
+            elif w[0] == "mark" and int(w[1], 16) == mark:
+                total = int(w[2])
+                if last is not None:
+                    between.append(total - last)
+                    pcs.append(cur_pcs)
+                last, cur_pcs = total, Counter()
+            elif w[0] == "end":
+                ended = True
+    if not header or not ended:
+        sys.exit(f"count_insns: {path} is not a complete insn_count plugin log (header {header}, end {ended})")
+    if want_pcs and not any(pcs):
+        sys.exit("count_insns: no `pc` lines in the plugin log: run the plugin with pcs=on")
+    return between, pcs
+
+
+def disassembly(llvm_bin, elf, names):
+    """Instructions of each named function: {name: [(address, mnemonic, operands)]}."""
+    out = subprocess.run(
+        [f"{llvm_bin}/llvm-objdump", "-d", "--no-show-raw-insn", f"--disassemble-symbols={','.join(names)}", elf],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    funcs, cur = {}, None
+    for line in out.splitlines():
+        m = re.match(r"^[0-9a-f]+ <(.+)>:$", line)
+        if m:
+            cur = funcs.setdefault(m.group(1), [])
+            continue
+        m = INSN.match(line)
+        if m and cur is not None:
+            cur.append((int(m.group(1), 16), m.group(2), m.group(3)))
+    return funcs
+
+
+def selftest_expected(llvm_bin, elf):
+    """The instruction counts of the self-check's two regions, from the disassembly alone.
+
+    A region starts after the first instruction of `texsat_count_mark` (the marker itself, not
+    counted) and ends with the `bl` to the next mark: the marker's other instructions (it is
+    straight-line code: no branch before its return), then the self-check's instructions after
+    one `bl texsat_count_mark` up to and including the next.
+    """
+    f = disassembly(llvm_bin, elf, ["texsat_count_mark", "texsat_count_selftest"])
+    mark, test = f.get("texsat_count_mark"), f.get("texsat_count_selftest")
+    if not mark or not test:
+        sys.exit("count_insns: texsat_count_mark or texsat_count_selftest not found in the disassembly")
+    if any(BRANCH.match(mn) or re.search(r"\bpc\b", ops) for _, mn, ops in mark[:-1]):
+        sys.exit(f"count_insns: texsat_count_mark is not straight-line code: {mark}")
+    calls = [i for i, (_, mn, ops) in enumerate(test) if mn == "bl" and "<texsat_count_mark>" in ops]
+    if len(calls) != 3:
+        sys.exit(f"count_insns: expected 3 calls of texsat_count_mark in texsat_count_selftest, found {len(calls)}")
+    return [len(mark) - 1 + (b - a) for a, b in zip(calls, calls[1:])]
 
 
 def symbols(llvm_bin, elf):
@@ -74,15 +175,16 @@ def symbols(llvm_bin, elf):
 def profile(a, entries, pcs):
     """Instructions per call in each function, from the REPS region of each entry point."""
     import bisect
-    from collections import Counter
 
     syms = symbols(a.llvm_bin, a.elf)
     addrs = [s[0] for s in syms]
     for i, (key, label, _) in enumerate(entries):
+        if key == "selftest":
+            continue
         c = Counter()
-        for pc in pcs[3 * i + 2]:
+        for pc, n in pcs[3 * i + 2].items():
             j = bisect.bisect_right(addrs, pc) - 1
-            c[syms[j][1] if j >= 0 else "?"] += 1
+            c[syms[j][1] if j >= 0 else "?"] += n
         print(f"profile {key} ({a.reps} calls, instructions per call by function):", file=sys.stderr)
         for name, n in c.most_common():
             name = re.sub(r"::<.*", "::<..>", name) if len(name) > 110 else name
@@ -91,12 +193,10 @@ def profile(a, entries, pcs):
 
 def lines(a, entries, pcs, key):
     """Instructions per call by source line (innermost inlined frame) for one entry point."""
-    from collections import Counter
-
     for i, (k, _label, _) in enumerate(entries):
         if k != key:
             continue
-        c = Counter(pcs[3 * i + 2])
+        c = pcs[3 * i + 2]
         addrs = sorted(c)
         # llvm-symbolizer (the system's, or the toolchain's llvm-tools if it ships one): for
         # each address its inlined frames, innermost first, a blank line after each address.
@@ -119,14 +219,37 @@ def lines(a, entries, pcs, key):
             print(f"  {n / a.reps:8.1f}  {loc}", file=sys.stderr)
 
 
+def demo_table(between):
+    """run.sh's DEMO_COUNT table: per plan, build (per entry) and render (per sample)."""
+    entries, samples = 64 * 64, 32 * 24
+    plans = ["small", "repeat", "tiled", "mip (for comparison)"]
+    # Per plan: a mark, the build, a mark, the render, a mark, the report (the last plan's report
+    # ends at exit, with no mark after it).
+    if len(between) != 3 * len(plans) - 1:
+        sys.exit(f"count_insns: expected {3 * len(plans) - 1} regions between demo marks, found {len(between)}")
+    print("| plan | build: instructions per entry | render: instructions per sample (footprint, lookup, mean, checksum) |")
+    print("|---|---:|---:|")
+    for i, name in enumerate(plans):
+        b, r = between[3 * i], between[3 * i + 1]
+        print(f"| {name} | {b / entries:.2f} | {r / samples:.1f} |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("elf")
-    ap.add_argument("log")
+    src = ap.add_mutually_exclusive_group(required=True)
+    src.add_argument("--plugin-log", metavar="LOG", help="output of the insn_count TCG plugin")
+    src.add_argument("--exec-log", metavar="LOG", help="log of qemu-system-arm -singlestep -d exec,nochain")
     ap.add_argument("--llvm-bin", required=True)
     ap.add_argument("--reps", type=int, default=11)
     ap.add_argument("--texels", type=int, default=64 * 64)
     ap.add_argument("--mip", action="store_true")
+    ap.add_argument("--demo", action="store_true", help="the texsat-demo firmware: print run.sh's table")
+    ap.add_argument(
+        "--regions-out",
+        metavar="FILE",
+        help="also write the instruction count of every region between marks, one a line",
+    )
     ap.add_argument(
         "--lines",
         metavar="ENTRY",
@@ -140,36 +263,43 @@ def main():
     )
     a = ap.parse_args()
 
-    mark = symbol_addr(a.llvm_bin, a.elf, "texsat_count_mark")
-    regions = []  # instruction counts between consecutive mark entries
-    pcs = []  # per region: the PCs executed (only with --profile)
-    cur = None
-    with open(a.log, errors="replace") as f:
-        for line in f:
-            m = TRACE.match(line)
-            if not m:
-                continue
-            pc = int(m.group(1), 16)
-            if pc == mark:
-                if cur is not None:
-                    regions.append(cur)
-                cur = 0
-                if a.profile or a.lines:
-                    pcs.append([])
-            elif cur is not None:
-                cur += 1
-                if a.profile or a.lines:
-                    pcs[-1].append(pc)
+    mark = symbol_addr(a.llvm_bin, a.elf, "texsat_demo_mark" if a.demo else "texsat_count_mark")
+    want_pcs = bool(a.profile or a.lines)
+    if a.plugin_log:
+        between, pcs = read_plugin_log(a.plugin_log, mark, want_pcs)
+    else:
+        between, pcs = read_exec_log(a.exec_log, mark, want_pcs)
+    if a.regions_out:
+        with open(a.regions_out, "w") as f:
+            f.writelines(f"{n}\n" for n in between)
+    if a.demo:
+        demo_table(between)
+        return
+
     entries = ENTRIES + (MIP_ENTRIES if a.mip else [])
-    regions.insert(0, 0)  # the first setup region precedes the first mark
-    pcs.insert(0, [])  # the same for the captured PCs: pcs[3 i + 2] is entry i's REPS region
+    # The first setup region precedes the first mark: regions[3 i + 1] and regions[3 i + 2] are
+    # entry i's 1-call and REPS-call regions (and pcs[3 i + 2] the PCs of the latter).
+    regions = [0] + between
+    pcs = [Counter()] + pcs
     if len(regions) != 3 * len(entries):
         sys.exit(
             f"count_insns: expected {3 * len(entries)} regions between marks, found {len(regions)} "
             "(did the firmware run to the end? is the log complete?)"
         )
+    expected = selftest_expected(a.llvm_bin, a.elf)
+    if regions[1:3] != expected:
+        sys.exit(
+            f"count_insns: SELF-CHECK FAILED: the self-check's regions count {regions[1:3]} instructions, "
+            f"its disassembly {expected}"
+        )
+    print(
+        f"count_insns: self-check passed: {regions[1]} and {regions[2]} instructions, as disassembled",
+        file=sys.stderr,
+    )
     per_call = {}
     for i, (key, _, _) in enumerate(entries):
+        if key == "selftest":
+            continue
         c1, cr = regions[3 * i + 1], regions[3 * i + 2]
         d = cr - c1
         if d % (a.reps - 1):
@@ -185,7 +315,7 @@ def main():
     print("| entry point | texsat, instructions per call | hand-written, same behaviour |")
     print("|---|---:|---:|")
     for key, label, hand in entries:
-        if key.startswith("hand_"):
+        if key.startswith("hand_") or key == "selftest":
             continue
         v = per_call[key] - base
         h = f"{per_call[hand] - base:g}" if hand else ""

@@ -9,7 +9,9 @@
 #
 #   bash examples/firmware/run.sh               build, run, compare; flash and RAM
 #   DEMO_COUNT=1 bash examples/firmware/run.sh  also instructions per table entry built and per
-#                                               sample, per plan (QEMU -singlestep exec log)
+#                                               sample, per plan (the TCG plugin plugin/insn_count.c,
+#                                               built with gcc, installed with apt when missing;
+#                                               COUNT_METHOD as in count-insns.sh)
 set -euo pipefail
 cd "$(dirname "$0")"
 HERE=$(pwd)
@@ -96,41 +98,79 @@ STEP="sizes"
   END { printf "flash (.vector_table + .text + .rodata + .data): %d bytes; RAM (.data + .bss): %d bytes\n", flash, ram }'
 
 if [ -n "${DEMO_COUNT:-}" ]; then
-  STEP="count instructions"
+  # The insn_count TCG plugin (plugin/insn_count.c, built with gcc) counts every executed
+  # instruction and prints the running count at each `texsat_demo_mark`; count_insns.py --demo
+  # turns the differences into the table. COUNT_METHOD as in count-insns.sh: auto (default: the
+  # plugin, falling back loudly to QEMU's -singlestep exec log if it cannot be built or
+  # loaded), plugin, singlestep, or both (fails unless both give the same count in every region).
+  METHOD=${COUNT_METHOD:-auto}
+  case "$METHOD" in
+    auto | plugin | singlestep | both) ;;
+    *)
+      STEP="count instructions"
+      die "COUNT_METHOD must be auto, plugin, singlestep or both (got $METHOD)"
+      ;;
+  esac
+  QEMU_COUNT=("$QEMU" -M mps2-an386 -display none -monitor none -serial none
+    -semihosting-config enable=on,target=native -kernel "$ELF")
+  PARSE=(python3 "$HERE/count_insns.py" "$ELF" --llvm-bin "$LLVM_BIN" --demo)
+  STEP="count instructions: find texsat_demo_mark"
   MARK=$("$LLVM_BIN/llvm-nm" "$ELF" | awk '$3 == "texsat_demo_mark" { print $1 }')
   [ -n "$MARK" ] || die "texsat_demo_mark not found"
-  FIFO=$OUT/exec.fifo
-  rm -f "$FIFO"
-  mkfifo "$FIFO"
-  timeout 600 "$QEMU" -M mps2-an386 -display none -monitor none -serial none \
-    -semihosting-config enable=on,target=native \
-    -singlestep -d exec,nochain -D "$FIFO" -kernel "$ELF" >/dev/null &
-  QPID=$!
-  python3 - "$FIFO" "$MARK" <<'PY'
-import re, sys
-mark = int(sys.argv[2], 16) & ~1
-trace = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
-regions, cur = [], None
-with open(sys.argv[1], errors="replace") as f:
-    for line in f:
-        m = trace.match(line)
-        if not m:
-            continue
-        pc = int(m.group(1), 16)
-        if pc == mark:
-            if cur is not None:
-                regions.append(cur)
-            cur = 0
-        elif cur is not None:
-            cur += 1
-entries, samples = 64 * 64, 32 * 24
-print("| plan | build: instructions per entry | render: instructions per sample (footprint, lookup, mean, checksum) |")
-print("|---|---:|---:|")
-for i, name in enumerate(["small", "repeat", "tiled", "mip (for comparison)"]):
-    b, r = regions[3 * i], regions[3 * i + 1]
-    print(f"| {name} | {b / entries:.2f} | {r / samples:.1f} |")
-PY
-  wait "$QPID" || die "QEMU (counting run) failed"
-  rm -f "$FIFO"
+  use_singlestep=0
+  if [ "$METHOD" != singlestep ]; then
+    STEP="count instructions: build the insn_count plugin (gcc)"
+    PLOG=$OUT/insn_count.log
+    if SO=$(bash "$HERE/plugin/build.sh" "$OUT"); then
+      STEP="count instructions: run under QEMU with the plugin"
+      rm -f "$PLOG"
+      status=0
+      timeout 120 "${QEMU_COUNT[@]}" -plugin "$SO,mark=0x$MARK,out=$PLOG" >/dev/null 2>"$OUT/qemu-count.log" ||
+        status=$?
+      if head -n 1 "$PLOG" 2>/dev/null | grep -qx 'insn_count 1'; then
+        [ "$status" = 0 ] || { cat "$OUT/qemu-count.log" >&2; die "QEMU exited with status $status"; }
+        STEP="count instructions: read the plugin's log"
+        "${PARSE[@]}" --plugin-log "$PLOG" --regions-out "$OUT/regions.plugin" || die "count_insns.py failed"
+      else
+        cat "$OUT/qemu-count.log" >&2
+        [ "$METHOD" = auto ] || die "QEMU did not load the plugin (status $status)"
+        use_singlestep=1
+      fi
+    else
+      [ "$METHOD" = auto ] || die "the plugin could not be built"
+      use_singlestep=1
+    fi
+    if [ "$use_singlestep" = 1 ]; then
+      printf '%s\n' "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!" \
+        "!!! run.sh: WARNING: the insn_count TCG plugin could not be built or loaded (see above):" \
+        "!!! counting from QEMU's -singlestep exec log instead (same counts, much slower)" \
+        "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!" >&2
+    fi
+  fi
+  if [ "$METHOD" = singlestep ] || [ "$METHOD" = both ] || [ "$use_singlestep" = 1 ]; then
+    # One TB per instruction, one log line per executed TB, read through a FIFO (about 1.1 GB).
+    STEP="count instructions: run under QEMU -singlestep -d exec,nochain"
+    FIFO=$OUT/exec.fifo
+    rm -f "$FIFO"
+    mkfifo "$FIFO"
+    timeout 600 "${QEMU_COUNT[@]}" -singlestep -d exec,nochain -D "$FIFO" >/dev/null &
+    QPID=$!
+    table=/dev/stdout
+    [ "$METHOD" = both ] && table=$OUT/table.singlestep
+    status=0
+    "${PARSE[@]}" --exec-log "$FIFO" --regions-out "$OUT/regions.singlestep" >"$table" || status=$?
+    qstatus=0
+    wait "$QPID" || qstatus=$?
+    rm -f "$FIFO"
+    [ "$qstatus" = 0 ] || die "QEMU exited with status $qstatus"
+    [ "$status" = 0 ] || die "count_insns.py failed"
+  fi
+  if [ "$METHOD" = both ]; then
+    STEP="count instructions: compare the plugin with the -singlestep exec log"
+    diff "$OUT/regions.plugin" "$OUT/regions.singlestep" >&2 ||
+      die "the two methods disagree (regions between marks: $OUT/regions.plugin, $OUT/regions.singlestep)"
+    echo "run.sh: the plugin and the -singlestep exec log agree on all" \
+      "$(wc -l <"$OUT/regions.plugin") regions between marks" >&2
+  fi
 fi
 echo "run.sh: OK"

@@ -1,12 +1,14 @@
 //! Instruction counter harness (feature `count`, bin `texsat-count`; run by `count-insns.sh`).
 //!
 //! Calls each measured texsat entry point from its own `#[inline(never)] fn m_<name>`, first once
-//! and then `REPS` times, with `texsat_count_mark` called between the runs. Under QEMU with
-//! `-singlestep -d exec,nochain` every executed instruction is one logged TB, so the number of
-//! TBs between two marks is the number of instructions executed there; `count-insns.sh` takes
-//! `(count(REPS) - count(1)) / (REPS - 1)`, which removes the setup, and subtracts the same
-//! figure for `m_baseline` (an empty wrapper of the same shape: loop, call, return, `black_box`).
-//! Then it exits QEMU through semihosting `SYS_EXIT`.
+//! and then `REPS` times, with `texsat_count_mark` called between the runs. Under QEMU, the TCG
+//! plugin `plugin/insn_count.c` counts every executed instruction and prints the running count
+//! each time the mark's first instruction runs (fallback: `-singlestep -d exec,nochain`, one
+//! logged TB per executed instruction), so the instructions executed between two marks are
+//! known exactly; a self-check in assembly comes first (`texsat_count_selftest`).
+//! `count-insns.sh` takes `(count(REPS) - count(1)) / (REPS - 1)`, which removes the setup, and
+//! subtracts the same figure for `m_baseline` (an empty wrapper of the same shape: loop, call,
+//! return, `black_box`). Then it exits QEMU through semihosting `SYS_EXIT`.
 //!
 //! Same types as the link gate: 8-bit texels, `u32` entries, one channel, `I24F8` corners,
 //! `NoCount`; a 64 x 64 pseudo-random texture. Same panic handler as the gate too: this binary
@@ -55,6 +57,36 @@ fn exit() -> ! {
         // SAFETY: semihosting call; r0 = SYS_EXIT (0x18), r1 = ADP_Stopped_ApplicationExit.
         unsafe { asm!("bkpt 0xab", in("r0") 0x18u32, in("r1") 0x20026u32, options(nostack)) }
     }
+}
+
+// The counting method's self-check (count_insns.py, entry `selftest`): a mark, 7 `nop`s, a
+// mark, 29 `nop`s, a mark, in assembly, so the instructions executed between the marks are
+// known from the disassembly alone (the rest of `texsat_count_mark` after its first
+// instruction, the `nop`s, the next `bl`); count_insns.py fails unless the count agrees.
+core::arch::global_asm!(
+    ".section .text.texsat_count_selftest,\"ax\",%progbits",
+    ".syntax unified",
+    ".thumb",
+    ".global texsat_count_selftest",
+    ".type texsat_count_selftest, %function",
+    ".thumb_func",
+    "texsat_count_selftest:",
+    "push {{r4, lr}}",
+    "bl texsat_count_mark",
+    ".rept 7",
+    "nop",
+    ".endr",
+    "bl texsat_count_mark",
+    ".rept 29",
+    "nop",
+    ".endr",
+    "bl texsat_count_mark",
+    "pop {{r4, pc}}",
+    ".size texsat_count_selftest, . - texsat_count_selftest",
+);
+
+extern "C" {
+    fn texsat_count_selftest();
 }
 
 #[inline(always)]
@@ -326,7 +358,11 @@ fn main() -> ! {
     }
     let sides = black_box(sum.sides_raw());
 
-    // Region order (count_insns.py's ENTRIES relies on it): each measure! gives three regions.
+    // Region order (count_insns.py's ENTRIES relies on it): the self-check and each measure!
+    // give three regions.
+    // SAFETY: the assembly above is an AAPCS function without arguments: it calls only
+    // `texsat_count_mark` and restores `lr` (pushed with `r4`, keeping the stack 8-byte aligned).
+    unsafe { texsat_count_selftest() };
     measure!(m_baseline(&sat, &rf));
     measure!(m_box_sum_int_border(&sat, &ri));
     measure!(h_box_sum_int_border(&hand_table, &ri));
