@@ -43,6 +43,7 @@ ENTRIES = [
     ("stable_repeat_cross", "4. `Sat::box_sum` Stable Repeat, crossing the right edge", None),
     ("mean_rounded", "`BoxSum::mean_rounded(0, 8, ..)` alone", "hand_mean"),
     ("hand_mean", "", None),
+    ("mean_rounded_u32", "`BoxSum::mean_rounded_u32(0, 8, ..)` alone (a plan's 32-bit mean)", "hand_mean"),
     ("stable_border_mean", "5. 2 + `BoxSum::mean_rounded(0, 8, ..)`", "hand_border_mean"),
     ("hand_border_mean", "", None),
     ("sat_build", "6. `Sat::build`", "hand_build"),

@@ -160,6 +160,11 @@ fn m_mean_rounded(sum: &BoxSum<u64, 1>) {
 }
 
 #[inline(never)]
+fn m_mean_rounded_u32(sum: &BoxSum<u64, 1>) {
+    keep(sum.mean_rounded_u32(black_box(0), black_box(8), &mut NoCount));
+}
+
+#[inline(never)]
 fn m_box_sum_stable_border_mean(sat: &Sat<'_, En>, r: &Rect<Co>) {
     if let Ok(s) = sat.box_sum(r, Stable, Border, &mut NoCount) {
         keep(s.mean_rounded(black_box(0), black_box(8), &mut NoCount));
@@ -387,6 +392,12 @@ fn main() -> ! {
     measure!(m_box_sum_stable_repeat(&sat, &rr_cross));
     measure!(m_mean_rounded(&sum));
     measure!(h_mean_rounded(sum.sum(), sides));
+    if sum.mean_rounded_u32(0, 8, &mut NoCount).map(u64::from)
+        != sum.mean_rounded(0, 8, &mut NoCount)
+    {
+        exit()
+    }
+    measure!(m_mean_rounded_u32(&sum));
     measure!(m_box_sum_stable_border_mean(&sat, &rf));
     measure!(h_box_sum_border_mean(&hand_table, &rf));
     // Sat::build of the whole W x H table (per entry: divided by W * H in count-insns.sh).
