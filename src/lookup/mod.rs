@@ -268,9 +268,9 @@ impl<W: Wide, const C: usize> BoxSum<W, C> {
     /// mean narrow: the same value, `round(sum * 2^g / area)` with ties up, computed by one
     /// 64-by-32-bit division (two hardware divides on a Cortex-M3/M4, no library routine), and
     /// refused as [`Error::TooWide`] where [`BoxSum::mean_rounded`] would need more: `sum * 2^g`
-    /// past 64 bits ([`Quantity::MeanNumerator`](crate::Quantity::MeanNumerator)), the area
-    /// `W H` (in units of `2^-2F`) past 32 bits ([`Quantity::MeanArea`](crate::Quantity::MeanArea))
-    /// or the mean itself past 32 bits ([`Quantity::Mean`](crate::Quantity::Mean)).
+    /// past 64 bits ([`Quantity::MeanNumerator`]), the area
+    /// `W H` (in units of `2^-2F`) past 32 bits ([`Quantity::MeanArea`])
+    /// or the mean itself past 32 bits ([`Quantity::Mean`]).
     ///
     /// Why: the general mean carries fallbacks for huge areas and numerators (a 64-bit divisor,
     /// long division), about 1.1 KiB of Cortex-M4 code a firmware never runs when its plan
