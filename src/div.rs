@@ -144,15 +144,68 @@ fn divrem_u64_narrow(n: u64, d: u64) -> Option<(u64, u64)> {
     Some((q, r))
 }
 
+/// `(n / d, n % d)` for any `n` and `d != 0` (`None` for `d = 0`) in the least code: on a
+/// 32-bit core restoring division, one quotient bit per step from the top (`bits(n) - bits(d) +
+/// 1` steps of a compare and a subtract, at most 64), native on 64-bit hosts.
+///
+/// Why: the boundary modes divide 64-bit operands only for coordinates or box widths past 32
+/// bits (a firmware's `i32` corners never reach them), yet [`divrem_u64`]'s fast path for such
+/// operands (two 16-bit digit steps and a hardware divide, inlined) costs about 440 bytes of
+/// Cortex-M4 flash in every firmware that places Repeat or Mirror boxes; this loop is a few
+/// dozen bytes.
+#[inline(never)]
+pub(crate) fn divrem_u64_small(n: u64, d: u64) -> Option<(u64, u64)> {
+    #[cfg(all(target_pointer_width = "64", not(test)))]
+    {
+        let d = core::num::NonZeroU64::new(d)?;
+        Some((n / d, n % d))
+    }
+    #[cfg(any(not(target_pointer_width = "64"), test))]
+    {
+        divrem_u64_bits(n, d)
+    }
+}
+
+/// [`divrem_u64_small`] as a 32-bit core computes it (also compiled on hosts for the tests).
+#[cfg(any(not(target_pointer_width = "64"), test))]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "lz(d) - lz(n) >= 0 as n >= d; d << i loses no bit (i <= lz(d) - lz(n) <= lz(d)) and \
+              1 << i has i <= 63; r -= step only when r >= step; i -= 1 only when i > 0"
+)]
+fn divrem_u64_bits(n: u64, d: u64) -> Option<(u64, u64)> {
+    if d == 0 {
+        return None;
+    }
+    if n < d {
+        return Some((0, n));
+    }
+    // Align d's top bit with n's, then one quotient bit per step.
+    let mut i = d.leading_zeros() - n.leading_zeros();
+    let (mut q, mut r) = (0u64, n);
+    loop {
+        let step = d << i;
+        if r >= step {
+            r -= step;
+            q |= 1 << i;
+        }
+        if i == 0 {
+            break;
+        }
+        i -= 1;
+    }
+    Some((q, r))
+}
+
 /// `(floor(x / p), x mod p)` (so `0 <= x mod p < p`) for `p > 0`; `None` for `p <= 0`. By
-/// [`divrem_u64`] on `|x|`.
+/// [`divrem_u64_small`] on `|x|` (its callers divide 64-bit operands only in rare cases).
 #[inline]
 pub(crate) fn div_euclid_i64(x: i64, p: i64) -> Option<(i64, i64)> {
     if p <= 0 {
         return None;
     }
     // p > 0: the bit pattern is the value.
-    let (q, r) = divrem_u64(x.unsigned_abs(), p.cast_unsigned())?;
+    let (q, r) = divrem_u64_small(x.unsigned_abs(), p.cast_unsigned())?;
     // |x| <= 2^63 and p >= 1: q <= 2^63, r < p; both fit i64 except q = 2^63 for x = i64::MIN,
     // p = 1, where -q is i64::MIN itself (the reinterpretation gives i64::MIN, and its wrapping
     // negation is i64::MIN again).
@@ -253,6 +306,7 @@ mod tests {
         let check = |n: u64, d: u64| {
             let want = n.checked_div(d).zip(n.checked_rem(d));
             assert_eq!(divrem_u64_narrow(n, d), want, "{n} / {d}");
+            assert_eq!(divrem_u64_bits(n, d), want, "bits: {n} / {d}");
         };
         // Under Miri (about 10^4 times slower) a smaller square and fewer random pairs; the
         // edges below run in full.

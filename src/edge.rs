@@ -553,7 +553,8 @@ fn div_euclid_narrow(x: i64, p: i64) -> Option<(i64, i64)> {
     crate::div::div_euclid_i64(x, p)
 }
 
-/// `(x / d, x % d)` in 32 bits when both fit (one hardware `udiv`), else in 64; `None` for
+/// `(x / d, x % d)` in 32 bits when both fit (one hardware `udiv`), else in 64 by the
+/// smallest division code (rare operands: see [`crate::div::divrem_u64_small`]); `None` for
 /// `d = 0`.
 #[inline(always)]
 fn div_rem_narrow(x: u64, d: u64) -> Option<(u64, u64)> {
@@ -561,7 +562,7 @@ fn div_rem_narrow(x: u64, d: u64) -> Option<(u64, u64)> {
         let d = core::num::NonZeroU32::new(d)?;
         return Some((u64::from(a / d), u64::from(a % d)));
     }
-    crate::div::divrem_u64(x, d)
+    crate::div::divrem_u64_small(x, d)
 }
 
 /// Places `[lo, hi)` (raw, `hi >= lo`) against an axis of `n >= 1` texels at `F = f`
