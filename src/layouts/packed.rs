@@ -19,7 +19,10 @@
     clippy::as_conversions
 )]
 
+#[cfg(test)]
 use crate::error::Error;
+use crate::texel::Entry;
+#[cfg(test)]
 use crate::width::bits_of_u64;
 
 /// Bits per storage word.
@@ -290,6 +293,7 @@ pub fn write_bits(words: &mut [u32], offset: u64, len: u32, value: u64) -> bool 
 
 /// [`write_bits`] with the reason of a refusal: [`Error::StorageTooSmall`] (in words) if the
 /// field does not fit the slice, [`Error::TooWide`] if the value has more than `len` bits.
+#[cfg(test)]
 #[inline]
 pub(crate) fn write_field(
     words: &mut [u32],
@@ -407,6 +411,142 @@ impl<'w> BitWriter<'w> {
             }
         }
     }
+}
+
+/// Packs the low `len` bits (`1 <= len <= 64`) of every value of `fields` back to back from bit
+/// `offset` (field `i` at bit `offset + i len`, the layout of [`write_bits`]), keeping the bits
+/// before `offset` and after the last field. Returns `false`, writing nothing, if the fields do
+/// not fit the slice or `len` is 0 or above 64.
+///
+/// The builders' packing. On 64-bit targets, fields of at most 32 bits go 32 at a time (exactly
+/// `len` words) through code specialized for the width ([`pack_groups`]): every shift a
+/// constant, every word assembled in a register and stored once, no branch per field; the
+/// fields after the last whole group go through [`BitWriter`], as does everything on 32-bit
+/// targets (where the 32 specializations would cost flash for no measured need).
+pub(crate) fn pack_fields<E: Entry>(
+    words: &mut [u32],
+    offset: u64,
+    fields: &[E],
+    len: u32,
+) -> bool {
+    if len == 0 || len > 64 || !BitWriter::fits(words, offset, fields.len(), len) {
+        return false;
+    }
+    #[cfg(target_pointer_width = "64")]
+    let (done, offset) = if len <= WORD_BITS {
+        pack_groups(words, offset, fields, len)
+    } else {
+        (0, offset)
+    };
+    let m = mask(len);
+    let mut out = BitWriter::new(words, offset);
+    #[cfg(target_pointer_width = "64")]
+    let fields = fields.get(done..).unwrap_or(&[]);
+    for f in fields {
+        out.push(f.to_u64() & m, len);
+    }
+    out.finish();
+    true
+}
+
+/// Packs the whole groups of 32 fields of `fields` (`len <= 32` bits each, their low bits) from
+/// bit `offset`, which the caller has checked they fit; returns the fields done and the bit
+/// offset after them. Dispatches on `len` to [`pack_groups_k`].
+#[cfg(target_pointer_width = "64")]
+fn pack_groups<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32) -> (usize, u64) {
+    macro_rules! by_width {
+        ($($k:literal)*) => {
+            match len {
+                $($k => pack_groups_k::<E, $k>(words, offset, fields),)*
+                _ => (0, offset),
+            }
+        };
+    }
+    by_width!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32)
+}
+
+/// [`pack_groups`] for `K`-bit fields. A group of 32 fields is exactly `K` words: [`group`]
+/// assembles them as if the group started at a word boundary (the shifts are constants), and
+/// each is stored moved up by `s = offset mod 32`: stored word `m` is the top 32 bits of
+/// `(w_m : w_{m-1}) >> (32 - s)`, the word before the first holding the `s` bits already in
+/// the destination below `offset`. The `s` bits left over after the last group are merged into
+/// the next word (its upper bits kept).
+#[cfg(target_pointer_width = "64")]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "s < 32, so 32 - s is in 1..=32 and a u64 shift by it is defined; groups * K words \
+              and groups * 32 K bits end inside the slice, which the caller checked (fits), so \
+              first + words and offset + bits do not wrap; the u32 casts keep the low word on \
+              purpose"
+)]
+fn pack_groups_k<E: Entry, const K: u32>(
+    words: &mut [u32],
+    offset: u64,
+    fields: &[E],
+) -> (usize, u64) {
+    let groups = fields.len() / 32;
+    let s = word_shift(offset);
+    let (Ok(first), Ok(k)) = (usize::try_from(offset / WORD_BITS64), usize::try_from(K)) else {
+        return (0, offset);
+    };
+    let n = groups * k;
+    let Some(dst) = words.get_mut(first..first + n) else {
+        return (0, offset);
+    };
+    if groups == 0 {
+        return (0, offset);
+    }
+    // The destination's bits below `offset`, at the top of the word before the first.
+    let mut prev = (dst.first().map_or(0, |&w| u64::from(w)) << (32 - s)) as u32;
+    for (f, d) in fields.chunks_exact(32).zip(dst.chunks_exact_mut(k)) {
+        let Ok(f) = <&[E; 32]>::try_from(f) else {
+            break;
+        };
+        let w = group::<E, K>(f);
+        for (d, &w) in d.iter_mut().zip(w.iter()) {
+            *d = ((u64::from(w) << 32 | u64::from(prev)) >> (32 - s)) as u32;
+            prev = w;
+        }
+    }
+    if s > 0 {
+        if let Some(d) = words.get_mut(first + n) {
+            let keep = !(mask(s) as u32);
+            *d = (*d & keep) | (prev >> (32 - s));
+        }
+    }
+    (groups * 32, offset + u64::from(K) * 32 * groups as u64)
+}
+
+/// 32 fields of `K` bits (their low bits) packed into the first `K` words of the result, as
+/// from a word boundary. With `K` a constant the loop unrolls into straight-line code: each
+/// word is assembled in a register from the fields it holds and written once.
+#[cfg(target_pointer_width = "64")]
+#[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "bits < 32 between fields and K <= 32, so bits + K < 64 and the shift of a K-bit \
+              field by bits fits 64 bits; j < K <= 32 while fields remain (32 K bits in all); \
+              the u32 cast keeps the low word on purpose"
+)]
+fn group<E: Entry, const K: u32>(f: &[E; 32]) -> [u32; 32] {
+    let m = mask(K);
+    let mut out = [0u32; 32];
+    let (mut acc, mut bits, mut j) = (0u64, 0u32, 0usize);
+    for v in f {
+        acc |= (v.to_u64() & m) << bits;
+        bits += K;
+        if bits >= WORD_BITS {
+            if let Some(o) = out.get_mut(j) {
+                *o = acc as u32;
+            }
+            j += 1;
+            acc >>= WORD_BITS;
+            bits -= WORD_BITS;
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -260,7 +260,7 @@ fn check_geometry_u128(g: &Geometry, channels: usize) -> u128 {
             assert_eq!(c.bits, bits, "{what:?}");
             let stride = bits as u128 * channels as u128;
             assert_eq!(c.stride_bits as u128, stride, "{what:?}");
-            assert_eq!(c.row_bits as u128, cy * stride, "{what:?}");
+            assert_eq!(c.row_bits as u128, cx * stride, "{what:?}");
             let size = cx * cy * stride;
             if cx > 0 && cy > 0 {
                 let last = c.offset((cx - 1) as u32, (cy - 1) as u32) as u128;

@@ -45,8 +45,8 @@
 use core::num::NonZeroU32;
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_masked, read_masked32, word_shift, words_of_bits,
-    write_field, USIZE_MAX64, WORD_BITS,
+    bits_of_mul, check_dimensions, mask, pack_fields, read_masked, read_masked32, word_shift,
+    words_of_bits, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::{per_channel, Counter, Region};
@@ -421,11 +421,13 @@ impl Axis {
 }
 
 /// Where component `(p, q)` lives and how wide its fields are. Entry `(ix, iy)` channel `c`
-/// starts at bit `offset_bits + ix row_bits + iy stride_bits + c bits`.
+/// starts at bit `offset_bits + iy row_bits + ix stride_bits + c bits`: the entries are stored
+/// row by row (all `ix` of one `iy`, then the next `iy`), so the builder, which finishes one
+/// `iy` of one y component per texture row, writes each component row as one stream of fields.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Component {
     pub(super) offset_bits: u64,
-    /// Bits of one row of entries (`count_y` entries): `count_y * stride_bits`.
+    /// Bits of one row of entries (`count_x` entries): `count_x * stride_bits`.
     pub(super) row_bits: u64,
     /// Bits of one entry, all channels: `bits * C`.
     pub(super) stride_bits: u64,
@@ -450,8 +452,8 @@ impl Component {
     #[inline(always)]
     pub(super) fn offset(&self, ix: u32, iy: u32) -> u64 {
         self.offset_bits
-            .wrapping_add(u64::from(ix).wrapping_mul(self.row_bits))
-            .wrapping_add(u64::from(iy).wrapping_mul(self.stride_bits))
+            .wrapping_add(u64::from(iy).wrapping_mul(self.row_bits))
+            .wrapping_add(u64::from(ix).wrapping_mul(self.stride_bits))
     }
 }
 
@@ -630,10 +632,10 @@ impl Geometry {
                 let Some(stride_bits) = (bits as u64).checked_mul(ch) else {
                     return Err(too_large);
                 };
-                let Some(row_bits) = stride_bits.checked_mul(cy) else {
+                let Some(row_bits) = stride_bits.checked_mul(cx) else {
                     return Err(too_large);
                 };
-                let Some(size) = row_bits.checked_mul(cx) else {
+                let Some(size) = row_bits.checked_mul(cy) else {
                     return Err(too_large);
                 };
                 comps[p][q] = Component {
@@ -889,8 +891,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             // (exact, the low words of the u64 geometry) and each field from at most two words
             // with 32-bit shifts. The common case on a microcontroller (tables below 512 MiB).
             let at = (comp.offset_bits as u32)
-                .wrapping_add(ix.wrapping_mul(comp.row_bits as u32))
-                .wrapping_add(iy.wrapping_mul(comp.stride_bits as u32));
+                .wrapping_add(iy.wrapping_mul(comp.row_bits as u32))
+                .wrapping_add(ix.wrapping_mul(comp.stride_bits as u32));
             let read = comp.stride_bits as u32;
             k.reads(1, read);
             k.read_at(Region::Table, u64::from(at), read);
@@ -922,8 +924,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     fn field32<K: Counter>(&self, c: &Comp32, ix: u32, iy: u32, k: &mut K) -> [E; C] {
         let mut at = c
             .offset
-            .wrapping_add(ix.wrapping_mul(c.row))
-            .wrapping_add(iy.wrapping_mul(c.stride));
+            .wrapping_add(iy.wrapping_mul(c.row))
+            .wrapping_add(ix.wrapping_mul(c.stride));
         k.reads(1, c.stride);
         k.read_at(Region::Table, u64::from(at), c.stride);
         k.words(
@@ -1098,9 +1100,9 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     /// top edges (`i` and `j` not multiples of the tile sides, and neither is `i + 1`, `j + 1`:
     /// every digit non-zero, both columns and both rows in the same tile): the usual corner of
     /// a 16-read lookup. The 9 fields ([`Tiled::quad_fast`]) at offsets formed by additions
-    /// from three products: the local sums at `o`, `o + row`, `o + stride`, `o + row + stride`;
-    /// the strips above at `o01` and `o01 + row`; the strips left at `o10` and `o10 + stride`;
-    /// the tile corner. `None` when the cell is not of that kind.
+    /// from three products: the local sums at `o`, `o + stride` (next column), `o + row` (next
+    /// row), `o + row + stride`; the strips above at `o01` and `o01 + stride`; the strips left
+    /// at `o10` and `o10 + row`; the tile corner. `None` when the cell is not of that kind.
     #[inline(never)]
     fn cell_fast<K: Counter>(
         &self,
@@ -1118,18 +1120,18 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         let [c00, c01, c10, c11] = &o.comps;
         let at = |c: &Comp32, ix: u32, iy: u32| {
             c.offset
-                .wrapping_add(ix.wrapping_mul(c.row))
-                .wrapping_add(iy.wrapping_mul(c.stride))
+                .wrapping_add(iy.wrapping_mul(c.row))
+                .wrapping_add(ix.wrapping_mul(c.stride))
         };
         let o00 = at(c00, x.i0, y.i0);
         let mut s0 = self.field_at(c00, o00, k);
-        let mut s1 = self.field_at(c00, o00.wrapping_add(c00.row), k);
-        let mut s2 = self.field_at(c00, o00.wrapping_add(c00.stride), k);
+        let mut s1 = self.field_at(c00, o00.wrapping_add(c00.stride), k);
+        let mut s2 = self.field_at(c00, o00.wrapping_add(c00.row), k);
         let mut s3 = self.field_at(c00, o00.wrapping_add(c00.row).wrapping_add(c00.stride), k);
         if y.q != 0 {
             let o01 = at(c01, x.i0, y.q.wrapping_sub(1));
             let a = self.field_at(c01, o01, k);
-            let b = self.field_at(c01, o01.wrapping_add(c01.row), k);
+            let b = self.field_at(c01, o01.wrapping_add(c01.stride), k);
             add_to(&mut s0, &a);
             add_to(&mut s1, &b);
             add_to(&mut s2, &a);
@@ -1138,7 +1140,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         if x.q != 0 {
             let o10 = at(c10, x.q.wrapping_sub(1), y.i0);
             let mut a = self.field_at(c10, o10, k);
-            let mut b = self.field_at(c10, o10.wrapping_add(c10.stride), k);
+            let mut b = self.field_at(c10, o10.wrapping_add(c10.row), k);
             if y.q != 0 {
                 let t = self.field32(c11, x.q.wrapping_sub(1), y.q.wrapping_sub(1), k);
                 add_to(&mut a, &t);
@@ -1405,6 +1407,105 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     }
 }
 
+/// Refuses a row holding a texel wider than `texel_bits` (the field widths are proved for
+/// `texel_bits`), reporting the first such texel's width. Nothing to check when `T` is no wider;
+/// else one OR over the row (vectorized: every texel is at most `2^b - 1` iff their OR is), the
+/// texel-by-texel search only when that fails.
+pub(super) fn check_texel_width<T: Texel>(texels: &[T], texel_bits: u32) -> Result<(), Error> {
+    if T::BITS <= texel_bits {
+        return Ok(());
+    }
+    let max = mask(texel_bits);
+    if u64::from(texels.iter().fold(0u16, |a, t| a | t.to_u16())) <= max {
+        return Ok(());
+    }
+    for t in texels {
+        let v = t.to_u16();
+        if u64::from(v) > max {
+            return Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: width::bits_of_u64(u64::from(v)),
+                bits_available: texel_bits,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `row[x] += t_0 + ... + t_x` per channel (wrapping), for a row of `w C` entries: the flat
+/// build's row step (the row above plus the running sum), with the vectorized kernel where it
+/// applies (`simd`: `u8` texels, `u32` entries, one channel).
+pub(super) fn add_prefix_row<T: Texel, E: Entry, const C: usize>(texels: &[T], row: &mut [E]) {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if crate::simd::build_row_in_place::<T, E, C>(texels, row, false, None) {
+        return;
+    }
+    let mut run = [E::ZERO; C];
+    for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+        for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+            *r = r.wrapping_add(E::from(tv.to_u16()));
+            *ov = ov.wrapping_add(*r);
+        }
+    }
+}
+
+/// One row of the fields of x component `p` into `out`, in storage order: for every stored
+/// position `x <= n` (a multiple of `b = b_p` whose digit `d_p` is not zero) the `C` values
+/// `acc[x] - acc[trunc_{p+1}(x)]`, `acc[x]` at `x C`. `big = b_{p+1}`, or 0 for the top
+/// component (its intervals start at 0). Returns the number of values written; `None` if `acc`
+/// or `out` is too short (never, for the builder's rows). Within a block of `b_{p+1}` the
+/// positions are `base + b, base + 2b, ...` (contiguous for `b = 1`: the local sums).
+fn component_fields<E: Entry, const C: usize>(
+    acc: &[E],
+    n: usize,
+    b: usize,
+    big: usize,
+    out: &mut [E],
+) -> Option<usize> {
+    let at = |x: usize| x.checked_mul(C);
+    let mut k = 0usize;
+    let mut base = 0usize;
+    loop {
+        let from = at(base)?;
+        let lo: [E; C] = acc.get(from..)?.first_chunk::<C>().copied()?;
+        let end = if big == 0 {
+            n
+        } else {
+            n.min(base.saturating_add(big).saturating_sub(1))
+        };
+        if b == 1 {
+            if end > base {
+                let src = acc.get(from.checked_add(C)?..at(end)?.checked_add(C)?)?;
+                let dst = out.get_mut(k..k.checked_add(src.len())?)?;
+                for (d, s) in dst.chunks_exact_mut(C).zip(src.chunks_exact(C)) {
+                    for ((d, s), l) in d.iter_mut().zip(s).zip(&lo) {
+                        *d = s.wrapping_sub(*l);
+                    }
+                }
+                k = k.checked_add(src.len())?;
+            }
+        } else {
+            let mut x = base.saturating_add(b);
+            while x <= end {
+                let v: [E; C] = acc.get(at(x)?..)?.first_chunk::<C>().copied()?;
+                let dst = out.get_mut(k..k.checked_add(C)?)?;
+                for ((d, s), l) in dst.iter_mut().zip(&v).zip(&lo) {
+                    *d = s.wrapping_sub(*l);
+                }
+                k = k.checked_add(C)?;
+                x = x.saturating_add(b);
+            }
+        }
+        if big == 0 {
+            return Some(k);
+        }
+        base = base.saturating_add(big);
+        if base >= n {
+            return Some(k);
+        }
+    }
+}
+
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
 /// component (two for one level of tiles) plus the current row's prefix sums.
 #[derive(Debug)]
@@ -1481,58 +1582,20 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 got: texels.len(),
             });
         }
-        // The field widths are proved for `texel_bits`; a wider texel would break them.
-        let max = mask(g.texel_bits);
-        for t in texels {
-            let v = t.to_u16();
-            if u64::from(v) > max {
-                return Err(Error::TooWide {
-                    what: Quantity::Entry,
-                    bits_needed: width::bits_of_u64(u64::from(v)),
-                    bits_available: g.texel_bits,
-                });
-            }
-        }
-        #[allow(
-            clippy::arithmetic_side_effects,
-            reason = "E::BITS is 16, 32 or 64 (Entry is sealed): + 1 does not wrap"
-        )]
-        let overflow = Error::TooWide {
-            what: Quantity::Entry,
-            bits_needed: E::BITS + 1,
-            bits_available: E::BITS,
-        };
-        let modulus = g.spec.modulus;
-        // Exact sums are checked; a modular spec needs them only modulo 2^k and wraps on purpose.
-        let add = |a: E, b: E| -> Result<E, Error> {
-            match modulus {
-                Some(_) => Ok(a.wrapping_add(b)),
-                None => a.checked_add(b).ok_or(overflow),
-            }
-        };
+        check_texel_width(texels, g.texel_bits)?;
         let short = Error::StorageTooSmall {
             needed: row_len,
             got: scratch.len(),
         };
-        let (prefix, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
-        // The row's prefix sums P[X], X = 0..=n.
-        let mut run = [E::ZERO; C];
-        let (p0, rest) = prefix.split_at_mut_checked(C).ok_or(short)?;
-        p0.fill(E::ZERO);
-        for (t, p) in texels.chunks_exact(C).zip(rest.chunks_exact_mut(C)) {
-            for ((tv, pv), r) in t.iter().zip(p.iter_mut()).zip(run.iter_mut()) {
-                *r = add(*r, E::from(tv.to_u16()))?;
-                *pv = *r;
-            }
-        }
-        // Every y component accumulates the row.
-        for acc in accs.chunks_exact_mut(row_len) {
-            for (a, &p) in acc.iter_mut().zip(prefix.iter()) {
-                *a = add(*a, p)?;
-            }
-        }
+        // The first scratch row holds one row of fields at a time; then one accumulator row per
+        // y component, acc_q[x] at x C.. for x = 0..=w (x = 0 always zero).
+        let (buf, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
+        // acc_0 += the row's prefix sums. Wrapping additions: without a modulus every sum is at
+        // most the texture's total, which `E` holds (`check_value_type`); with one, only the
+        // low k bits are stored, and those of a sum depend only on the low k bits of its terms.
+        add_prefix_row::<T, E, C>(texels, accs.get_mut(C..row_len).ok_or(short)?);
         // Row y ends a block of exactly one y component: that of its lowest non-zero digit
-        // (a multiple of b_q with d_q != 0). Likewise each x, for the x components.
+        // (a multiple of b_q with d_q != 0).
         #[allow(
             clippy::arithmetic_side_effects,
             clippy::as_conversions,
@@ -1549,53 +1612,58 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             return Err(short);
         };
         let iy = dy.index.get(q).copied().unwrap_or(0);
-        let acc = accs.chunks_exact(row_len).nth(q).ok_or(short)?;
-        for x in 1..=n {
-            #[allow(clippy::as_conversions, reason = "x <= w < 2^31: lossless")]
-            let dx = g.ax.digits(x as u32);
-            let Some(p) = dx
-                .digit
-                .iter()
-                .take(g.ax.components())
-                .position(|&d| d != 0)
-            else {
-                continue;
-            };
-            let (d, ix) = (
-                dx.digit.get(p).copied().unwrap_or(0),
-                dx.index.get(p).copied().unwrap_or(0),
-            );
-            // The interval I_p(x) = [x - d_p b_p, x): x is a multiple of b_p here.
+        // Invariant between rows: acc_j holds the rows in [trunc_{j+1}(y), trunc_j(y)) for
+        // j >= 1 and acc_0 those in [trunc_1(y), y). Here y is a multiple of b_1, ..., b_q, so
+        // folding acc_{j-1} into acc_j for j = 1..=q (and clearing it) leaves in acc_q the rows
+        // of I_q(y) = [trunc_{q+1}(y), y), the sums C_pq(., y) need, and restores the
+        // invariant: one pass over a row when y ends a tile row (1 row in b_1), none otherwise.
+        for j in 1..=q {
             #[allow(
                 clippy::arithmetic_side_effects,
-                clippy::as_conversions,
-                reason = "u32 -> usize is lossless (usize has at least 32 bits: MAX_DIMENSION); \
-                          x = sum_k d_k b_k >= d_p b_p, so x - d_p b_p >= 0; lo <= x <= w, so \
-                          (x + 1) C <= (w + 1) C = row_len, computed with checks"
+                reason = "j <= q <= Ly < MAX_LEVELS + 1 and (Ly + 2) row_len fits usize \
+                          (scratch_needed): no overflow"
             )]
-            let (hi_range, lo_range) = {
-                let lo = x - (d as usize) * (g.ax.block(p) as usize);
-                (x * C..(x + 1) * C, lo * C..(lo + 1) * C)
-            };
-            let comp = g.component(p, q).ok_or(short)?;
-            let (hi_v, lo_v) = (
-                acc.get(hi_range).ok_or(short)?,
-                acc.get(lo_range).ok_or(short)?,
-            );
-            let mut at = comp.offset(ix, iy);
-            for (&a, &b) in hi_v.iter().zip(lo_v.iter()) {
-                let mut v = a.wrapping_sub(b);
-                if let Some(m) = modulus {
-                    v = v.low_bits(m);
-                }
-                write_field(words, at, comp.bits, v.to_u64())?;
-                at = at.wrapping_add(u64::from(comp.bits));
+            let (lower, upper) = accs.split_at_mut_checked(j * row_len).ok_or(short)?;
+            #[allow(clippy::arithmetic_side_effects, reason = "j >= 1; as above")]
+            let below = lower.get_mut((j - 1) * row_len..).ok_or(short)?;
+            let here = upper.get_mut(..row_len).ok_or(short)?;
+            for (h, b) in here.iter_mut().zip(below.iter_mut()) {
+                *h = h.wrapping_add(*b);
+                *b = E::ZERO;
             }
         }
-        // Reset the accumulators whose super-block ends here: those below q (y is a multiple of
-        // b_{q'+1} for q' < q).
-        for acc in accs.chunks_exact_mut(row_len).take(q) {
-            acc.fill(E::ZERO);
+        let acc = accs.chunks_exact(row_len).nth(q).ok_or(short)?;
+        // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
+        // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
+        for p in 0..g.ax.components() {
+            let comp = g.component(p, q).ok_or(short)?;
+            let big = if p < g.ax.levels {
+                g.ax.block(p.saturating_add(1))
+            } else {
+                0
+            };
+            #[allow(
+                clippy::as_conversions,
+                reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+            )]
+            let (b, big) = (g.ax.block(p) as usize, big as usize);
+            let count = component_fields::<E, C>(acc, n, b, big, buf).ok_or(short)?;
+            let fields = buf.get(..count).ok_or(short)?;
+            // The stored positions, counted as Geometry::new counted them: a mismatch would
+            // be a bug here, refused rather than written across the next row.
+            let bits = u64::try_from(count)
+                .ok()
+                .and_then(|c| c.checked_mul(u64::from(comp.bits)));
+            if bits != Some(comp.row_bits) {
+                return Err(short);
+            }
+            // (A component without stored positions on this axis has no fields, and 0 bits.)
+            if !fields.is_empty() && !pack_fields(words, comp.offset(0, iy), fields, comp.bits) {
+                return Err(Error::StorageTooSmall {
+                    needed: g.words,
+                    got: words.len(),
+                });
+            }
         }
         #[allow(
             clippy::arithmetic_side_effects,
