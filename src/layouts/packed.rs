@@ -466,8 +466,8 @@ fn pack_groups<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32)
 }
 
 /// [`pack_groups`] for `K`-bit fields. A group of 32 fields is exactly `K` words: [`group`]
-/// assembles them as if the group started at a word boundary (the shifts are constants), and
-/// each is stored moved up by `s = offset mod 32`: stored word `m` is the top 32 bits of
+/// assembles them as if the group started at a word boundary (the shifts are constants) and
+/// stores each moved up by `s = offset mod 32`: stored word `m` is the top 32 bits of
 /// `(w_m : w_{m-1}) >> (32 - s)`, the word before the first holding the `s` bits already in
 /// the destination below `offset`. The `s` bits left over after the last group are merged into
 /// the next word (its upper bits kept).
@@ -475,39 +475,35 @@ fn pack_groups<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32)
 #[allow(
     clippy::arithmetic_side_effects,
     clippy::as_conversions,
-    reason = "s < 32, so 32 - s is in 1..=32 and a u64 shift by it is defined; groups * K words \
-              and groups * 32 K bits end inside the slice, which the caller checked (fits), so \
-              first + words and offset + bits do not wrap; the u32 casts keep the low word on \
-              purpose"
+    reason = "s < 32, so 32 - s is in 1..=32 and a u64 shift by it is defined; groups K words \
+              and groups 32 K bits end inside the slice, which the caller checked (fits), so \
+              first + n and offset + bits do not wrap; K <= 32: lossless casts; the u32 casts \
+              keep the low word on purpose"
 )]
-fn pack_groups_k<E: Entry, const K: u32>(
+fn pack_groups_k<E: Entry, const K: usize>(
     words: &mut [u32],
     offset: u64,
     fields: &[E],
 ) -> (usize, u64) {
     let groups = fields.len() / 32;
     let s = word_shift(offset);
-    let (Ok(first), Ok(k)) = (usize::try_from(offset / WORD_BITS64), usize::try_from(K)) else {
+    let Ok(first) = usize::try_from(offset / WORD_BITS64) else {
         return (0, offset);
     };
-    let n = groups * k;
-    let Some(dst) = words.get_mut(first..first + n) else {
-        return (0, offset);
-    };
+    let n = groups * K;
     if groups == 0 {
         return (0, offset);
     }
+    let Some(dst) = words.get_mut(first..first + n) else {
+        return (0, offset);
+    };
     // The destination's bits below `offset`, at the top of the word before the first.
     let mut prev = (dst.first().map_or(0, |&w| u64::from(w)) << (32 - s)) as u32;
-    for (f, d) in fields.chunks_exact(32).zip(dst.chunks_exact_mut(k)) {
-        let Ok(f) = <&[E; 32]>::try_from(f) else {
+    for (f, d) in fields.chunks_exact(32).zip(dst.chunks_exact_mut(K)) {
+        let (Ok(f), Ok(d)) = (<&[E; 32]>::try_from(f), <&mut [u32; K]>::try_from(d)) else {
             break;
         };
-        let w = group::<E, K>(f);
-        for (d, &w) in d.iter_mut().zip(w.iter()) {
-            *d = ((u64::from(w) << 32 | u64::from(prev)) >> (32 - s)) as u32;
-            prev = w;
-        }
+        group::<E, K>(f, d, &mut prev, s);
     }
     if s > 0 {
         if let Some(d) = words.get_mut(first + n) {
@@ -515,38 +511,53 @@ fn pack_groups_k<E: Entry, const K: u32>(
             *d = (*d & keep) | (prev >> (32 - s));
         }
     }
-    (groups * 32, offset + u64::from(K) * 32 * groups as u64)
+    (groups * 32, offset + (K as u64) * 32 * groups as u64)
 }
 
-/// 32 fields of `K` bits (their low bits) packed into the first `K` words of the result, as
-/// from a word boundary. With `K` a constant the loop unrolls into straight-line code: each
-/// word is assembled in a register from the fields it holds and written once.
+/// 32 fields of `K` bits (their low bits) packed into `K` words, as from a word boundary (field
+/// `i` at bit `i K`: bit `i K mod 32` of word `i K / 32`, its top bits in the next word when
+/// it crosses the boundary), each word stored into `d` moved up by `s` bits as soon as it is
+/// complete (see [`pack_groups_k`]; `prev` is the word before). Written out once per field (a
+/// macro, not a loop, which LLVM keeps rolled): with `K` a constant every index, shift and
+/// test is a constant, each word is assembled in a register and written once, and nothing
+/// goes through memory in between.
 #[cfg(target_pointer_width = "64")]
 #[inline(always)]
 #[allow(
     clippy::arithmetic_side_effects,
     clippy::as_conversions,
-    reason = "bits < 32 between fields and K <= 32, so bits + K < 64 and the shift of a K-bit \
-              field by bits fits 64 bits; j < K <= 32 while fields remain (32 K bits in all); \
-              the u32 cast keeps the low word on purpose"
+    reason = "i < 32 and K <= 32: i K < 1024 and the casts are lossless; sh < 32 and s < 32, so \
+              32 - sh and 32 - s are in 1..=32, a K-bit field shifted by sh fits 64 bits, and \
+              the u32 casts keep a word on purpose; j = i K / 32 < K, and j + 1 < K where the \
+              field crosses (i K + K > 32 (j + 1) and i K + K <= 32 K)"
 )]
-fn group<E: Entry, const K: u32>(f: &[E; 32]) -> [u32; 32] {
-    let m = mask(K);
-    let mut out = [0u32; 32];
-    let (mut acc, mut bits, mut j) = (0u64, 0u32, 0usize);
-    for v in f {
-        acc |= (v.to_u64() & m) << bits;
-        bits += K;
-        if bits >= WORD_BITS {
+fn group<E: Entry, const K: usize>(f: &[E; 32], d: &mut [u32; K], prev: &mut u32, s: u32) {
+    let kb = K as u32;
+    let m = mask(kb);
+    let mut out = [0u32; K];
+    macro_rules! fields {
+        ($($i:literal)*) => {$(
+            let v = f[$i].to_u64() & m;
+            let p = $i * kb;
+            let (j, sh) = ((p / WORD_BITS) as usize, p % WORD_BITS);
             if let Some(o) = out.get_mut(j) {
-                *o = acc as u32;
+                *o |= (v << sh) as u32;
             }
-            j += 1;
-            acc >>= WORD_BITS;
-            bits -= WORD_BITS;
-        }
+            if sh + kb > WORD_BITS {
+                if let Some(o) = out.get_mut(j + 1) {
+                    *o |= (v >> (WORD_BITS - sh)) as u32;
+                }
+            }
+            // Word j is complete once a field reaches its end.
+            if sh + kb >= WORD_BITS {
+                if let (Some(&w), Some(o)) = (out.get(j), d.get_mut(j)) {
+                    *o = ((u64::from(w) << 32 | u64::from(*prev)) >> (WORD_BITS - s)) as u32;
+                    *prev = w;
+                }
+            }
+        )*};
     }
-    out
+    fields!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
 }
 
 #[cfg(test)]

@@ -1463,8 +1463,19 @@ fn component_fields<E: Entry, const C: usize>(
     out: &mut [E],
 ) -> Option<usize> {
     let at = |x: usize| x.checked_mul(C);
-    let mut k = 0usize;
-    let mut base = 0usize;
+    // The local sums of the common power-of-two tiles: whole tiles by code specialized for the
+    // width; the last, partial tile below.
+    let (mut k, mut base) = match (b, big) {
+        (1, 2) => local_fields::<E, C, 2>(acc, n, out)?,
+        (1, 4) => local_fields::<E, C, 4>(acc, n, out)?,
+        (1, 8) => local_fields::<E, C, 8>(acc, n, out)?,
+        (1, 16) => local_fields::<E, C, 16>(acc, n, out)?,
+        (1, 32) => local_fields::<E, C, 32>(acc, n, out)?,
+        _ => (0, 0),
+    };
+    if big != 0 && base >= n {
+        return Some(k);
+    }
     loop {
         let from = at(base)?;
         let lo: [E; C] = acc.get(from..)?.first_chunk::<C>().copied()?;
@@ -1477,10 +1488,10 @@ fn component_fields<E: Entry, const C: usize>(
             if end > base {
                 let src = acc.get(from.checked_add(C)?..at(end)?.checked_add(C)?)?;
                 let dst = out.get_mut(k..k.checked_add(src.len())?)?;
-                for (d, s) in dst.chunks_exact_mut(C).zip(src.chunks_exact(C)) {
-                    for ((d, s), l) in d.iter_mut().zip(s).zip(&lo) {
-                        *d = s.wrapping_sub(*l);
-                    }
+                // Channel i % C of each entry (i % C < C: the `get` never fails; with C a
+                // constant, no division and, for C = 1, a plain loop over the tile's row).
+                for (i, (d, s)) in dst.iter_mut().zip(src).enumerate() {
+                    *d = s.wrapping_sub(lo.get(i % C).copied().unwrap_or(E::ZERO));
                 }
                 k = k.checked_add(src.len())?;
             }
@@ -1504,6 +1515,30 @@ fn component_fields<E: Entry, const C: usize>(
             return Some(k);
         }
     }
+}
+
+/// [`component_fields`] for the local sums (`b = 1`) of `B`-texel blocks, over the whole blocks
+/// of the row (those whose `B - 1` positions are all at most `n`): per block, `acc[base + d] -
+/// acc[base]` for `d = 1..B`, loops of constant length that LLVM unrolls and vectorizes.
+/// Returns the values written and the first block not done.
+fn local_fields<E: Entry, const C: usize, const B: usize>(
+    acc: &[E],
+    n: usize,
+    out: &mut [E],
+) -> Option<(usize, usize)> {
+    // Block t is whole if t B + B - 1 <= n, i.e. t < (n + 1) / B.
+    let blocks = n.checked_add(1)? / B;
+    let len_in = B.checked_mul(C)?;
+    let len_out = len_in.checked_sub(C)?;
+    let src = acc.get(..blocks.checked_mul(len_in)?)?;
+    let dst = out.get_mut(..blocks.checked_mul(len_out)?)?;
+    for (d, a) in dst.chunks_exact_mut(len_out).zip(src.chunks_exact(len_in)) {
+        let (lo, rest) = a.split_at_checked(C)?;
+        for (i, (d, r)) in d.iter_mut().zip(rest).enumerate() {
+            *d = r.wrapping_sub(lo.get(i % C).copied().unwrap_or(E::ZERO));
+        }
+    }
+    Some((dst.len(), blocks.checked_mul(B)?))
 }
 
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
