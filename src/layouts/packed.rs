@@ -503,7 +503,11 @@ fn pack_groups_k<E: Entry, const K: usize>(
         let (Ok(f), Ok(d)) = (<&[E; 32]>::try_from(f), <&mut [u32; K]>::try_from(d)) else {
             break;
         };
-        group::<E, K>(f, d, &mut prev, s);
+        if s == 0 {
+            group::<E, K, false>(f, d, &mut prev, s);
+        } else {
+            group::<E, K, true>(f, d, &mut prev, s);
+        }
     }
     if s > 0 {
         if let Some(d) = words.get_mut(first + n) {
@@ -531,7 +535,12 @@ fn pack_groups_k<E: Entry, const K: usize>(
               the u32 casts keep a word on purpose; j = i K / 32 < K, and j + 1 < K where the \
               field crosses (i K + K > 32 (j + 1) and i K + K <= 32 K)"
 )]
-fn group<E: Entry, const K: usize>(f: &[E; 32], d: &mut [u32; K], prev: &mut u32, s: u32) {
+fn group<E: Entry, const K: usize, const SHIFT: bool>(
+    f: &[E; 32],
+    d: &mut [u32; K],
+    prev: &mut u32,
+    s: u32,
+) {
     let kb = K as u32;
     let m = mask(kb);
     let mut out = [0u32; K];
@@ -551,8 +560,12 @@ fn group<E: Entry, const K: usize>(f: &[E; 32], d: &mut [u32; K], prev: &mut u32
             // Word j is complete once a field reaches its end.
             if sh + kb >= WORD_BITS {
                 if let (Some(&w), Some(o)) = (out.get(j), d.get_mut(j)) {
-                    *o = ((u64::from(w) << 32 | u64::from(*prev)) >> (WORD_BITS - s)) as u32;
-                    *prev = w;
+                    if SHIFT {
+                        *o = ((u64::from(w) << 32 | u64::from(*prev)) >> (WORD_BITS - s)) as u32;
+                        *prev = w;
+                    } else {
+                        *o = w;
+                    }
                 }
             }
         )*};

@@ -1530,8 +1530,26 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     let blocks = n.checked_add(1)? / B;
     let len_in = B.checked_mul(C)?;
     let len_out = len_in.checked_sub(C)?;
+    let done = blocks.checked_mul(len_out)?;
+    if C == 1 {
+        // Block t: acc[t B + 1 ..= t B + B] - acc[t B], B values written at t (B - 1): fixed-size
+        // arrays, one vector operation; the B-th value (the next block's base minus this one's)
+        // lands on the next block's first value, which overwrites it, or past the values
+        // returned (`out` holds w + 1 values: t (B - 1) + B <= n + 1 for a whole block).
+        for t in 0..blocks {
+            let base = t.checked_mul(B)?;
+            let lo = *acc.get(base)?;
+            let src: &[E; B] = acc.get(base.checked_add(1)?..)?.first_chunk::<B>()?;
+            let at = t.checked_mul(B.checked_sub(1)?)?;
+            let dst: &mut [E; B] = out.get_mut(at..)?.first_chunk_mut::<B>()?;
+            for (d, s) in dst.iter_mut().zip(src) {
+                *d = s.wrapping_sub(lo);
+            }
+        }
+        return Some((done, blocks.checked_mul(B)?));
+    }
     let src = acc.get(..blocks.checked_mul(len_in)?)?;
-    let dst = out.get_mut(..blocks.checked_mul(len_out)?)?;
+    let dst = out.get_mut(..done)?;
     for (d, a) in dst.chunks_exact_mut(len_out).zip(src.chunks_exact(len_in)) {
         let (lo, rest) = a.split_at_checked(C)?;
         for (i, (d, r)) in d.iter_mut().zip(rest).enumerate() {
