@@ -1495,6 +1495,20 @@ fn component_fields<E: Entry, const C: usize>(
                 }
                 k = k.checked_add(src.len())?;
             }
+        } else if C == 1 {
+            // x = base + b, base + 2b, ... <= end: every b-th value from base + b.
+            let first = base.saturating_add(b);
+            if first <= end {
+                let src = acc.get(first..=end)?;
+                // b >= 1 (a block size): step_by does not panic, the division is checked.
+                let count = end.checked_sub(first)?.checked_div(b)?.checked_add(1)?;
+                let dst = out.get_mut(k..k.checked_add(count)?)?;
+                let lo = lo.first().copied().unwrap_or(E::ZERO);
+                for (d, s) in dst.iter_mut().zip(src.iter().step_by(b.max(1))) {
+                    *d = s.wrapping_sub(lo);
+                }
+                k = k.checked_add(count)?;
+            }
         } else {
             let mut x = base.saturating_add(b);
             while x <= end {
@@ -1532,19 +1546,22 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     let len_out = len_in.checked_sub(C)?;
     let done = blocks.checked_mul(len_out)?;
     if C == 1 {
-        // Block t: acc[t B + 1 ..= t B + B] - acc[t B], B values written at t (B - 1): fixed-size
-        // arrays, one vector operation; the B-th value (the next block's base minus this one's)
-        // lands on the next block's first value, which overwrites it, or past the values
-        // returned (`out` holds w + 1 values: t (B - 1) + B <= n + 1 for a whole block).
-        for t in 0..blocks {
-            let base = t.checked_mul(B)?;
-            let lo = *acc.get(base)?;
-            let src: &[E; B] = acc.get(base.checked_add(1)?..)?.first_chunk::<B>()?;
-            let at = t.checked_mul(B.checked_sub(1)?)?;
-            let dst: &mut [E; B] = out.get_mut(at..)?.first_chunk_mut::<B>()?;
-            for (d, s) in dst.iter_mut().zip(src) {
-                *d = s.wrapping_sub(lo);
+        // Block t (acc[t B .. t B + B] as an array): acc[t B + j] - acc[t B] for j = 1..B into
+        // out[t (B - 1)..] as an array of B values, the last a 0 that the next block's first
+        // value overwrites (or past the values returned: out holds w + 1 values and
+        // t (B - 1) + B <= n + 1 for a whole block). Constant lengths: one vector operation.
+        let (tiles, _) = acc.as_chunks::<B>();
+        let step = B.checked_sub(1)?;
+        let mut at = 0usize;
+        for a in tiles.iter().take(blocks) {
+            let lo = a.first().copied().unwrap_or(E::ZERO);
+            let d = out.get_mut(at..)?.first_chunk_mut::<B>()?;
+            for (j, d) in d.iter_mut().enumerate() {
+                *d = a
+                    .get(j.wrapping_add(1))
+                    .map_or(E::ZERO, |v| v.wrapping_sub(lo));
             }
+            at = at.wrapping_add(step);
         }
         return Some((done, blocks.checked_mul(B)?));
     }
