@@ -590,6 +590,66 @@ mod tests {
 
     /// The writer lays fields out exactly as `write_bits` does, for every field width at
     /// several starting offsets, over words that start as noise (bits outside the fields kept).
+    /// `pack_fields` writes what `write_bits` field by field writes, bits around the fields
+    /// kept: every width 1 to 64, start offsets at and around word boundaries, counts below,
+    /// at and past whole groups of 32 (the width-specialized path and the `BitWriter` tail),
+    /// values wider than the field (only their low bits stored), for `u16`, `u32` and `u64`
+    /// values; refusals (past the slice, width 0 or above 64) write nothing.
+    #[test]
+    fn pack_fields_equals_write_bits() {
+        fn check<E: Entry>(to_e: impl Fn(u64) -> E, value_bits: u32) {
+            let counts: &[usize] = if cfg!(miri) {
+                &[0, 33, 70]
+            } else {
+                &[0, 1, 31, 32, 33, 64, 65, 100]
+            };
+            let starts: &[u64] = if cfg!(miri) {
+                &[0, 13, 32]
+            } else {
+                &[0, 1, 5, 13, 31, 32, 33, 63, 64, 100]
+            };
+            for len in 1..=64u32 {
+                for &start in starts {
+                    for &count in counts {
+                        let mut seed = 0x1234_5678_9abc_def1u64 ^ u64::from(len) ^ start << 8;
+                        let mut next = || {
+                            seed ^= seed << 13;
+                            seed ^= seed >> 7;
+                            seed ^= seed << 17;
+                            seed
+                        };
+                        let noise: Vec<u32> = (0..240).map(|_| next() as u32).collect();
+                        let fields: Vec<E> = (0..count)
+                            .map(|_| to_e(next() & mask(value_bits)))
+                            .collect();
+                        let (mut a, mut b) = (noise.clone(), noise.clone());
+                        for (i, f) in fields.iter().enumerate() {
+                            let at = start + i as u64 * u64::from(len);
+                            assert!(write_bits(&mut a, at, len, f.to_u64() & mask(len)));
+                        }
+                        assert!(pack_fields(&mut b, start, &fields, len));
+                        assert_eq!(a, b, "len {len} start {start} count {count}");
+                        // One bit short of the slice: refused, nothing written.
+                        let end = start + count as u64 * u64::from(len);
+                        if count > 0 {
+                            let mut c = noise.clone();
+                            let short = end.div_ceil(32) as usize - 1;
+                            assert!(!pack_fields(&mut c[..short], start, &fields, len));
+                            assert_eq!(c, noise);
+                        }
+                    }
+                }
+            }
+            let mut c = [7u32; 4];
+            assert!(!pack_fields(&mut c, 0, &[to_e(1)], 0));
+            assert!(!pack_fields(&mut c, 0, &[to_e(1)], 65));
+            assert_eq!(c, [7; 4]);
+        }
+        check(|v| v as u16, 16);
+        check(|v| v as u32, 32);
+        check(|v| v, 64);
+    }
+
     #[test]
     fn bit_writer_equals_write_bits() {
         for len in 1..=64u32 {
