@@ -1488,10 +1488,15 @@ fn component_fields<E: Entry, const C: usize>(
             if end > base {
                 let src = acc.get(from.checked_add(C)?..at(end)?.checked_add(C)?)?;
                 let dst = out.get_mut(k..k.checked_add(src.len())?)?;
-                // Channel i % C of each entry (i % C < C: the `get` never fails; with C a
+                // Channel i % C of each entry (C >= 1 and i % C < C: never the default; with C a
                 // constant, no division and, for C = 1, a plain loop over the tile's row).
                 for (i, (d, s)) in dst.iter_mut().zip(src).enumerate() {
-                    *d = s.wrapping_sub(lo.get(i % C).copied().unwrap_or(E::ZERO));
+                    *d = s.wrapping_sub(
+                        i.checked_rem(C)
+                            .and_then(|c| lo.get(c))
+                            .copied()
+                            .unwrap_or(E::ZERO),
+                    );
                 }
                 k = k.checked_add(src.len())?;
             }
@@ -1541,7 +1546,7 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     out: &mut [E],
 ) -> Option<(usize, usize)> {
     // Block t is whole if t B + B - 1 <= n, i.e. t < (n + 1) / B.
-    let blocks = n.checked_add(1)? / B;
+    let blocks = n.checked_add(1)?.checked_div(B)?;
     let len_in = B.checked_mul(C)?;
     let len_out = len_in.checked_sub(C)?;
     let done = blocks.checked_mul(len_out)?;
@@ -1570,7 +1575,12 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     for (d, a) in dst.chunks_exact_mut(len_out).zip(src.chunks_exact(len_in)) {
         let (lo, rest) = a.split_at_checked(C)?;
         for (i, (d, r)) in d.iter_mut().zip(rest).enumerate() {
-            *d = r.wrapping_sub(lo.get(i % C).copied().unwrap_or(E::ZERO));
+            *d = r.wrapping_sub(
+                i.checked_rem(C)
+                    .and_then(|c| lo.get(c))
+                    .copied()
+                    .unwrap_or(E::ZERO),
+            );
         }
     }
     Some((dst.len(), blocks.checked_mul(B)?))
