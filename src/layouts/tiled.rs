@@ -465,6 +465,9 @@ pub(super) struct Comp32 {
     stride: u32,
     bits: u32,
     mask: u32,
+    /// The low `2 stride` bits set when two entries side by side (`ix`, `ix + 1`) fit one
+    /// 32-bit read (`2 stride <= 32`: 14-bit local sums of 8 x 8 tiles of 8-bit texels), else 0.
+    pair_mask: u32,
 }
 
 impl Comp32 {
@@ -474,6 +477,7 @@ impl Comp32 {
         stride: 0,
         bits: 0,
         mask: 0,
+        pair_mask: 0,
     };
 }
 
@@ -696,6 +700,11 @@ impl Geometry {
                         stride: comp.stride_bits as u32,
                         bits: comp.bits,
                         mask: comp.mask as u32,
+                        pair_mask: if comp.stride_bits <= 16 {
+                            mask(2 * comp.stride_bits as u32) as u32
+                        } else {
+                            0
+                        },
                     };
                     i += 1;
                 }
@@ -1096,6 +1105,35 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         out
     }
 
+    /// The entries at bit `at` and the next one (`at + stride`: `ix + 1`, same `iy`), the reads
+    /// counted as two [`Tiled::field_at`] calls count them. When both fit one 32-bit read
+    /// (`pair_mask`), one [`read_masked32`] of `2 stride` bits gives both; else two reads.
+    #[inline(always)]
+    fn pair_at<K: Counter>(&self, c: &Comp32, at: u32, k: &mut K) -> ([E; C], [E; C]) {
+        let next = at.wrapping_add(c.stride);
+        if c.pair_mask == 0 {
+            return (self.field_at(c, at, k), self.field_at(c, next, k));
+        }
+        for a in [at, next] {
+            k.reads(1, c.stride);
+            k.read_at(Region::Table, u64::from(a), c.stride);
+            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+        }
+        let v = read_masked32(self.words, at, c.pair_mask);
+        let (mut a, mut b) = ([E::ZERO; C], [E::ZERO; C]);
+        // Channel c of the first entry at c bits, of the second at stride + c bits: both below
+        // 2 stride <= 32 (pair_mask != 0), so the shifts are below 32.
+        let mut sh = 0u32;
+        for (a, b) in a.iter_mut().zip(b.iter_mut()) {
+            *a = E::from_u64_truncating(u64::from(v.wrapping_shr(sh) & c.mask));
+            *b = E::from_u64_truncating(u64::from(
+                v.wrapping_shr(sh.wrapping_add(c.stride)) & c.mask,
+            ));
+            sh = sh.wrapping_add(c.bits);
+        }
+        (a, b)
+    }
+
     /// The corners of cell `(i, j)` when the cell lies inside one tile away from its left and
     /// top edges (`i` and `j` not multiples of the tile sides, and neither is `i + 1`, `j + 1`:
     /// every digit non-zero, both columns and both rows in the same tile): the usual corner of
@@ -1124,14 +1162,11 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
                 .wrapping_add(ix.wrapping_mul(c.stride))
         };
         let o00 = at(c00, x.i0, y.i0);
-        let mut s0 = self.field_at(c00, o00, k);
-        let mut s1 = self.field_at(c00, o00.wrapping_add(c00.stride), k);
-        let mut s2 = self.field_at(c00, o00.wrapping_add(c00.row), k);
-        let mut s3 = self.field_at(c00, o00.wrapping_add(c00.row).wrapping_add(c00.stride), k);
+        let (mut s0, mut s1) = self.pair_at(c00, o00, k);
+        let (mut s2, mut s3) = self.pair_at(c00, o00.wrapping_add(c00.row), k);
         if y.q != 0 {
             let o01 = at(c01, x.i0, y.q.wrapping_sub(1));
-            let a = self.field_at(c01, o01, k);
-            let b = self.field_at(c01, o01.wrapping_add(c01.stride), k);
+            let (a, b) = self.pair_at(c01, o01, k);
             add_to(&mut s0, &a);
             add_to(&mut s1, &b);
             add_to(&mut s2, &a);
