@@ -816,3 +816,74 @@ fn const_sizes_for_statics() {
         flat.box_sum_int(&Rect::new(3, 4, 10, 9), Border, &mut NoCount)
     );
 }
+
+/// Multi-channel tiled layouts, every corner and every cell's four corners against sums
+/// computed here texel by texel: narrow texels (`texel_bits` 1 and 2) so that two entries of
+/// `C` channels fit one 32-bit read (the lookups' paired read of entries side by side), and
+/// 8-bit ones so that they do not; one-level power-of-two tiles (the fast paths) and others.
+#[test]
+fn tiled_channels_every_corner_and_cell() {
+    fn check<const C: usize>(texel_bits: u32, w: usize, h: usize, spec: TiledSpec) {
+        let t = texture(w * C, h, (w * 131 + h * 7 + C) as u32);
+        let texels: Vec<u8> = t[..w * h * C]
+            .iter()
+            .map(|&v| v & ((1u16 << texel_bits) - 1) as u8)
+            .collect();
+        // S(x, y) per channel, texel by texel.
+        let s = |x: usize, y: usize| -> [u32; C] {
+            core::array::from_fn(|c| {
+                let mut sum = 0u32;
+                for j in 0..y {
+                    for i in 0..x {
+                        sum += u32::from(texels[(j * w + i) * C + c]);
+                    }
+                }
+                sum
+            })
+        };
+        let mut words =
+            std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, texel_bits).unwrap()];
+        let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+        let mut b =
+            TiledBuilder::<u32, C>::new(spec, w, h, texel_bits, &mut words, &mut scratch).unwrap();
+        for row in texels.chunks_exact(w * C) {
+            b.push_row(row).unwrap();
+        }
+        let l = b.finish().unwrap();
+        let what = (C, texel_bits, w, h, spec);
+        for y in 0..=h {
+            for x in 0..=w {
+                assert_eq!(l.corner(x, y, &mut NoCount), s(x, y), "{what:?} ({x}, {y})");
+            }
+        }
+        for j in 0..h {
+            for i in 0..w {
+                let want = [s(i, j), s(i + 1, j), s(i, j + 1), s(i + 1, j + 1)];
+                assert_eq!(
+                    l.cell_corners(i, j, &mut NoCount),
+                    want,
+                    "{what:?} cell ({i}, {j})"
+                );
+            }
+        }
+    }
+    let specs = [
+        TiledSpec::tiles(4, 4).unwrap(),
+        TiledSpec::tiles(8, 2).unwrap(),
+        TiledSpec::tiles(3, 5).unwrap(),
+        TiledSpec::square(&[2, 4]).unwrap(),
+    ];
+    let sizes: &[(usize, usize)] = if cfg!(miri) {
+        &[(9, 7)]
+    } else {
+        &[(9, 7), (16, 13)]
+    };
+    for spec in specs {
+        for &(w, h) in sizes {
+            for bits in [1, 2, 8] {
+                check::<2>(bits, w, h, spec);
+                check::<3>(bits, w, h, spec);
+            }
+        }
+    }
+}
