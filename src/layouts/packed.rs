@@ -418,11 +418,13 @@ impl<'w> BitWriter<'w> {
 /// before `offset` and after the last field. Returns `false`, writing nothing, if the fields do
 /// not fit the slice or `len` is 0 or above 64.
 ///
-/// The builders' packing. On 64-bit targets, fields of at most 32 bits go 32 at a time (exactly
-/// `len` words) through code specialized for the width ([`pack_groups`]): every shift a
-/// constant, every word assembled in a register and stored once, no branch per field; the
-/// fields after the last whole group go through [`BitWriter`], as does everything on 32-bit
-/// targets (where the 32 specializations would cost flash for no measured need).
+/// The builders' packing. Fields of at most 32 bits go 32 at a time (exactly `len` words)
+/// through code specialized for the width ([`pack_groups`]): every shift a constant, every word
+/// assembled in a register and stored once, no branch per field. On 64-bit targets every width
+/// has its specialization; on smaller ones (microcontrollers, where each costs flash: about
+/// 0.5 KiB per width and entry type on the Cortex-M4) only 16 bits, the width of a `modular:16`
+/// plan, whose build it makes 2.5 times faster there (31.5 to 12.7 instructions per entry).
+/// The rest, and the fields after the last whole group, go through [`BitWriter`].
 pub(crate) fn pack_fields<E: Entry>(
     words: &mut [u32],
     offset: u64,
@@ -432,7 +434,6 @@ pub(crate) fn pack_fields<E: Entry>(
     if len == 0 || len > 64 || !BitWriter::fits(words, offset, fields.len(), len) {
         return false;
     }
-    #[cfg(target_pointer_width = "64")]
     let (done, offset) = if len <= WORD_BITS {
         pack_groups(words, offset, fields, len)
     } else {
@@ -440,7 +441,6 @@ pub(crate) fn pack_fields<E: Entry>(
     };
     let m = mask(len);
     let mut out = BitWriter::new(words, offset);
-    #[cfg(target_pointer_width = "64")]
     let fields = fields.get(done..).unwrap_or(&[]);
     for f in fields {
         out.push(f.to_u64() & m, len);
@@ -451,8 +451,8 @@ pub(crate) fn pack_fields<E: Entry>(
 
 /// Packs the whole groups of 32 fields of `fields` (`len <= 32` bits each, their low bits) from
 /// bit `offset`, which the caller has checked they fit; returns the fields done and the bit
-/// offset after them. Dispatches on `len` to [`pack_groups_k`].
-#[cfg(target_pointer_width = "64")]
+/// offset after them (none for a width without a specialization on this target). Dispatches
+/// on `len` to [`pack_groups_k`].
 fn pack_groups<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32) -> (usize, u64) {
     macro_rules! by_width {
         ($($k:literal)*) => {
@@ -462,7 +462,11 @@ fn pack_groups<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32)
             }
         };
     }
-    by_width!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32)
+    #[cfg(target_pointer_width = "64")]
+    let done = by_width!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32);
+    #[cfg(not(target_pointer_width = "64"))]
+    let done = by_width!(16);
+    done
 }
 
 /// [`pack_groups`] for `K`-bit fields. A group of 32 fields is exactly `K` words: [`group`]
@@ -471,7 +475,6 @@ fn pack_groups<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32)
 /// `(w_m : w_{m-1}) >> (32 - s)`, the word before the first holding the `s` bits already in
 /// the destination below `offset`. The `s` bits left over after the last group are merged into
 /// the next word (its upper bits kept).
-#[cfg(target_pointer_width = "64")]
 #[allow(
     clippy::arithmetic_side_effects,
     clippy::as_conversions,
@@ -525,7 +528,6 @@ fn pack_groups_k<E: Entry, const K: usize>(
 /// macro, not a loop, which LLVM keeps rolled): with `K` a constant every index, shift and
 /// test is a constant, each word is assembled in a register and written once, and nothing
 /// goes through memory in between.
-#[cfg(target_pointer_width = "64")]
 #[inline(always)]
 #[allow(
     clippy::arithmetic_side_effects,
