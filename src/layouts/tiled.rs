@@ -1539,13 +1539,15 @@ fn component_fields<E: Entry, const C: usize>(
             // x = base + b, base + 2b, ... <= end: every b-th value from base + b.
             let first = base.saturating_add(b);
             if first <= end {
-                let src = acc.get(first..=end)?;
-                // b >= 1 (a block size): step_by does not panic, the division is checked.
+                // b >= 1 (a block size): the division is checked.
                 let count = end.checked_sub(first)?.checked_div(b)?.checked_add(1)?;
                 let dst = out.get_mut(k..k.checked_add(count)?)?;
                 let lo = lo.first().copied().unwrap_or(E::ZERO);
-                for (d, s) in dst.iter_mut().zip(src.iter().step_by(b.max(1))) {
-                    *d = s.wrapping_sub(lo);
+                // x <= end <= n for every value written: inside acc (no default taken).
+                let mut x = first;
+                for d in dst.iter_mut() {
+                    *d = acc.get(x).copied().unwrap_or(E::ZERO).wrapping_sub(lo);
+                    x = x.wrapping_add(b);
                 }
                 k = k.checked_add(count)?;
             }
@@ -1747,7 +1749,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 *b = E::ZERO;
             }
         }
-        let acc = accs.chunks_exact(row_len).nth(q).ok_or(short)?;
+        let from = q.checked_mul(row_len).ok_or(short)?;
+        let acc = accs
+            .get(from..from.checked_add(row_len).ok_or(short)?)
+            .ok_or(short)?;
         // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
         // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
         for p in 0..g.ax.components() {
