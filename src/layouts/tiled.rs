@@ -17,6 +17,16 @@
 //! array of fields of exactly `bits_of(m * len_p * len_q)` bits (`len` the longest interval,
 //! `m` the largest texel), packed back to back in 32-bit words.
 //!
+//! ## Storage order
+//! The components follow each other in the order `(0, 0), (0, 1), ..., (1, 0), ...` (x level
+//! `p` major). Inside component `(p, q)`, with `cx` and `cy` stored positions per axis, the
+//! entries are stored **row by row**: entry `(ix, iy)` (the `ix`-th stored `X`, the `iy`-th
+//! stored `Y`) starts at bit `offset + (iy cx + ix) C bits`, its `C` channels side by side. So
+//! texture row `y`, which finishes exactly row `iy` of the components `(., q)` of its lowest
+//! non-zero digit `q`, is written as one stream of fields per component ([`TiledBuilder`]), and
+//! the lookups find the two local sums of neighbouring columns side by side (one read when
+//! both fit 32 bits).
+//!
 //! Reading `S(x, y)` costs one field per pair of non-zero digits: at most `(Lx + 1)(Ly + 1)`
 //! fields (4 for one level of tiles), each 1 to 3 words, and one addition per field after the
 //! first. With no levels (`AxisLevels::FLAT`) the layout is the flat table packed at its exact
@@ -1624,7 +1634,14 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
 }
 
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
-/// component (two for one level of tiles) plus the current row's prefix sums.
+/// component (two for one level of tiles) plus one row of fields.
+///
+/// Per row `y`: the row's prefix sums are added to the accumulator of level 0 (the flat build's
+/// row step, the vectorized kernel with `simd`); when `y` ends a block of level `q >= 1` the
+/// accumulators below are folded into level `q` (one pass over a row, once per tile row); then
+/// for each x level `p` the row's fields `C_pq(X, y) = acc_q[X] - acc_q[trunc_{p+1}(X)]` are
+/// formed into the field row and packed, 32 at a time, as row `iy` of component `(p, q)`: each
+/// output word written once, in order (see the module's "Storage order").
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
