@@ -434,6 +434,25 @@ pub(crate) fn pack_fields<E: Entry>(
     if len == 0 || len > 64 || !BitWriter::fits(words, offset, fields.len(), len) {
         return false;
     }
+    // With the `simd` feature, a word-aligned start and `u32` values, AVX-512 where the CPU has
+    // it (`simd::pack_u32`); then the width-specialized groups; then the rest.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    let (fields, offset) = {
+        let done = match usize::try_from(offset / WORD_BITS64) {
+            Ok(first) if word_shift(offset) == 0 && len <= WORD_BITS => words
+                .get_mut(first..)
+                .map_or(0, |w| crate::simd::pack_u32(w, fields, len)),
+            _ => 0,
+        };
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "done fields of len bits were written inside the slice (fits): no wrap; \
+                      usize -> u64 is lossless"
+        )]
+        let offset = offset + done as u64 * u64::from(len);
+        (fields.get(done..).unwrap_or(&[]), offset)
+    };
     let (done, offset) = if len <= WORD_BITS {
         pack_groups(words, offset, fields, len)
     } else {
