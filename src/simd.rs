@@ -676,6 +676,56 @@ mod pack512 {
 mod tests {
     use super::*;
 
+    /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
+    /// low `k` bits gives (`layouts::packed::write_bits`), for whole groups of 32 only, and
+    /// nothing past them; values with their high bits set (only the low `k` stored); 0 fields
+    /// packed without AVX-512 (Miri: the kernel the target features enable), for another
+    /// type, or a width outside 11..=32.
+    #[test]
+    fn pack_u32_equals_field_by_field() {
+        extern crate std;
+        use std::vec::Vec;
+        let counts: &[usize] = if cfg!(miri) {
+            &[33]
+        } else {
+            &[0, 31, 32, 64, 101]
+        };
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed as u32
+        };
+        let avx512 = Kernel::best() == Kernel::Avx512Vnni;
+        for k in MIN_PACK_BITS..=32 {
+            for &n in counts {
+                let fields: Vec<u32> = (0..n).map(|_| next()).collect();
+                let noise: Vec<u32> = (0..n * k as usize / 32 + 3).map(|_| next()).collect();
+                let mut words = noise.clone();
+                let done = pack_u32(&mut words, &fields, k);
+                assert_eq!(done, if avx512 { n / 32 * 32 } else { 0 }, "k {k} n {n}");
+                let mut want = noise.clone();
+                for (i, &f) in fields.iter().take(done).enumerate() {
+                    let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+                    let at = i as u64 * u64::from(k);
+                    assert!(crate::layouts::packed::write_bits(
+                        &mut want,
+                        at,
+                        k,
+                        u64::from(f & m)
+                    ));
+                }
+                assert_eq!(words, want, "k {k} n {n}");
+            }
+        }
+        let mut w = [0u32; 64];
+        assert_eq!(pack_u32(&mut w, &[1u16; 64], 16), 0);
+        assert_eq!(pack_u32(&mut w, &[1u32; 64], MIN_PACK_BITS - 1), 0);
+        assert_eq!(pack_u32(&mut w, &[1u32; 64], 33), 0);
+        assert_eq!(w, [0; 64]);
+    }
+
     /// The portable row (the reference): running sum plus the entry above.
     fn reference(t: &[u8], above: Option<&[u32]>, out: &mut [u32]) {
         let mut r = 0u32;
