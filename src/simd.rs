@@ -598,6 +598,23 @@ const fn pack_tables() -> [[[u8; 32]; 8]; 22] {
 mod pack512 {
     use super::*;
 
+    /// Lane `j` of the 32 lanes of `a` then `b` selected by lane `j` of `idx` (0..32):
+    /// `vpermt2d`. Miri does not emulate it, so under Miri the same selection by two `vpermd`
+    /// and a blend (slower, same lanes): Miri still checks every load and store of the kernel.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
+        #[cfg(not(miri))]
+        let v = _mm512_permutex2var_epi32(a, idx, b);
+        #[cfg(miri)]
+        let v = _mm512_mask_blend_epi32(
+            _mm512_cmpge_epu32_mask(idx, _mm512_set1_epi32(16)),
+            _mm512_permutexvar_epi32(idx, a),
+            _mm512_permutexvar_epi32(idx, b),
+        );
+        v
+    }
+
     /// The kernel of [`pack_u32`].
     ///
     /// # Safety
@@ -644,7 +661,7 @@ mod pack512 {
                     if *n == 0 {
                         continue;
                     }
-                    let t = |i: usize| _mm512_permutex2var_epi32(a, ix[i], b);
+                    let t = |i: usize| perm2(a, ix[i], b);
                     let v = _mm512_or_si512(
                         _mm512_or_si512(
                             _mm512_srlv_epi32(t(0), c[0]),
