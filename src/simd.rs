@@ -12,8 +12,10 @@
 //!
 //! Covered: `u8` texels into `u32` entries, one channel, the unchecked build (after the width
 //! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
-//! and the modular builder's rows. Everything else (and [`crate::Sat::build_checked`]) takes the
-//! portable path. The kernel is the widest this CPU runs, detected once at run time from CPUID
+//! and the modular and tiled builders' rows. Everything else (and [`crate::Sat::build_checked`])
+//! takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
+//! 11 to 32 bits into 32-bit words that the modular and tiled builders do per row (the portable
+//! packer, width-specialized scalar code, costs about a cycle per field). The kernel is the widest this CPU runs, detected once at run time from CPUID
 //! and XGETBV (no `std` needed), as OpenCV and the standard library's
 //! `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
@@ -35,7 +37,10 @@
 //!    the x86-64 baseline). Under Miri, which cannot execute CPUID, the kernel is the one the
 //!    build's target features enable. Calling the kernels (and XGETBV, after CPUID reports
 //!    OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
-//! 2. *Memory.* [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
+//! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
+//!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
+//!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
+//!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
 //!    `read_unaligned` for the 4-byte groups), then finishes the tail `i..n` with checked
