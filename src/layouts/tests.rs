@@ -265,6 +265,19 @@ fn check_geometry_u128(g: &Geometry, channels: usize) -> u128 {
             if cx > 0 && cy > 0 {
                 let last = c.offset((cx - 1) as u32, (cy - 1) as u32) as u128;
                 assert_eq!(last + stride, offset + size, "{what:?}: last entry");
+                // Row by row: the next x entry is the next field group, the next y a row on.
+                let first = c.offset(0, 0) as u128;
+                assert_eq!(first, offset, "{what:?}: first entry");
+                if cx > 1 {
+                    assert_eq!(c.offset(1, 0) as u128, first + stride, "{what:?}: next x");
+                }
+                if cy > 1 {
+                    assert_eq!(
+                        c.offset(0, 1) as u128,
+                        first + cx * stride,
+                        "{what:?}: next y"
+                    );
+                }
             }
             offset += size;
         }
