@@ -619,17 +619,21 @@ mod tests {
     #[test]
     fn pack_fields_equals_write_bits() {
         fn check<E: Entry>(to_e: impl Fn(u64) -> E, value_bits: u32) {
+            // Under Miri (about 10^4 times slower) the widths around the specializations' and
+            // the BitWriter's cases only, fewer offsets and counts.
             let counts: &[usize] = if cfg!(miri) {
-                &[0, 33, 70]
+                &[0, 70]
             } else {
                 &[0, 1, 31, 32, 33, 64, 65, 100]
             };
             let starts: &[u64] = if cfg!(miri) {
-                &[0, 13, 32]
+                &[0, 13]
             } else {
                 &[0, 1, 5, 13, 31, 32, 33, 63, 64, 100]
             };
-            for len in 1..=64u32 {
+            let lens =
+                (1..=64u32).filter(|l| !cfg!(miri) || [1, 7, 16, 21, 32, 33, 64].contains(l));
+            for len in lens {
                 for &start in starts {
                     for &count in counts {
                         let mut seed = 0x1234_5678_9abc_def1u64 ^ u64::from(len) ^ start << 8;

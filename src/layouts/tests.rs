@@ -886,14 +886,21 @@ fn tiled_channels_every_corner_and_cell() {
         TiledSpec::tiles(3, 5).unwrap(),
         TiledSpec::square(&[2, 4]).unwrap(),
     ];
+    // Under Miri (about 10^4 times slower) one size, the first and last specs (one level of
+    // power-of-two tiles, two levels), 2- and 8-bit texels.
     let sizes: &[(usize, usize)] = if cfg!(miri) {
         &[(9, 7)]
     } else {
         &[(9, 7), (16, 13)]
     };
-    for spec in specs {
+    let miri_skips = |i: usize| cfg!(miri) && i != 0 && i != specs.len() - 1;
+    for (_, spec) in specs
+        .into_iter()
+        .enumerate()
+        .filter(|&(i, _)| !miri_skips(i))
+    {
         for &(w, h) in sizes {
-            for bits in [1, 2, 8] {
+            for bits in [1, 2, 8].into_iter().filter(|&b| !cfg!(miri) || b != 1) {
                 check::<2>(bits, w, h, spec);
                 check::<3>(bits, w, h, spec);
             }
