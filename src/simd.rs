@@ -12,8 +12,10 @@
 //!
 //! Covered: `u8` texels into `u32` entries, one channel, the unchecked build (after the width
 //! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
-//! and the modular builder's rows. Everything else (and [`crate::Sat::build_checked`]) takes the
-//! portable path. The kernel is the widest this CPU runs, detected once at run time from CPUID
+//! and the modular and tiled builders' rows. Everything else (and [`crate::Sat::build_checked`])
+//! takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
+//! 11 to 32 bits into 32-bit words that the modular and tiled builders do per row (the portable
+//! packer, width-specialized scalar code, costs about a cycle per field). The kernel is the widest this CPU runs, detected once at run time from CPUID
 //! and XGETBV (no `std` needed), as OpenCV and the standard library's
 //! `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
@@ -35,7 +37,10 @@
 //!    the x86-64 baseline). Under Miri, which cannot execute CPUID, the kernel is the one the
 //!    build's target features enable. Calling the kernels (and XGETBV, after CPUID reports
 //!    OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
-//! 2. *Memory.* [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
+//! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
+//!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
+//!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
+//!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
 //!    `read_unaligned` for the 4-byte groups), then finishes the tail `i..n` with checked
@@ -523,6 +528,167 @@ mod avx512vnni {
     }
 }
 
+/// Packs fields of `k` bits (`MIN_PACK_BITS <= k <= 32`, the low `k` bits of each value) into
+/// `words` from its bit 0, 32 fields (exactly `k` words) at a time, with AVX-512F; returns the
+/// fields packed (whole groups of 32 that fit `words`; 0 for other types, widths, or CPUs
+/// without AVX-512). Each word written is the word the layouts' portable packing writes there
+/// (`layouts::packed::pack_fields`: field `i` at bit `i k`), written once.
+///
+/// How: output word `j` of a group holds bits `32 j .. 32 j + 32`, that is
+/// `f[i] >> s | f[i + 1] << (k - s) | f[i + 2] << (2k - s) | f[i + 3] << (3k - s)` with
+/// `i = floor(32 j / k)`, `s = 32 j - i k`: at most four fields for `k >= 11`. Per 16 output
+/// words: four `vpermt2d` gathering those fields from the group's two registers (indices past
+/// the group clamped to 31: their shift counts are at least 32, and AVX-512's variable shifts
+/// give 0 there, as for the terms a word does not need), one `vpsrlvd`, three `vpsllvd`, three
+/// ors, one (masked) store. The index and count tables depend on `k` only: built once per call.
+pub(crate) fn pack_u32<E: Entry>(words: &mut [u32], fields: &[E], k: u32) -> usize {
+    let Some(f) = as_u32(fields) else {
+        return 0;
+    };
+    if !(MIN_PACK_BITS..=32).contains(&k) || Kernel::best() != Kernel::Avx512Vnni {
+        return 0;
+    }
+    let ku = k as usize;
+    let groups = (f.len() / 32).min(words.len() / ku);
+    if groups == 0 {
+        return 0;
+    }
+    // idx[t][j], cnt[t][j]: the field (0..32 in the group) and the shift of term t of word j.
+    let Some(table) = PACK_TABLES.get(ku - MIN_PACK_BITS as usize) else {
+        return 0;
+    };
+    // SAFETY: AVX-512F is available (Kernel::best() is Avx512Vnni, whose detection includes
+    // it); `f` holds at least 32 groups values and `words` at least groups k words (above); the
+    // kernel reads f[0..32 groups] and writes words[0..groups k] only; the table is k's.
+    unsafe { pack512::pack(f.as_ptr(), words.as_mut_ptr(), groups, k, table) };
+    groups * 32
+}
+
+/// The narrowest field [`pack_u32`] packs: from 11 bits on, a word holds parts of at most four
+/// fields.
+pub(crate) const MIN_PACK_BITS: u32 = 11;
+
+/// [`pack_u32`]'s tables, per width `k = 11..=32` (index `k - 11`): rows `t = 0..4` the field
+/// (0..32 in the group, clamped to 31) of term `t` of output word `j` (column `j`), rows
+/// `4 + t` its shift count (`s` right for `t = 0`, `t k - s` left after; at most 96). Bytes,
+/// widened in the kernel: 5.5 KiB, computed at compile time.
+static PACK_TABLES: [[[u8; 32]; 8]; 22] = pack_tables();
+
+const fn pack_tables() -> [[[u8; 32]; 8]; 22] {
+    let mut out = [[[0u8; 32]; 8]; 22];
+    let mut k = MIN_PACK_BITS;
+    while k <= 32 {
+        // Word j + 1 starts 32 bits after word j: (i, s) by subtraction.
+        let (mut i, mut s, mut j) = (0u32, 0u32, 0usize);
+        while j < k as usize {
+            let mut t = 0u32;
+            while t < 4 {
+                let row = &mut out[(k - MIN_PACK_BITS) as usize];
+                row[t as usize][j] = if i + t > 31 { 31 } else { (i + t) as u8 };
+                row[4 + t as usize][j] = if t == 0 { s as u8 } else { (t * k - s) as u8 };
+                t += 1;
+            }
+            s += 32;
+            while s >= k {
+                s -= k;
+                i += 1;
+            }
+            j += 1;
+        }
+        k += 1;
+    }
+    out
+}
+
+mod pack512 {
+    use super::*;
+
+    /// Lane `j` of the 32 lanes of `a` then `b` selected by lane `j` of `idx` (0..32):
+    /// `vpermt2d`. Miri does not emulate it, so under Miri the same selection by two `vpermd`
+    /// and a blend (slower, same lanes): Miri still checks every load and store of the kernel.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
+        #[cfg(not(miri))]
+        let v = _mm512_permutex2var_epi32(a, idx, b);
+        #[cfg(miri)]
+        let v = _mm512_mask_blend_epi32(
+            _mm512_cmpge_epu32_mask(idx, _mm512_set1_epi32(16)),
+            _mm512_permutexvar_epi32(idx, a),
+            _mm512_permutexvar_epi32(idx, b),
+        );
+        v
+    }
+
+    /// The kernel of [`pack_u32`].
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F; `f` is valid for reads of `32 groups` values and `w` for writes of
+    /// `groups k` words; `11 <= k <= 32`; `table` is `PACK_TABLES[k - 11]`.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn pack(
+        f: *const u32,
+        w: *mut u32,
+        groups: usize,
+        k: u32,
+        table: &[[u8; 32]; 8],
+    ) {
+        let load = |r: usize, half: usize| {
+            // SAFETY: r < 8 and half is 0 or 1: 16 bytes inside the table's 32-byte row.
+            unsafe {
+                _mm512_cvtepu8_epi32(_mm_loadu_si128(table[r].as_ptr().add(16 * half).cast()))
+            }
+        };
+        let m = _mm512_set1_epi32(if k == 32 {
+            -1
+        } else {
+            ((1u32 << k) - 1) as i32
+        });
+        let k = k as usize;
+        // The two halves of the output (words 0..16 and 16..k), each: 4 index and 4 count
+        // vectors, and how many words it stores.
+        let half = |h: usize| {
+            (
+                [load(0, h), load(1, h), load(2, h), load(3, h)],
+                [load(4, h), load(5, h), load(6, h), load(7, h)],
+                k.saturating_sub(16 * h).min(16),
+            )
+        };
+        let halves = [half(0), half(1)];
+        for g in 0..groups {
+            // SAFETY: g < groups: f[32 g .. 32 g + 32] is readable and w[g k .. g k + k]
+            // writable (the caller's contract); each store writes n <= 16 words from
+            // 16 h < k on, so inside them.
+            unsafe {
+                let a = _mm512_and_si512(_mm512_loadu_si512(f.add(32 * g).cast()), m);
+                let b = _mm512_and_si512(_mm512_loadu_si512(f.add(32 * g + 16).cast()), m);
+                for (h, (ix, c, n)) in halves.iter().enumerate() {
+                    if *n == 0 {
+                        continue;
+                    }
+                    let t = |i: usize| perm2(a, ix[i], b);
+                    let v = _mm512_or_si512(
+                        _mm512_or_si512(
+                            _mm512_srlv_epi32(t(0), c[0]),
+                            _mm512_sllv_epi32(t(1), c[1]),
+                        ),
+                        _mm512_or_si512(
+                            _mm512_sllv_epi32(t(2), c[2]),
+                            _mm512_sllv_epi32(t(3), c[3]),
+                        ),
+                    );
+                    let out = w.add(g * k + 16 * h);
+                    if *n == 16 {
+                        _mm512_storeu_si512(out.cast(), v);
+                    } else {
+                        _mm512_mask_storeu_epi32(out.cast(), ((1u32 << n) - 1) as u16, v);
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 #[allow(
     clippy::unwrap_used,
@@ -531,6 +697,56 @@ mod avx512vnni {
 )]
 mod tests {
     use super::*;
+
+    /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
+    /// low `k` bits gives (`layouts::packed::write_bits`), for whole groups of 32 only, and
+    /// nothing past them; values with their high bits set (only the low `k` stored); 0 fields
+    /// packed without AVX-512 (Miri: the kernel the target features enable), for another
+    /// type, or a width outside 11..=32.
+    #[test]
+    fn pack_u32_equals_field_by_field() {
+        extern crate std;
+        use std::vec::Vec;
+        let counts: &[usize] = if cfg!(miri) {
+            &[33]
+        } else {
+            &[0, 31, 32, 64, 101]
+        };
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed as u32
+        };
+        let avx512 = Kernel::best() == Kernel::Avx512Vnni;
+        for k in MIN_PACK_BITS..=32 {
+            for &n in counts {
+                let fields: Vec<u32> = (0..n).map(|_| next()).collect();
+                let noise: Vec<u32> = (0..n * k as usize / 32 + 3).map(|_| next()).collect();
+                let mut words = noise.clone();
+                let done = pack_u32(&mut words, &fields, k);
+                assert_eq!(done, if avx512 { n / 32 * 32 } else { 0 }, "k {k} n {n}");
+                let mut want = noise.clone();
+                for (i, &f) in fields.iter().take(done).enumerate() {
+                    let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+                    let at = i as u64 * u64::from(k);
+                    assert!(crate::layouts::packed::write_bits(
+                        &mut want,
+                        at,
+                        k,
+                        u64::from(f & m)
+                    ));
+                }
+                assert_eq!(words, want, "k {k} n {n}");
+            }
+        }
+        let mut w = [0u32; 64];
+        assert_eq!(pack_u32(&mut w, &[1u16; 64], 16), 0);
+        assert_eq!(pack_u32(&mut w, &[1u32; 64], MIN_PACK_BITS - 1), 0);
+        assert_eq!(pack_u32(&mut w, &[1u32; 64], 33), 0);
+        assert_eq!(w, [0; 64]);
+    }
 
     /// The portable row (the reference): running sum plus the entry above.
     fn reference(t: &[u8], above: Option<&[u32]>, out: &mut [u32]) {

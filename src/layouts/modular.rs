@@ -25,12 +25,12 @@
 )]
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_field, read_masked, read_masked32, word_shift,
-    words_of_bits, BitWriter, USIZE_MAX64, WORD_BITS,
+    bits_of_mul, check_dimensions, mask, pack_fields, read_field, read_masked, read_masked32,
+    word_shift, words_of_bits, BitWriter, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::{Counter, Region};
-use crate::error::{Error, Quantity};
+use crate::error::Error;
 use crate::texel::{Entry, Texel};
 use crate::texture::Texture;
 
@@ -429,17 +429,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
                 got: texels.len(),
             });
         }
-        let max = mask(self.texel_bits);
-        for t in texels {
-            let v = t.to_u16();
-            if u64::from(v) > max {
-                return Err(Error::TooWide {
-                    what: Quantity::Entry,
-                    bits_needed: crate::width::bits_of_u64(u64::from(v)),
-                    bits_available: self.texel_bits,
-                });
-            }
-        }
+        super::tiled::check_texel_width(texels, self.texel_bits)?;
         let k = self.k;
         // rows_done < h: the row's fields end at or before total_bits (no wrap).
         #[allow(
@@ -464,25 +454,14 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         // The row of the table modulo 2^E::BITS (wrapping additions: only the low k bits are
         // kept, and those of a sum depend only on the low k bits of its terms); the same
         // vectorized row as the flat build where it applies (`simd`).
-        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        let done = crate::simd::build_row_in_place::<T, E, C>(texels, self.row, false, None);
-        #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-        let done = false;
-        if !done {
-            let mut run = [E::ZERO; C];
-            for (o, t) in self.row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-                for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
-                    *r = r.wrapping_add(E::from(tv.to_u16()));
-                    *ov = ov.wrapping_add(*r);
-                }
-            }
+        super::tiled::add_prefix_row::<T, E, C>(texels, self.row);
+        // Its low k bits, packed 32 fields (k words) at a time.
+        if !pack_fields(self.words, offset, self.row, k) {
+            return Err(Error::StorageTooSmall {
+                needed: self.sizes.words,
+                got: self.words.len(),
+            });
         }
-        // Its low k bits, packed a word at a time.
-        let mut out = BitWriter::new(self.words, offset);
-        for v in self.row.iter() {
-            out.push(v.low_bits(k).to_u64(), k);
-        }
-        out.finish();
         #[allow(
             clippy::arithmetic_side_effects,
             reason = "rows_done < height (checked above)"

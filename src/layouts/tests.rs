@@ -260,11 +260,24 @@ fn check_geometry_u128(g: &Geometry, channels: usize) -> u128 {
             assert_eq!(c.bits, bits, "{what:?}");
             let stride = bits as u128 * channels as u128;
             assert_eq!(c.stride_bits as u128, stride, "{what:?}");
-            assert_eq!(c.row_bits as u128, cy * stride, "{what:?}");
+            assert_eq!(c.row_bits as u128, cx * stride, "{what:?}");
             let size = cx * cy * stride;
             if cx > 0 && cy > 0 {
                 let last = c.offset((cx - 1) as u32, (cy - 1) as u32) as u128;
                 assert_eq!(last + stride, offset + size, "{what:?}: last entry");
+                // Row by row: the next x entry is the next field group, the next y a row on.
+                let first = c.offset(0, 0) as u128;
+                assert_eq!(first, offset, "{what:?}: first entry");
+                if cx > 1 {
+                    assert_eq!(c.offset(1, 0) as u128, first + stride, "{what:?}: next x");
+                }
+                if cy > 1 {
+                    assert_eq!(
+                        c.offset(0, 1) as u128,
+                        first + cx * stride,
+                        "{what:?}: next y"
+                    );
+                }
             }
             offset += size;
         }
@@ -815,4 +828,82 @@ fn const_sizes_for_statics() {
         m.box_sum_int(&Rect::new(3, 4, 10, 9), Border, &mut NoCount),
         flat.box_sum_int(&Rect::new(3, 4, 10, 9), Border, &mut NoCount)
     );
+}
+
+/// Multi-channel tiled layouts, every corner and every cell's four corners against sums
+/// computed here texel by texel: narrow texels (`texel_bits` 1 and 2) so that two entries of
+/// `C` channels fit one 32-bit read (the lookups' paired read of entries side by side), and
+/// 8-bit ones so that they do not; one-level power-of-two tiles (the fast paths) and others.
+#[test]
+fn tiled_channels_every_corner_and_cell() {
+    fn check<const C: usize>(texel_bits: u32, w: usize, h: usize, spec: TiledSpec) {
+        let t = texture(w * C, h, (w * 131 + h * 7 + C) as u32);
+        let texels: Vec<u8> = t[..w * h * C]
+            .iter()
+            .map(|&v| v & ((1u16 << texel_bits) - 1) as u8)
+            .collect();
+        // S(x, y) per channel, texel by texel.
+        let s = |x: usize, y: usize| -> [u32; C] {
+            core::array::from_fn(|c| {
+                let mut sum = 0u32;
+                for j in 0..y {
+                    for i in 0..x {
+                        sum += u32::from(texels[(j * w + i) * C + c]);
+                    }
+                }
+                sum
+            })
+        };
+        let mut words =
+            std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, texel_bits).unwrap()];
+        let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+        let mut b =
+            TiledBuilder::<u32, C>::new(spec, w, h, texel_bits, &mut words, &mut scratch).unwrap();
+        for row in texels.chunks_exact(w * C) {
+            b.push_row(row).unwrap();
+        }
+        let l = b.finish().unwrap();
+        let what = (C, texel_bits, w, h, spec);
+        for y in 0..=h {
+            for x in 0..=w {
+                assert_eq!(l.corner(x, y, &mut NoCount), s(x, y), "{what:?} ({x}, {y})");
+            }
+        }
+        for j in 0..h {
+            for i in 0..w {
+                let want = [s(i, j), s(i + 1, j), s(i, j + 1), s(i + 1, j + 1)];
+                assert_eq!(
+                    l.cell_corners(i, j, &mut NoCount),
+                    want,
+                    "{what:?} cell ({i}, {j})"
+                );
+            }
+        }
+    }
+    let specs = [
+        TiledSpec::tiles(4, 4).unwrap(),
+        TiledSpec::tiles(8, 2).unwrap(),
+        TiledSpec::tiles(3, 5).unwrap(),
+        TiledSpec::square(&[2, 4]).unwrap(),
+    ];
+    // Under Miri (about 10^4 times slower) one size, the first and last specs (one level of
+    // power-of-two tiles, two levels), 2- and 8-bit texels.
+    let sizes: &[(usize, usize)] = if cfg!(miri) {
+        &[(9, 7)]
+    } else {
+        &[(9, 7), (16, 13)]
+    };
+    let miri_skips = |i: usize| cfg!(miri) && i != 0 && i != specs.len() - 1;
+    for (_, spec) in specs
+        .into_iter()
+        .enumerate()
+        .filter(|&(i, _)| !miri_skips(i))
+    {
+        for &(w, h) in sizes {
+            for bits in [1, 2, 8].into_iter().filter(|&b| !cfg!(miri) || b != 1) {
+                check::<2>(bits, w, h, spec);
+                check::<3>(bits, w, h, spec);
+            }
+        }
+    }
 }

@@ -17,6 +17,16 @@
 //! array of fields of exactly `bits_of(m * len_p * len_q)` bits (`len` the longest interval,
 //! `m` the largest texel), packed back to back in 32-bit words.
 //!
+//! ## Storage order
+//! The components follow each other in the order `(0, 0), (0, 1), ..., (1, 0), ...` (x level
+//! `p` major). Inside component `(p, q)`, with `cx` and `cy` stored positions per axis, the
+//! entries are stored **row by row**: entry `(ix, iy)` (the `ix`-th stored `X`, the `iy`-th
+//! stored `Y`) starts at bit `offset + (iy cx + ix) C bits`, its `C` channels side by side. So
+//! texture row `y`, which finishes exactly row `iy` of the components `(., q)` of its lowest
+//! non-zero digit `q`, is written as one stream of fields per component ([`TiledBuilder`]), and
+//! the lookups find the two local sums of neighbouring columns side by side (one read when
+//! both fit 32 bits).
+//!
 //! Reading `S(x, y)` costs one field per pair of non-zero digits: at most `(Lx + 1)(Ly + 1)`
 //! fields (4 for one level of tiles), each 1 to 3 words, and one addition per field after the
 //! first. With no levels (`AxisLevels::FLAT`) the layout is the flat table packed at its exact
@@ -45,8 +55,8 @@
 use core::num::NonZeroU32;
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, read_masked, read_masked32, word_shift, words_of_bits,
-    write_field, USIZE_MAX64, WORD_BITS,
+    bits_of_mul, check_dimensions, mask, pack_fields, read_masked, read_masked32, word_shift,
+    words_of_bits, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::{per_channel, Counter, Region};
@@ -421,11 +431,13 @@ impl Axis {
 }
 
 /// Where component `(p, q)` lives and how wide its fields are. Entry `(ix, iy)` channel `c`
-/// starts at bit `offset_bits + ix row_bits + iy stride_bits + c bits`.
+/// starts at bit `offset_bits + iy row_bits + ix stride_bits + c bits`: the entries are stored
+/// row by row (all `ix` of one `iy`, then the next `iy`), so the builder, which finishes one
+/// `iy` of one y component per texture row, writes each component row as one stream of fields.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Component {
     pub(super) offset_bits: u64,
-    /// Bits of one row of entries (`count_y` entries): `count_y * stride_bits`.
+    /// Bits of one row of entries (`count_x` entries): `count_x * stride_bits`.
     pub(super) row_bits: u64,
     /// Bits of one entry, all channels: `bits * C`.
     pub(super) stride_bits: u64,
@@ -450,8 +462,8 @@ impl Component {
     #[inline(always)]
     pub(super) fn offset(&self, ix: u32, iy: u32) -> u64 {
         self.offset_bits
-            .wrapping_add(u64::from(ix).wrapping_mul(self.row_bits))
-            .wrapping_add(u64::from(iy).wrapping_mul(self.stride_bits))
+            .wrapping_add(u64::from(iy).wrapping_mul(self.row_bits))
+            .wrapping_add(u64::from(ix).wrapping_mul(self.stride_bits))
     }
 }
 
@@ -463,6 +475,9 @@ pub(super) struct Comp32 {
     stride: u32,
     bits: u32,
     mask: u32,
+    /// The low `2 stride` bits set when two entries side by side (`ix`, `ix + 1`) fit one
+    /// 32-bit read (`2 stride <= 32`: 14-bit local sums of 8 x 8 tiles of 8-bit texels), else 0.
+    pair_mask: u32,
 }
 
 impl Comp32 {
@@ -472,6 +487,7 @@ impl Comp32 {
         stride: 0,
         bits: 0,
         mask: 0,
+        pair_mask: 0,
     };
 }
 
@@ -630,10 +646,10 @@ impl Geometry {
                 let Some(stride_bits) = (bits as u64).checked_mul(ch) else {
                     return Err(too_large);
                 };
-                let Some(row_bits) = stride_bits.checked_mul(cy) else {
+                let Some(row_bits) = stride_bits.checked_mul(cx) else {
                     return Err(too_large);
                 };
-                let Some(size) = row_bits.checked_mul(cx) else {
+                let Some(size) = row_bits.checked_mul(cy) else {
                     return Err(too_large);
                 };
                 comps[p][q] = Component {
@@ -694,6 +710,11 @@ impl Geometry {
                         stride: comp.stride_bits as u32,
                         bits: comp.bits,
                         mask: comp.mask as u32,
+                        pair_mask: if comp.stride_bits <= 16 {
+                            mask(2 * comp.stride_bits as u32) as u32
+                        } else {
+                            0
+                        },
                     };
                     i += 1;
                 }
@@ -889,8 +910,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             // (exact, the low words of the u64 geometry) and each field from at most two words
             // with 32-bit shifts. The common case on a microcontroller (tables below 512 MiB).
             let at = (comp.offset_bits as u32)
-                .wrapping_add(ix.wrapping_mul(comp.row_bits as u32))
-                .wrapping_add(iy.wrapping_mul(comp.stride_bits as u32));
+                .wrapping_add(iy.wrapping_mul(comp.row_bits as u32))
+                .wrapping_add(ix.wrapping_mul(comp.stride_bits as u32));
             let read = comp.stride_bits as u32;
             k.reads(1, read);
             k.read_at(Region::Table, u64::from(at), read);
@@ -922,8 +943,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     fn field32<K: Counter>(&self, c: &Comp32, ix: u32, iy: u32, k: &mut K) -> [E; C] {
         let mut at = c
             .offset
-            .wrapping_add(ix.wrapping_mul(c.row))
-            .wrapping_add(iy.wrapping_mul(c.stride));
+            .wrapping_add(iy.wrapping_mul(c.row))
+            .wrapping_add(ix.wrapping_mul(c.stride));
         k.reads(1, c.stride);
         k.read_at(Region::Table, u64::from(at), c.stride);
         k.words(
@@ -1094,13 +1115,42 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         out
     }
 
+    /// The entries at bit `at` and the next one (`at + stride`: `ix + 1`, same `iy`), the reads
+    /// counted as two [`Tiled::field_at`] calls count them. When both fit one 32-bit read
+    /// (`pair_mask`), one [`read_masked32`] of `2 stride` bits gives both; else two reads.
+    #[inline(always)]
+    fn pair_at<K: Counter>(&self, c: &Comp32, at: u32, k: &mut K) -> ([E; C], [E; C]) {
+        let next = at.wrapping_add(c.stride);
+        if c.pair_mask == 0 {
+            return (self.field_at(c, at, k), self.field_at(c, next, k));
+        }
+        for a in [at, next] {
+            k.reads(1, c.stride);
+            k.read_at(Region::Table, u64::from(a), c.stride);
+            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+        }
+        let v = read_masked32(self.words, at, c.pair_mask);
+        let (mut a, mut b) = ([E::ZERO; C], [E::ZERO; C]);
+        // Channel c of the first entry at c bits, of the second at stride + c bits: both below
+        // 2 stride <= 32 (pair_mask != 0), so the shifts are below 32.
+        let mut sh = 0u32;
+        for (a, b) in a.iter_mut().zip(b.iter_mut()) {
+            *a = E::from_u64_truncating(u64::from(v.wrapping_shr(sh) & c.mask));
+            *b = E::from_u64_truncating(u64::from(
+                v.wrapping_shr(sh.wrapping_add(c.stride)) & c.mask,
+            ));
+            sh = sh.wrapping_add(c.bits);
+        }
+        (a, b)
+    }
+
     /// The corners of cell `(i, j)` when the cell lies inside one tile away from its left and
     /// top edges (`i` and `j` not multiples of the tile sides, and neither is `i + 1`, `j + 1`:
     /// every digit non-zero, both columns and both rows in the same tile): the usual corner of
     /// a 16-read lookup. The 9 fields ([`Tiled::quad_fast`]) at offsets formed by additions
-    /// from three products: the local sums at `o`, `o + row`, `o + stride`, `o + row + stride`;
-    /// the strips above at `o01` and `o01 + row`; the strips left at `o10` and `o10 + stride`;
-    /// the tile corner. `None` when the cell is not of that kind.
+    /// from three products: the local sums at `o`, `o + stride` (next column), `o + row` (next
+    /// row), `o + row + stride`; the strips above at `o01` and `o01 + stride`; the strips left
+    /// at `o10` and `o10 + row`; the tile corner. `None` when the cell is not of that kind.
     #[inline(never)]
     fn cell_fast<K: Counter>(
         &self,
@@ -1118,18 +1168,15 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         let [c00, c01, c10, c11] = &o.comps;
         let at = |c: &Comp32, ix: u32, iy: u32| {
             c.offset
-                .wrapping_add(ix.wrapping_mul(c.row))
-                .wrapping_add(iy.wrapping_mul(c.stride))
+                .wrapping_add(iy.wrapping_mul(c.row))
+                .wrapping_add(ix.wrapping_mul(c.stride))
         };
         let o00 = at(c00, x.i0, y.i0);
-        let mut s0 = self.field_at(c00, o00, k);
-        let mut s1 = self.field_at(c00, o00.wrapping_add(c00.row), k);
-        let mut s2 = self.field_at(c00, o00.wrapping_add(c00.stride), k);
-        let mut s3 = self.field_at(c00, o00.wrapping_add(c00.row).wrapping_add(c00.stride), k);
+        let (mut s0, mut s1) = self.pair_at(c00, o00, k);
+        let (mut s2, mut s3) = self.pair_at(c00, o00.wrapping_add(c00.row), k);
         if y.q != 0 {
             let o01 = at(c01, x.i0, y.q.wrapping_sub(1));
-            let a = self.field_at(c01, o01, k);
-            let b = self.field_at(c01, o01.wrapping_add(c01.row), k);
+            let (a, b) = self.pair_at(c01, o01, k);
             add_to(&mut s0, &a);
             add_to(&mut s1, &b);
             add_to(&mut s2, &a);
@@ -1138,7 +1185,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         if x.q != 0 {
             let o10 = at(c10, x.q.wrapping_sub(1), y.i0);
             let mut a = self.field_at(c10, o10, k);
-            let mut b = self.field_at(c10, o10.wrapping_add(c10.stride), k);
+            let mut b = self.field_at(c10, o10.wrapping_add(c10.row), k);
             if y.q != 0 {
                 let t = self.field32(c11, x.q.wrapping_sub(1), y.q.wrapping_sub(1), k);
                 add_to(&mut a, &t);
@@ -1405,8 +1452,196 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     }
 }
 
+/// Refuses a row holding a texel wider than `texel_bits` (the field widths are proved for
+/// `texel_bits`), reporting the first such texel's width. Nothing to check when `T` is no wider;
+/// else one OR over the row (vectorized: every texel is at most `2^b - 1` iff their OR is), the
+/// texel-by-texel search only when that fails.
+pub(super) fn check_texel_width<T: Texel>(texels: &[T], texel_bits: u32) -> Result<(), Error> {
+    if T::BITS <= texel_bits {
+        return Ok(());
+    }
+    let max = mask(texel_bits);
+    if u64::from(texels.iter().fold(0u16, |a, t| a | t.to_u16())) <= max {
+        return Ok(());
+    }
+    for t in texels {
+        let v = t.to_u16();
+        if u64::from(v) > max {
+            return Err(Error::TooWide {
+                what: Quantity::Entry,
+                bits_needed: width::bits_of_u64(u64::from(v)),
+                bits_available: texel_bits,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `row[x] += t_0 + ... + t_x` per channel (wrapping), for a row of `w C` entries: the flat
+/// build's row step (the row above plus the running sum), with the vectorized kernel where it
+/// applies (`simd`: `u8` texels, `u32` entries, one channel).
+pub(super) fn add_prefix_row<T: Texel, E: Entry, const C: usize>(texels: &[T], row: &mut [E]) {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    if crate::simd::build_row_in_place::<T, E, C>(texels, row, false, None) {
+        return;
+    }
+    let mut run = [E::ZERO; C];
+    for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+        for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+            *r = r.wrapping_add(E::from(tv.to_u16()));
+            *ov = ov.wrapping_add(*r);
+        }
+    }
+}
+
+/// One row of the fields of x component `p` into `out`, in storage order: for every stored
+/// position `x <= n` (a multiple of `b = b_p` whose digit `d_p` is not zero) the `C` values
+/// `acc[x] - acc[trunc_{p+1}(x)]`, `acc[x]` at `x C`. `big = b_{p+1}`, or 0 for the top
+/// component (its intervals start at 0). Returns the number of values written; `None` if `acc`
+/// or `out` is too short (never, for the builder's rows). Within a block of `b_{p+1}` the
+/// positions are `base + b, base + 2b, ...` (contiguous for `b = 1`: the local sums).
+fn component_fields<E: Entry, const C: usize>(
+    acc: &[E],
+    n: usize,
+    b: usize,
+    big: usize,
+    out: &mut [E],
+) -> Option<usize> {
+    let at = |x: usize| x.checked_mul(C);
+    // The local sums of the common power-of-two tiles: whole tiles by code specialized for the
+    // width; the last, partial tile below.
+    let (mut k, mut base) = match (b, big) {
+        (1, 2) => local_fields::<E, C, 2>(acc, n, out)?,
+        (1, 4) => local_fields::<E, C, 4>(acc, n, out)?,
+        (1, 8) => local_fields::<E, C, 8>(acc, n, out)?,
+        (1, 16) => local_fields::<E, C, 16>(acc, n, out)?,
+        (1, 32) => local_fields::<E, C, 32>(acc, n, out)?,
+        _ => (0, 0),
+    };
+    if big != 0 && base >= n {
+        return Some(k);
+    }
+    loop {
+        let from = at(base)?;
+        let lo: [E; C] = acc.get(from..)?.first_chunk::<C>().copied()?;
+        let end = if big == 0 {
+            n
+        } else {
+            n.min(base.saturating_add(big).saturating_sub(1))
+        };
+        if b == 1 {
+            if end > base {
+                let src = acc.get(from.checked_add(C)?..at(end)?.checked_add(C)?)?;
+                let dst = out.get_mut(k..k.checked_add(src.len())?)?;
+                // Channel i % C of each entry (C >= 1 and i % C < C: never the default; with C a
+                // constant, no division and, for C = 1, a plain loop over the tile's row).
+                for (i, (d, s)) in dst.iter_mut().zip(src).enumerate() {
+                    *d = s.wrapping_sub(
+                        i.checked_rem(C)
+                            .and_then(|c| lo.get(c))
+                            .copied()
+                            .unwrap_or(E::ZERO),
+                    );
+                }
+                k = k.checked_add(src.len())?;
+            }
+        } else if C == 1 {
+            // x = base + b, base + 2b, ... <= end: every b-th value from base + b.
+            let first = base.saturating_add(b);
+            if first <= end {
+                // b >= 1 (a block size): the division is checked.
+                let count = end.checked_sub(first)?.checked_div(b)?.checked_add(1)?;
+                let dst = out.get_mut(k..k.checked_add(count)?)?;
+                let lo = lo.first().copied().unwrap_or(E::ZERO);
+                // x <= end <= n for every value written: inside acc (no default taken).
+                let mut x = first;
+                for d in dst.iter_mut() {
+                    *d = acc.get(x).copied().unwrap_or(E::ZERO).wrapping_sub(lo);
+                    x = x.wrapping_add(b);
+                }
+                k = k.checked_add(count)?;
+            }
+        } else {
+            let mut x = base.saturating_add(b);
+            while x <= end {
+                let v: [E; C] = acc.get(at(x)?..)?.first_chunk::<C>().copied()?;
+                let dst = out.get_mut(k..k.checked_add(C)?)?;
+                for ((d, s), l) in dst.iter_mut().zip(&v).zip(&lo) {
+                    *d = s.wrapping_sub(*l);
+                }
+                k = k.checked_add(C)?;
+                x = x.saturating_add(b);
+            }
+        }
+        if big == 0 {
+            return Some(k);
+        }
+        base = base.saturating_add(big);
+        if base >= n {
+            return Some(k);
+        }
+    }
+}
+
+/// [`component_fields`] for the local sums (`b = 1`) of `B`-texel blocks, over the whole blocks
+/// of the row (those whose `B - 1` positions are all at most `n`): per block, `acc[base + d] -
+/// acc[base]` for `d = 1..B`, loops of constant length that LLVM unrolls and vectorizes.
+/// Returns the values written and the first block not done.
+fn local_fields<E: Entry, const C: usize, const B: usize>(
+    acc: &[E],
+    n: usize,
+    out: &mut [E],
+) -> Option<(usize, usize)> {
+    // Block t is whole if t B + B - 1 <= n, i.e. t < (n + 1) / B.
+    let blocks = n.checked_add(1)?.checked_div(B)?;
+    let len_in = B.checked_mul(C)?;
+    let len_out = len_in.checked_sub(C)?;
+    let done = blocks.checked_mul(len_out)?;
+    if C == 1 {
+        // Block t (acc[t B .. t B + B] as an array): acc[t B + j] - acc[t B] for j = 1..B into
+        // out[t (B - 1)..] as an array of B values, the last a 0 that the next block's first
+        // value overwrites (or past the values returned: out holds w + 1 values and
+        // t (B - 1) + B <= n + 1 for a whole block). Constant lengths: one vector operation.
+        let (tiles, _) = acc.as_chunks::<B>();
+        let step = B.checked_sub(1)?;
+        let mut at = 0usize;
+        for a in tiles.iter().take(blocks) {
+            let lo = a.first().copied().unwrap_or(E::ZERO);
+            let d = out.get_mut(at..)?.first_chunk_mut::<B>()?;
+            for (j, d) in d.iter_mut().enumerate() {
+                *d = a
+                    .get(j.wrapping_add(1))
+                    .map_or(E::ZERO, |v| v.wrapping_sub(lo));
+            }
+            at = at.wrapping_add(step);
+        }
+        return Some((done, blocks.checked_mul(B)?));
+    }
+    let src = acc.get(..blocks.checked_mul(len_in)?)?;
+    let dst = out.get_mut(..done)?;
+    for (d, a) in dst.chunks_exact_mut(len_out).zip(src.chunks_exact(len_in)) {
+        let (lo, rest) = a.split_at_checked(C)?;
+        for (i, (d, r)) in d.iter_mut().zip(rest).enumerate() {
+            *d = r.wrapping_sub(
+                i.checked_rem(C)
+                    .and_then(|c| lo.get(c))
+                    .copied()
+                    .unwrap_or(E::ZERO),
+            );
+        }
+    }
+    Some((dst.len(), blocks.checked_mul(B)?))
+}
+
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
-/// component (two for one level of tiles) plus the current row's prefix sums.
+/// component (two for one level of tiles) plus one row of fields.
+///
+/// Per row `y`: the row's prefix sums are added to the accumulator of level 0 (the flat build's
+/// row step, the vectorized kernel with `simd`); when `y` ends a block of level `q >= 1` the
+/// accumulators below are folded into level `q` (one pass over a row, once per tile row); then
+/// for each x level `p` the row's fields `C_pq(X, y) = acc_q[X] - acc_q[trunc_{p+1}(X)]` are
+/// formed into the field row and packed, 32 at a time, as row `iy` of component `(p, q)`: each
+/// output word written once, in order (see the module's "Storage order").
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
@@ -1481,58 +1716,20 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 got: texels.len(),
             });
         }
-        // The field widths are proved for `texel_bits`; a wider texel would break them.
-        let max = mask(g.texel_bits);
-        for t in texels {
-            let v = t.to_u16();
-            if u64::from(v) > max {
-                return Err(Error::TooWide {
-                    what: Quantity::Entry,
-                    bits_needed: width::bits_of_u64(u64::from(v)),
-                    bits_available: g.texel_bits,
-                });
-            }
-        }
-        #[allow(
-            clippy::arithmetic_side_effects,
-            reason = "E::BITS is 16, 32 or 64 (Entry is sealed): + 1 does not wrap"
-        )]
-        let overflow = Error::TooWide {
-            what: Quantity::Entry,
-            bits_needed: E::BITS + 1,
-            bits_available: E::BITS,
-        };
-        let modulus = g.spec.modulus;
-        // Exact sums are checked; a modular spec needs them only modulo 2^k and wraps on purpose.
-        let add = |a: E, b: E| -> Result<E, Error> {
-            match modulus {
-                Some(_) => Ok(a.wrapping_add(b)),
-                None => a.checked_add(b).ok_or(overflow),
-            }
-        };
+        check_texel_width(texels, g.texel_bits)?;
         let short = Error::StorageTooSmall {
             needed: row_len,
             got: scratch.len(),
         };
-        let (prefix, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
-        // The row's prefix sums P[X], X = 0..=n.
-        let mut run = [E::ZERO; C];
-        let (p0, rest) = prefix.split_at_mut_checked(C).ok_or(short)?;
-        p0.fill(E::ZERO);
-        for (t, p) in texels.chunks_exact(C).zip(rest.chunks_exact_mut(C)) {
-            for ((tv, pv), r) in t.iter().zip(p.iter_mut()).zip(run.iter_mut()) {
-                *r = add(*r, E::from(tv.to_u16()))?;
-                *pv = *r;
-            }
-        }
-        // Every y component accumulates the row.
-        for acc in accs.chunks_exact_mut(row_len) {
-            for (a, &p) in acc.iter_mut().zip(prefix.iter()) {
-                *a = add(*a, p)?;
-            }
-        }
+        // The first scratch row holds one row of fields at a time; then one accumulator row per
+        // y component, acc_q[x] at x C.. for x = 0..=w (x = 0 always zero).
+        let (buf, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
+        // acc_0 += the row's prefix sums. Wrapping additions: without a modulus every sum is at
+        // most the texture's total, which `E` holds (`check_value_type`); with one, only the
+        // low k bits are stored, and those of a sum depend only on the low k bits of its terms.
+        add_prefix_row::<T, E, C>(texels, accs.get_mut(C..row_len).ok_or(short)?);
         // Row y ends a block of exactly one y component: that of its lowest non-zero digit
-        // (a multiple of b_q with d_q != 0). Likewise each x, for the x components.
+        // (a multiple of b_q with d_q != 0).
         #[allow(
             clippy::arithmetic_side_effects,
             clippy::as_conversions,
@@ -1549,53 +1746,61 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             return Err(short);
         };
         let iy = dy.index.get(q).copied().unwrap_or(0);
-        let acc = accs.chunks_exact(row_len).nth(q).ok_or(short)?;
-        for x in 1..=n {
-            #[allow(clippy::as_conversions, reason = "x <= w < 2^31: lossless")]
-            let dx = g.ax.digits(x as u32);
-            let Some(p) = dx
-                .digit
-                .iter()
-                .take(g.ax.components())
-                .position(|&d| d != 0)
-            else {
-                continue;
-            };
-            let (d, ix) = (
-                dx.digit.get(p).copied().unwrap_or(0),
-                dx.index.get(p).copied().unwrap_or(0),
-            );
-            // The interval I_p(x) = [x - d_p b_p, x): x is a multiple of b_p here.
+        // Invariant between rows: acc_j holds the rows in [trunc_{j+1}(y), trunc_j(y)) for
+        // j >= 1 and acc_0 those in [trunc_1(y), y). Here y is a multiple of b_1, ..., b_q, so
+        // folding acc_{j-1} into acc_j for j = 1..=q (and clearing it) leaves in acc_q the rows
+        // of I_q(y) = [trunc_{q+1}(y), y), the sums C_pq(., y) need, and restores the
+        // invariant: one pass over a row when y ends a tile row (1 row in b_1), none otherwise.
+        for j in 1..=q {
             #[allow(
                 clippy::arithmetic_side_effects,
-                clippy::as_conversions,
-                reason = "u32 -> usize is lossless (usize has at least 32 bits: MAX_DIMENSION); \
-                          x = sum_k d_k b_k >= d_p b_p, so x - d_p b_p >= 0; lo <= x <= w, so \
-                          (x + 1) C <= (w + 1) C = row_len, computed with checks"
+                reason = "j <= q <= Ly < MAX_LEVELS + 1 and (Ly + 2) row_len fits usize \
+                          (scratch_needed): no overflow"
             )]
-            let (hi_range, lo_range) = {
-                let lo = x - (d as usize) * (g.ax.block(p) as usize);
-                (x * C..(x + 1) * C, lo * C..(lo + 1) * C)
-            };
-            let comp = g.component(p, q).ok_or(short)?;
-            let (hi_v, lo_v) = (
-                acc.get(hi_range).ok_or(short)?,
-                acc.get(lo_range).ok_or(short)?,
-            );
-            let mut at = comp.offset(ix, iy);
-            for (&a, &b) in hi_v.iter().zip(lo_v.iter()) {
-                let mut v = a.wrapping_sub(b);
-                if let Some(m) = modulus {
-                    v = v.low_bits(m);
-                }
-                write_field(words, at, comp.bits, v.to_u64())?;
-                at = at.wrapping_add(u64::from(comp.bits));
+            let (lower, upper) = accs.split_at_mut_checked(j * row_len).ok_or(short)?;
+            #[allow(clippy::arithmetic_side_effects, reason = "j >= 1; as above")]
+            let below = lower.get_mut((j - 1) * row_len..).ok_or(short)?;
+            let here = upper.get_mut(..row_len).ok_or(short)?;
+            for (h, b) in here.iter_mut().zip(below.iter_mut()) {
+                *h = h.wrapping_add(*b);
+                *b = E::ZERO;
             }
         }
-        // Reset the accumulators whose super-block ends here: those below q (y is a multiple of
-        // b_{q'+1} for q' < q).
-        for acc in accs.chunks_exact_mut(row_len).take(q) {
-            acc.fill(E::ZERO);
+        let from = q.checked_mul(row_len).ok_or(short)?;
+        let acc = accs
+            .get(from..from.checked_add(row_len).ok_or(short)?)
+            .ok_or(short)?;
+        // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
+        // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
+        for p in 0..g.ax.components() {
+            let comp = g.component(p, q).ok_or(short)?;
+            let big = if p < g.ax.levels {
+                g.ax.block(p.saturating_add(1))
+            } else {
+                0
+            };
+            #[allow(
+                clippy::as_conversions,
+                reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+            )]
+            let (b, big) = (g.ax.block(p) as usize, big as usize);
+            let count = component_fields::<E, C>(acc, n, b, big, buf).ok_or(short)?;
+            let fields = buf.get(..count).ok_or(short)?;
+            // The stored positions, counted as Geometry::new counted them: a mismatch would
+            // be a bug here, refused rather than written across the next row.
+            let bits = u64::try_from(count)
+                .ok()
+                .and_then(|c| c.checked_mul(u64::from(comp.bits)));
+            if bits != Some(comp.row_bits) {
+                return Err(short);
+            }
+            // (A component without stored positions on this axis has no fields, and 0 bits.)
+            if !fields.is_empty() && !pack_fields(words, comp.offset(0, iy), fields, comp.bits) {
+                return Err(Error::StorageTooSmall {
+                    needed: g.words,
+                    got: words.len(),
+                });
+            }
         }
         #[allow(
             clippy::arithmetic_side_effects,
