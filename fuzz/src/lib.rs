@@ -897,6 +897,51 @@ fn same<T: PartialEq + Debug>(a: &T, b: &T, what: &dyn Debug) {
     assert_eq!(a, b, "{what:?}: run-time and zero-sized mode/form disagree");
 }
 
+/// `mean_rounded_u32` against `mean_rounded`'s answer `wide` for the channel sum `sum` (None:
+/// no such channel): the same value where the numerator `sum 2^g` fits 64 bits and the area and
+/// the mean fit 32 bits; otherwise the refusal that names the first that does not (numerator,
+/// area, mean); the wide mean's own refusals (no such channel, zero area) alike.
+fn check_mean_u32(
+    got: std::result::Result<u32, Error>,
+    wide: &std::result::Result<u128, Error>,
+    sum: Option<u128>,
+    g: u32,
+    (w, h): (u64, u64),
+    q: &dyn Debug,
+) {
+    let (Some(sum), Ok(m)) = (sum, wide) else {
+        if let Err(e) = wide {
+            if !matches!(e, Error::TooWide { .. }) {
+                assert_eq!(got, Err(*e), "{q:?}: mean_rounded_u32");
+                return;
+            }
+        }
+        assert!(
+            got.is_err(),
+            "{q:?}: mean_rounded_u32 answered where mean_rounded refused"
+        );
+        return;
+    };
+    let bits = |v: u128| 128 - v.leading_zeros();
+    let area = u128::from(w) * u128::from(h);
+    let want = if sum != 0 && bits(sum) + g > 64 {
+        Some(Quantity::MeanNumerator)
+    } else if sum != 0 && area > u128::from(u32::MAX) {
+        Some(Quantity::MeanArea)
+    } else if *m > u128::from(u32::MAX) {
+        Some(Quantity::Mean)
+    } else {
+        None
+    };
+    match want {
+        None => assert_eq!(got.map(u128::from), Ok(*m), "{q:?}: mean_rounded_u32"),
+        Some(what) => assert!(
+            matches!(got, Err(Error::TooWide { what: w, .. }) if w == what),
+            "{q:?}: mean_rounded_u32 {got:?}, want a refusal of {what:?}"
+        ),
+    }
+}
+
 /// At most 9 pieces of 16 corner reads each, whatever the box.
 fn check_reads(t: &Tally, facts: &Facts, what: &dyn Debug) {
     let max = 9 * 16 * facts.reads_per_corner;
@@ -931,6 +976,14 @@ where
                 let sum = case.sums[q.ch].expect("an Ok sum fits");
                 check_mean(&got, sum, q.g, case.sides(), wb, q);
             }
+            check_mean_u32(
+                s.mean_rounded_u32(q.ch, q.g, &mut NoCount),
+                &got.map(Into::into),
+                case.sums.get(q.ch).copied().flatten(),
+                q.g,
+                case.sides(),
+                q,
+            );
             // Every channel's mean at once agrees with the channel-by-channel ones (or fails with
             // the first channel's refusal).
             let all = s.means_rounded(q.g, &mut NoCount);
