@@ -95,13 +95,20 @@ pub(crate) fn div_u64_by_u32(n: u64, d: u32) -> Option<(u32, u32)> {
 pub(crate) fn divrem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
     #[cfg(all(target_pointer_width = "64", not(test)))]
     {
-        let d = core::num::NonZeroU64::new(d)?;
-        Some((n / d, n % d))
+        divrem_native(n, d)
     }
     #[cfg(any(not(target_pointer_width = "64"), test))]
     {
         divrem_u64_narrow(n, d)
     }
+}
+
+/// `(n / d, n % d)` by the host's native 64-bit division; `None` for `d = 0`.
+#[cfg(all(target_pointer_width = "64", not(test)))]
+#[inline(always)]
+fn divrem_native(n: u64, d: u64) -> Option<(u64, u64)> {
+    let d = core::num::NonZeroU64::new(d)?;
+    Some((n / d, n % d))
 }
 
 /// [`divrem_u64`] as a 32-bit core computes it (also compiled on hosts for the tests).
@@ -110,9 +117,8 @@ pub(crate) fn divrem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
 #[allow(
     clippy::arithmetic_side_effects,
     clippy::as_conversions,
-    reason = "one proof covers the function: the cast takes the high 32-bit word (n >> 32 < 2^32); \
-              lz(d) - lz(n) >= 0 as n >= d; d << i loses no bit (i <= lz(d) - lz(n) <= lz(d)) and \
-              1 << i has i <= 31 (d >= 2^32); r -= step only when r >= step; i -= 1 only when i > 0"
+    reason = "the cast takes the high 32-bit word (n >> 32 < 2^32); the shifts move 32-bit \
+              words into place"
 )]
 fn divrem_u64_narrow(n: u64, d: u64) -> Option<(u64, u64)> {
     if let Ok(d32) = u32::try_from(d) {
@@ -123,25 +129,8 @@ fn divrem_u64_narrow(n: u64, d: u64) -> Option<(u64, u64)> {
         let (q_lo, r) = div_u64_by_u32(u64::from(r_hi) << 32 | (n & 0xFFFF_FFFF), d32.get())?;
         return Some((u64::from(q_hi) << 32 | u64::from(q_lo), u64::from(r)));
     }
-    // d >= 2^32: q < 2^32. Align d's top bit with n's, then one quotient bit per step.
-    if n < d {
-        return Some((0, n));
-    }
-    let shift = d.leading_zeros() - n.leading_zeros(); // <= 31: d has a bit at 2^32 or above
-    let (mut q, mut r) = (0u64, n);
-    let mut i = shift;
-    loop {
-        let step = d << i; // no bit lost: i <= leading_zeros(d)
-        if r >= step {
-            r -= step;
-            q |= 1 << i;
-        }
-        if i == 0 {
-            break;
-        }
-        i -= 1;
-    }
-    Some((q, r))
+    // d >= 2^32: q < 2^32, found bit by bit (at most 32 steps).
+    divrem_u64_bits(n, d)
 }
 
 /// `(n / d, n % d)` for any `n` and `d != 0` (`None` for `d = 0`) in the least code: on a
@@ -157,8 +146,7 @@ fn divrem_u64_narrow(n: u64, d: u64) -> Option<(u64, u64)> {
 pub(crate) fn divrem_u64_small(n: u64, d: u64) -> Option<(u64, u64)> {
     #[cfg(all(target_pointer_width = "64", not(test)))]
     {
-        let d = core::num::NonZeroU64::new(d)?;
-        Some((n / d, n % d))
+        divrem_native(n, d)
     }
     #[cfg(any(not(target_pointer_width = "64"), test))]
     {

@@ -29,9 +29,10 @@
 )]
 
 use super::sealed::FormImpl;
+use super::split::overflow;
 use super::{check_acc, corners4::Corners4, BoxSum, WideOf};
 use crate::cost::{per_channel, Counter};
-use crate::error::{Error, Quantity};
+use crate::error::Error;
 use crate::layouts::Layout;
 use crate::rect::{RawBox, Rect};
 use crate::texel::Acc;
@@ -86,19 +87,6 @@ fn piece(lo: i32, hi: i32, n: u32, which: u32) -> Piece {
             mult: width(lo.max(n_i), hi),
         },
         _ => NONE,
-    }
-}
-
-#[inline(always)]
-#[allow(
-    clippy::arithmetic_side_effects,
-    reason = "W::BITS is 64 or 128 (Wide is sealed): + 1 does not wrap"
-)]
-fn overflow<W: Wide>() -> Error {
-    Error::TooWide {
-        what: Quantity::LookupAccumulator,
-        bits_needed: W::BITS + 1,
-        bits_available: W::BITS,
     }
 }
 

@@ -33,11 +33,12 @@ use crate::layouts::Layout;
 use crate::rect::RawBox;
 use crate::wide::Wide;
 
+/// The refusal of a sum past the result word `W` (also the clamp path's, `clamp_int`).
 #[allow(
     clippy::arithmetic_side_effects,
     reason = "W::BITS is 64 or 128 (Wide is sealed): + 1 does not wrap"
 )]
-fn overflow<W: Wide>() -> Error {
+pub(super) fn overflow<W: Wide>() -> Error {
     Error::TooWide {
         what: Quantity::LookupAccumulator,
         bits_needed: W::BITS + 1,
