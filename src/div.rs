@@ -159,7 +159,7 @@ pub(crate) fn divrem_u64_small(n: u64, d: u64) -> Option<(u64, u64)> {
 #[allow(
     clippy::arithmetic_side_effects,
     reason = "lz(d) - lz(n) >= 0 as n >= d; d << i loses no bit (i <= lz(d) - lz(n) <= lz(d)) and \
-              1 << i has i <= 63; r -= step only when r >= step; i -= 1 only when i > 0"
+              1 << i has i <= 63; r -= step only when r >= step"
 )]
 fn divrem_u64_bits(n: u64, d: u64) -> Option<(u64, u64)> {
     if d == 0 {
@@ -168,19 +168,20 @@ fn divrem_u64_bits(n: u64, d: u64) -> Option<(u64, u64)> {
     if n < d {
         return Some((0, n));
     }
-    // Align d's top bit with n's, then one quotient bit per step.
-    let mut i = d.leading_zeros() - n.leading_zeros();
+    // Align d's top bit with n's, then one quotient bit per step, the step and its bit shifted
+    // right by one each time (constant shifts: a 64-bit shift by a variable amount is a
+    // branchy sequence on a 32-bit core); the low bits of `d << i` are zero, so the shifts are
+    // exact and the steps are d 2^i, ..., d.
+    let i = d.leading_zeros() - n.leading_zeros();
+    let (mut step, mut bit) = (d << i, 1u64 << i);
     let (mut q, mut r) = (0u64, n);
-    loop {
-        let step = d << i;
+    while bit != 0 {
         if r >= step {
             r -= step;
-            q |= 1 << i;
+            q |= bit;
         }
-        if i == 0 {
-            break;
-        }
-        i -= 1;
+        step >>= 1;
+        bit >>= 1;
     }
     Some((q, r))
 }

@@ -282,6 +282,11 @@ mod sealed {
 pub trait EdgeMode: Copy + sealed::Sealed {
     /// Which mode this is. Constant for the zero-sized types, so their lookups compile one branch.
     fn kind(self) -> EdgeKind;
+    /// Whether the lookups answer only boxes at most one period long on each axis
+    /// ([`RepeatWithinPeriod`]): then a box crossing the edge is at most 2 x 2 pieces of
+    /// multiplicity 1, and no code for whole periods is compiled.
+    #[doc(hidden)]
+    const WITHIN_PERIOD: bool = false;
 }
 
 /// Outside the texture is zero; the area of the mean is the unclipped box's (Crow §2.4).
@@ -295,6 +300,17 @@ pub struct ClampToEdge;
 /// The texture repeats with period `w x h`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Repeat;
+
+/// [`Repeat`] for boxes at most one period (the texture's side) long on each axis, as a scene
+/// plan states when its largest box is at most the texture
+/// ([`crate::plan::Plan::repeat_within_period`]). The same sums as [`Repeat`] for those boxes;
+/// a longer box is refused with [`crate::Error::OutsidePlan`]
+/// ([`crate::plan::PlanLimit::LongerThanPeriod`]). What it leaves out: a box crossing the edge
+/// is at most 2 x 2 in-range pieces of multiplicity 1, so the whole periods' division and the
+/// multiplies are not compiled (Stable + Repeat firmware on a Cortex-M4: docs/firmware.md).
+/// Its [`EdgeMode::kind`] is [`EdgeKind::Repeat`]: counted costs and errors are Repeat's.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RepeatWithinPeriod;
 
 /// The texture repeats with period `2w x 2h`, every other copy reflected.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -316,6 +332,15 @@ zst_mode!(Border, EdgeKind::Border);
 zst_mode!(ClampToEdge, EdgeKind::Clamp);
 zst_mode!(Repeat, EdgeKind::Repeat);
 zst_mode!(MirroredRepeat, EdgeKind::Mirror);
+
+impl sealed::Sealed for RepeatWithinPeriod {}
+impl EdgeMode for RepeatWithinPeriod {
+    #[inline(always)]
+    fn kind(self) -> EdgeKind {
+        EdgeKind::Repeat
+    }
+    const WITHIN_PERIOD: bool = true;
+}
 
 impl sealed::Sealed for EdgeKind {}
 impl EdgeMode for EdgeKind {

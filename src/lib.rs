@@ -86,7 +86,9 @@ pub mod wide;
 pub mod width;
 
 pub use cost::{Counter, NoCount, Region, Tally};
-pub use edge::{Border, ClampToEdge, EdgeKind, EdgeMode, MirroredRepeat, Repeat};
+pub use edge::{
+    Border, ClampToEdge, EdgeKind, EdgeMode, MirroredRepeat, Repeat, RepeatWithinPeriod,
+};
 pub use error::{Error, Quantity};
 pub use layouts::Layout;
 pub use lookup::{

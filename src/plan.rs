@@ -614,6 +614,23 @@ impl Plan {
         self.mean_fits_u32
     }
 
+    /// Whether the facts' boxes are Repeat boxes at most one period (the texture's side) long on
+    /// each axis: then [`crate::RepeatWithinPeriod`] answers every box of the plan with
+    /// [`crate::Repeat`]'s sums, and a firmware that uses it leaves out the whole periods'
+    /// division and multiplies (about 1 KiB of the Stable + Repeat firmware on a Cortex-M4,
+    /// docs/firmware.md). `false` for any other mode and for a largest box past the texture.
+    #[allow(
+        clippy::as_conversions,
+        reason = "const fn (no From): a plan exists only for sides below 2^31 and F <= 24 \
+                  (check_facts, check_dimensions), so n 2^F < 2^55 is exact in u64"
+    )]
+    pub const fn repeat_within_period(&self) -> bool {
+        let f = &self.facts;
+        matches!(f.edge, EdgeKind::Repeat)
+            && f.max_box[0] <= (f.width as u64) << f.frac_bits
+            && f.max_box[1] <= (f.height as u64) << f.frac_bits
+    }
+
     /// The cargo features the firmware needs for this plan: none (box lookups, every layout
     /// and mode are in the core without features).
     pub const fn features(&self) -> &'static [&'static str] {
@@ -678,6 +695,9 @@ pub enum PlanLimit {
     BoxTooLarge,
     /// The box reaches outside the texture, and the facts say boxes stay inside.
     LeavesTexture,
+    /// A side is longer than the texture's, and the lookup answers boxes within one period
+    /// only ([`crate::RepeatWithinPeriod`]).
+    LongerThanPeriod,
 }
 
 impl core::fmt::Display for PlanLimit {
@@ -687,6 +707,10 @@ impl core::fmt::Display for PlanLimit {
             PlanLimit::BoxTooLarge => "a side is above the plan's largest box",
             PlanLimit::LeavesTexture => {
                 "the box leaves the texture, and the plan's boxes stay inside"
+            }
+            PlanLimit::LongerThanPeriod => {
+                "a side is longer than the texture, and the lookup answers boxes within one \
+                 period (RepeatWithinPeriod)"
             }
         })
     }

@@ -41,6 +41,8 @@ ENTRIES = [
     ("stable_repeat_in", "3b. `Sat::box_sum` Stable Repeat, inside one period (not the first)", "hand_repeat_in"),
     ("hand_repeat_in", "", None),
     ("stable_repeat_cross", "4. `Sat::box_sum` Stable Repeat, crossing the right edge", None),
+    ("within_in", "3c. `Sat::box_sum` Stable `RepeatWithinPeriod` (a plan's boxes at most the texture), as 3b", "hand_repeat_in"),
+    ("within_cross", "4b. `Sat::box_sum` Stable `RepeatWithinPeriod`, crossing the right edge, as 4", None),
     ("mean_rounded", "`BoxSum::mean_rounded(0, 8, ..)` alone", "hand_mean"),
     ("hand_mean", "", None),
     ("mean_rounded_u32", "`BoxSum::mean_rounded_u32(0, 8, ..)` alone (a plan's 32-bit mean)", "hand_mean"),

@@ -744,7 +744,11 @@ pub(crate) fn sum_raw_with<
         (px, py) => {
             check_modular(layout, r, f, form.modular_headroom_bits(f))?;
             acc()?;
-            out.sums = split::sum(layout, px, py, f, form, mode, k)?;
+            out.sums = if M::WITHIN_PERIOD {
+                split::sum_within(layout, px, py, f, form, k)?
+            } else {
+                split::sum(layout, px, py, f, form, mode, k)?
+            };
         }
     }
     Ok(out)

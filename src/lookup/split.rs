@@ -27,7 +27,7 @@
 use super::sealed::FormImpl;
 use super::{in_range_wide, WideOf};
 use crate::cost::{per_channel, Counter};
-use crate::edge::{AxisPlan, EdgeMode};
+use crate::edge::{AxisPlan, AxisSplit, EdgeMode};
 use crate::error::{Error, Quantity};
 use crate::layouts::Layout;
 use crate::rect::RawBox;
@@ -110,6 +110,72 @@ pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: 
                     .ok_or_else(overflow::<WideOf<L, C>>)?;
                 *o = o.checked_add(t).ok_or_else(overflow::<WideOf<L, C>>)?;
             }
+        }
+    }
+    Ok(acc)
+}
+
+/// The pieces of a Repeat axis whose box is at most one period `p` long, as `[a, b)` and
+/// `[0, c)` (`c = 0`: none): an in-range axis is its one piece; a split one is the head
+/// `[r0, p)` of the first period and the tail `[0, rest)` of the next (`rest <= r0`: the box
+/// is at most `p` long).
+/// [`Error::OutsidePlan`] ([`crate::plan::PlanLimit::LongerThanPeriod`]) for a box longer
+/// than `p` (`rest > r0`); an in-range axis is never longer.
+#[inline(always)]
+fn within_pieces(plan: AxisPlan, p: i64) -> Result<(i64, i64, i64), Error> {
+    match plan {
+        AxisPlan::InRange(lo, hi) => Ok((lo, hi, 0)),
+        AxisPlan::Split(AxisSplit::Periodic { r0, rest, .. }) => {
+            // r0 >= 0: its bit pattern is its value; rest <= r0 < p <= 2^55 below.
+            if rest > r0.cast_unsigned() {
+                return Err(Error::OutsidePlan {
+                    limit: crate::plan::PlanLimit::LongerThanPeriod,
+                });
+            }
+            Ok((r0, p, rest.cast_signed()))
+        }
+        _ => Ok((0, 0, 0)),
+    }
+}
+
+/// [`sum`] for [`crate::RepeatWithinPeriod`]: a box at most one period long on each axis
+/// crossing the edge is at most 2 x 2 in-range pieces, each of multiplicity 1 (Crow §2.4's
+/// pieces with no whole periods): no division, no multiply. A longer box is refused here (a
+/// box placed in range is never longer than a period, so the in-range path needs no test).
+/// The pieces' sums are added with checked arithmetic, as in [`sum`]. Not inlined: the common
+/// in-range case stays small.
+#[inline(never)]
+pub(crate) fn sum_within<L: Layout<C>, Fm: FormImpl, K: Counter, const C: usize>(
+    layout: &L,
+    px: AxisPlan,
+    py: AxisPlan,
+    f: u32,
+    form: Fm,
+    k: &mut K,
+) -> Result<[WideOf<L, C>; C], Error> {
+    #[allow(
+        clippy::as_conversions,
+        reason = "sides <= 2^31 - 1 (check_dimensions) and f <= MAX_FRAC_BITS = 24: lossless, and \
+                  the shifted values stay below 2^55"
+    )]
+    let (pw, ph) = ((layout.width() as i64) << f, (layout.height() as i64) << f);
+    let (xa, xb, xc) = within_pieces(px, pw)?;
+    let (ya, yb, yc) = within_pieces(py, ph)?;
+    let mut acc = [<WideOf<L, C> as Wide>::ZERO; C];
+    let mut first = true;
+    for i in 0..4u32 {
+        let (x0, x1) = if i & 1 == 0 { (xa, xb) } else { (0, xc) };
+        let (y0, y1) = if i & 2 == 0 { (ya, yb) } else { (0, yc) };
+        if x1 <= x0 || y1 <= y0 {
+            continue;
+        }
+        let v = in_range_wide(layout, &RawBox { x0, y0, x1, y1 }, f, form, k)?;
+        if !first {
+            k.adds(const { per_channel(1, C) });
+        }
+        first = false;
+        for (o, v) in acc.iter_mut().zip(v) {
+            *o = o.checked_add(v).ok_or_else(overflow::<WideOf<L, C>>)?;
         }
     }
     Ok(acc)

@@ -210,6 +210,69 @@ fn split_boxes_match_direct_sums() {
     assert!(n > if cfg!(miri) { 40 } else { 1000 });
 }
 
+/// `RepeatWithinPeriod` gives Repeat's sums and counted costs for every box at most one period
+/// long on each axis (in the first period, in another, crossing an edge or a corner: every
+/// start and size at F = 2 on a 5 x 4 texture, both forms, and every integer box through the
+/// 4-read lookup), and refuses every longer box with `OutsidePlan { LongerThanPeriod }`.
+#[test]
+fn repeat_within_period_equals_repeat_and_refuses_longer_boxes() {
+    use crate::plan::PlanLimit;
+    use crate::{Error, FormKind, FracBits, RepeatWithinPeriod};
+    let t = Texture::<u8>::new(&TEX, W, H).unwrap();
+    let mut st = [0u32; W * H];
+    let sat = Sat::build(&t, &mut st).unwrap();
+    let fb = FracBits::new(2).unwrap();
+    let (pw, ph) = ((W as i64) << 2, (H as i64) << 2);
+    let longer = Err(Error::OutsidePlan {
+        limit: PlanLimit::LongerThanPeriod,
+    });
+    let (mut same, mut refused) = (0u32, 0u32);
+    // Under Miri (about 10^4 times slower) every 7th start and size.
+    let step = if cfg!(miri) { 7 } else { 1 };
+    for x0 in (-pw - 3..2 * pw).step_by(step) {
+        for bw in (0..pw + 3).step_by(step) {
+            for y0 in (-ph - 2..2 * ph).step_by(step * 3) {
+                for bh in (0..ph + 2).step_by(step * 2) {
+                    let r = Rect::new(x0, y0, x0 + bw, y0 + bh);
+                    for form in [FormKind::Paper, FormKind::Stable] {
+                        let (mut k0, mut k1) = (Tally::new(), Tally::new());
+                        let want = sat.box_sum_raw(&r, fb, form, Repeat, &mut k0);
+                        let got = sat.box_sum_raw(&r, fb, form, RepeatWithinPeriod, &mut k1);
+                        if (bw > pw || bh > ph) && bw > 0 && bh > 0 {
+                            assert_eq!(got, longer, "{r:?}");
+                            refused += 1;
+                        } else {
+                            assert_eq!(got, want, "{form:?} {r:?}");
+                            assert_eq!(k1, k0, "{form:?} {r:?}");
+                            same += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(same > if cfg!(miri) { 50 } else { 5000 } && refused > 10);
+    // Integer corners: the 4-read lookup.
+    for x0 in -(W as i32) - 1..2 * W as i32 {
+        for bw in 0..W as i32 + 2 {
+            for y0 in (-(H as i32) - 1..2 * H as i32).step_by(step) {
+                for bh in 0..H as i32 + 2 {
+                    let r = Rect::new(x0, y0, x0 + bw, y0 + bh);
+                    let (mut k0, mut k1) = (Tally::new(), Tally::new());
+                    let want = sat.box_sum_int(&r, Repeat, &mut k0);
+                    let got = sat.box_sum_int(&r, RepeatWithinPeriod, &mut k1);
+                    if (bw > W as i32 || bh > H as i32) && bw > 0 && bh > 0 {
+                        assert_eq!(got, longer, "{r:?}");
+                    } else {
+                        assert_eq!(got, want, "{r:?}");
+                        assert_eq!(k1, k0, "{r:?}");
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Counted costs of a split box: a Repeat box crossing the right edge is two in-range lookups,
 /// one addition per channel to combine them; crossing a corner, four.
 #[test]

@@ -331,3 +331,68 @@ fn the_u32_mean_serves_every_box_of_a_plan_that_says_so() {
         }
     }
 }
+
+/// `repeat_within_period` holds exactly for Repeat facts whose largest box is at most the
+/// texture on both axes, and then `RepeatWithinPeriod` answers every box `check_box` accepts
+/// (leaving the texture included) with Repeat's sum.
+#[test]
+fn repeat_within_period_follows_the_facts() {
+    let (w, h) = (12usize, 7usize);
+    for f in [0u32, 3] {
+        let within = |max: [u64; 2], edge| {
+            let facts = SceneFacts {
+                max_box: max,
+                leaves_texture: true,
+                ..SceneFacts::new(w, h, 8, f, edge)
+            };
+            Plan::for_scene(&facts).unwrap().repeat_within_period()
+        };
+        let (pw, ph) = ((w as u64) << f, (h as u64) << f);
+        assert!(within([pw, ph], EdgeKind::Repeat));
+        assert!(within([1 << f, 1 << f], EdgeKind::Repeat));
+        assert!(!within([pw + 1, ph], EdgeKind::Repeat));
+        assert!(!within([pw, ph + 1], EdgeKind::Repeat));
+        for edge in [EdgeKind::Border, EdgeKind::Clamp, EdgeKind::Mirror] {
+            assert!(!within([pw, ph], edge));
+        }
+    }
+    let texels: Vec<u8> = (0..w * h).map(|i| (i * 53 % 251) as u8).collect();
+    let tex = Texture::<u8>::new(&texels, w, h).unwrap();
+    let mut flat = vec![0u32; w * h];
+    let sat = Sat::build(&tex, &mut flat).unwrap();
+    let f = 2u32;
+    let facts = SceneFacts {
+        max_box: [(w as u64) << f, (h as u64) << f],
+        leaves_texture: true,
+        ..SceneFacts::new(w, h, 8, f, EdgeKind::Repeat)
+    };
+    let p = Plan::for_scene(&facts).unwrap();
+    assert!(p.repeat_within_period());
+    let fb = FracBits::new(f).unwrap();
+    let step = if cfg!(miri) { 9 } else { 1 };
+    let mut n = 0;
+    for x0 in (-60i64..60).step_by(step * 7) {
+        for bw in (1i64..60).step_by(step * 3) {
+            for y0 in (-40i64..40).step_by(step * 5) {
+                for bh in (1i64..36).step_by(step * 2) {
+                    let r = Rect::new(x0, y0, x0 + bw, y0 + bh);
+                    let want = sat.box_sum_raw(&r, fb, Stable, crate::Repeat, &mut NoCount);
+                    let got =
+                        sat.box_sum_raw(&r, fb, Stable, crate::RepeatWithinPeriod, &mut NoCount);
+                    match p.check_box(&r) {
+                        Ok(()) => {
+                            assert_eq!(got, want, "{r:?}");
+                            n += 1;
+                        }
+                        Err(_) => assert_eq!(
+                            got.is_err(),
+                            bw > (w as i64) << f || bh > (h as i64) << f,
+                            "{r:?}"
+                        ),
+                    }
+                }
+            }
+        }
+    }
+    assert!(n > if cfg!(miri) { 5 } else { 1000 });
+}

@@ -53,8 +53,8 @@ use std::process::ExitCode;
 use texsat::texel::Acc;
 use texsat::width::{self, bits_of};
 use texsat::{
-    BoxLookup, BoxSum, EdgeKind, Entry, Error, FormKind, FracBits, NoCount, Quantity, Rect, Tally,
-    Texel, Texture,
+    BoxLookup, BoxSum, EdgeKind, EdgeMode, Entry, Error, FormKind, FracBits, NoCount, Quantity,
+    Rect, RepeatWithinPeriod, Tally, Texel, Texture,
 };
 use texsat_tools::budget::{self, Budget, Estimate, MAX_LINE_BYTES};
 
@@ -1174,8 +1174,23 @@ fn lookup<L: BoxLookup<C>, const C: usize>(
     raw: [i64; 4],
     k: &mut Tally,
 ) -> Looked<C> {
+    // A plan whose Repeat boxes are at most the texture: its firmware's mode
+    // (`RepeatWithinPeriod`, the same sums; `check_box` has refused longer boxes).
+    if o.plan.as_ref().is_some_and(|p| p.repeat_within_period()) {
+        return lookup_in(l, o, raw, RepeatWithinPeriod, k);
+    }
+    lookup_in(l, o, raw, o.edge.kind(), k)
+}
+
+/// [`lookup`] under the boundary mode `mode`.
+fn lookup_in<L: BoxLookup<C>, M: EdgeMode, const C: usize>(
+    l: &L,
+    o: &QueryOpts,
+    raw: [i64; 4],
+    mode: M,
+    k: &mut Tally,
+) -> Looked<C> {
     let f = o.frac_bits;
-    let mode = o.edge.kind();
     let integer = raw.iter().all(|&v| v & ((1i64 << f) - 1) == 0);
     if f == 0 || (o.int4 && integer) {
         let mut c = [0i32; 4];

@@ -2019,12 +2019,29 @@ fn plan_prints_the_smallest_table_and_its_reasons() {
         "adds",
         "max_error",
         "mean",
+        "repeat_within_period",
         "features",
         "rejected",
     ] {
         assert!(p.get(key).is_some(), "missing {key}: {p}");
     }
     assert_eq!(p["edge"], "repeat");
+    // Boxes up to 8 x 8 on a 64 x 48 texture: Repeat within one period; a box wider than the
+    // texture is not, and neither is another mode.
+    assert_eq!(p["repeat_within_period"], true);
+    for (b, edge) in [("1x1..65x8", "repeat"), ("1x1..8x8", "border")] {
+        let q = plan(&[
+            "--size",
+            "64x48",
+            "--texel-bits",
+            "8",
+            "--box",
+            b,
+            "--edge",
+            edge,
+        ]);
+        assert_eq!(q["repeat_within_period"], false, "{b} {edge}: {q}");
+    }
     // Boxes up to 8 x 8 texels at F = 8: area 2^22, mean 8 + 8 bits: the 32-bit mean.
     assert_eq!(p["mean"], "u32");
     assert_eq!(p["lookup"], "stable");

@@ -25,7 +25,9 @@ use cortex_m_rt::entry;
 #[allow(dead_code)]
 mod hand;
 use texsat::layouts::{Tiled, TiledSpec};
-use texsat::{Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, Sat, Stable, Texture};
+use texsat::{
+    Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, RepeatWithinPeriod, Sat, Stable, Texture,
+};
 
 type Tx = u8;
 type En = u32;
@@ -154,6 +156,12 @@ fn m_box_sum_stable_border(sat: &Sat<'_, En>, r: &Rect<Co>) {
 #[inline(never)]
 fn m_box_sum_stable_repeat(sat: &Sat<'_, En>, r: &Rect<Co>) {
     keep(sat.box_sum(r, Stable, Repeat, &mut NoCount));
+}
+
+/// Repeat for a plan whose boxes are at most the texture (`Plan::repeat_within_period`).
+#[inline(never)]
+fn m_box_sum_stable_repeat_within(sat: &Sat<'_, En>, r: &Rect<Co>) {
+    keep(sat.box_sum(r, Stable, RepeatWithinPeriod, &mut NoCount));
 }
 
 #[inline(never)]
@@ -392,6 +400,15 @@ fn main() -> ! {
     measure!(m_box_sum_stable_repeat(&sat, &rr_in));
     measure!(h_box_sum_repeat(&hand_table, &rr_in));
     measure!(m_box_sum_stable_repeat(&sat, &rr_cross));
+    for r in [&rr_in, &rr_cross] {
+        if sat.box_sum(r, Stable, RepeatWithinPeriod, &mut NoCount)
+            != sat.box_sum(r, Stable, Repeat, &mut NoCount)
+        {
+            exit()
+        }
+    }
+    measure!(m_box_sum_stable_repeat_within(&sat, &rr_in));
+    measure!(m_box_sum_stable_repeat_within(&sat, &rr_cross));
     measure!(m_mean_rounded(&sum));
     measure!(h_mean_rounded(sum.sum(), sides));
     if sum.mean_rounded_u32(0, 8, &mut NoCount).map(u64::from)

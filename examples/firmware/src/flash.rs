@@ -198,7 +198,10 @@ mod inside_hand {
 #[cfg(any(feature = "flash-stable-repeat", feature = "flash-all"))]
 mod stable_repeat {
     use super::*;
-    use texsat::{DefaultCoord as I24F8, EdgeKind, NoCount, Rect, Repeat, Sat, Stable, Texture};
+    use texsat::{
+        DefaultCoord as I24F8, EdgeKind, NoCount, Rect, Repeat, RepeatWithinPeriod, Sat, Stable,
+        Texture,
+    };
 
     /// The Stable + Repeat plan's scene: boxes at `F = 8` up to the texture's size, Repeat.
     const PLAN: texsat::plan::Plan = super::plan(8, EdgeKind::Repeat);
@@ -216,7 +219,14 @@ mod stable_repeat {
             I24F8::from_bits(c[2]),
             I24F8::from_bits(c[3]),
         );
-        if let Ok(sum) = sat.box_sum(&r, Stable, Repeat, &mut NoCount) {
+        // The plan's mode: its boxes are at most the texture, so Repeat within one period
+        // (a constant branch, as for the mean: one of the two is compiled).
+        let sum = if PLAN.repeat_within_period() {
+            sat.box_sum(&r, Stable, RepeatWithinPeriod, &mut NoCount)
+        } else {
+            sat.box_sum(&r, Stable, Repeat, &mut NoCount)
+        };
+        if let Ok(sum) = sum {
             // The plan's mean (a constant branch: one of the two is compiled).
             if PLAN.mean_fits_u32() {
                 let _ = black_box(sum.mean_rounded_u32(0, 8, &mut NoCount));

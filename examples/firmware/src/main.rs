@@ -25,8 +25,8 @@ use cortex_m_rt::entry;
 use texsat::layouts::{Modular, ModularBuilder, Tiled, TiledBuilder, TiledSpec};
 use texsat::{
     Border, BoxLookup, BoxSum, ClampToEdge, DefaultCoord, EdgeKind, FormKind, FracBits, Layout,
-    MirroredRepeat, NoCount, Paper, Rect, Repeat, RowStreamBuilder, Sat, Shortcut, Stable, Tally,
-    Texture,
+    MirroredRepeat, NoCount, Paper, Rect, Repeat, RepeatWithinPeriod, RowStreamBuilder, Sat,
+    Shortcut, Stable, Tally, Texture,
 };
 
 /// Texel type.
@@ -210,6 +210,7 @@ box_sum_int_gates! {
     gate_box_sum_int_clamp: ClampToEdge;
     gate_box_sum_int_repeat: Repeat;
     gate_box_sum_int_mirror: MirroredRepeat;
+    gate_box_sum_int_repeat_within: RepeatWithinPeriod;
 }
 
 /// `Sat::box_sum_inside` (boxes known inside, no edge handling).
@@ -237,6 +238,8 @@ box_sum_gates! {
     gate_box_sum_stable_clamp: Stable, ClampToEdge;
     gate_box_sum_stable_repeat: Stable, Repeat;
     gate_box_sum_stable_mirror: Stable, MirroredRepeat;
+    gate_box_sum_stable_repeat_within: Stable, RepeatWithinPeriod;
+    gate_box_sum_paper_repeat_within: Paper, RepeatWithinPeriod;
 }
 
 /// One lookup with the `Tally` counter (its additions are not overflow-checked in release).
@@ -1017,6 +1020,7 @@ fn main() -> ! {
         gate_box_sum_int_clamp(&sat, &rect_int);
         gate_box_sum_int_repeat(&sat, &rect_int);
         gate_box_sum_int_mirror(&sat, &rect_int);
+        gate_box_sum_int_repeat_within(&sat, &rect_int);
         let s1 = gate_box_sum_paper_border(&sat, &rect_fix);
         gate_box_sum_paper_clamp(&sat, &rect_fix);
         gate_box_sum_paper_repeat(&sat, &rect_fix);
@@ -1025,6 +1029,8 @@ fn main() -> ! {
         gate_box_sum_stable_clamp(&sat, &rect_fix);
         gate_box_sum_stable_repeat(&sat, &rect_fix);
         gate_box_sum_stable_mirror(&sat, &rect_fix);
+        gate_box_sum_stable_repeat_within(&sat, &rect_fix);
+        gate_box_sum_paper_repeat_within(&sat, &rect_fix);
         let tally = gate_box_sum_stable_repeat_tally(&sat, &rect_fix);
 
         let tol = black_box([1u64, 4]);

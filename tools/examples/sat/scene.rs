@@ -176,6 +176,10 @@ pub fn to_json(p: &Plan) -> Value {
         "mean".into(),
         json!(if p.mean_fits_u32() { "u32" } else { "wide" }),
     );
+    o.insert(
+        "repeat_within_period".into(),
+        json!(p.repeat_within_period()),
+    );
     o.insert("features".into(), json!(p.features()));
     o.insert("rejected".into(), Value::Array(rejected));
     o.insert(
@@ -284,7 +288,15 @@ pub fn read(path: &Path) -> Result<Plan, String> {
     let plan = Plan::for_scene(&facts)
         .map_err(|e| format!("--plan {}: no plan for its facts: {e}", path.display()))?;
     let want = to_json(&plan);
-    for key in ["layout", "entry", "frac_bits", "lookup", "edge", "mean"] {
+    for key in [
+        "layout",
+        "entry",
+        "frac_bits",
+        "lookup",
+        "edge",
+        "mean",
+        "repeat_within_period",
+    ] {
         if v.get(key) != want.get(key) {
             return Err(format!(
                 "--plan {}: its {key} is {}, but its facts plan {} (edited by hand, or written \
