@@ -5,8 +5,9 @@
 //! where their actual sums fit); then up to four queries, each through `box_sum_int`,
 //! `box_sum_raw` (`FormKind::{Paper, Stable}`, `F` 0..=24), `box_sum` (five `fixed` corner
 //! types, one with `F = 32`) or the shortcut (`box_mean_shortcut_raw`, `box_mean_shortcut`),
-//! under `EdgeKind` and again under the zero-sized mode and form, with `mean_rounded` and
-//! `means_rounded`; and `box_sum_inside`. Every answer must be the exact integral of the extended
+//! under `EdgeKind` and again under the zero-sized mode and form (and, under Repeat, with
+//! `RepeatWithinPeriod`: Repeat's answer and counted costs for a box at most a period long, a
+//! refusal for a longer one), with `mean_rounded` and `means_rounded`; and `box_sum_inside`. Every answer must be the exact integral of the extended
 //! texture (`texsat_fuzz::box_integral`), the exactly rounded mean, or a refusal the
 //! documentation allows for that input.
 #![no_main]

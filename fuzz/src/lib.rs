@@ -893,8 +893,49 @@ macro_rules! with_form {
 }
 
 /// The same result, as a run-time choice and as zero-sized types, must agree exactly.
+/// `hi - lo` for `hi >= lo` (as the lookups compute it; 0 for an inverted box, which both
+/// modes refuse alike).
+fn width_of(lo: i64, hi: i64) -> u64 {
+    if hi < lo {
+        0
+    } else {
+        hi.wrapping_sub(lo) as u64
+    }
+}
+
 fn same<T: PartialEq + Debug>(a: &T, b: &T, what: &dyn Debug) {
     assert_eq!(a, b, "{what:?}: run-time and zero-sized mode/form disagree");
+}
+
+/// `RepeatWithinPeriod`'s answer `within` against Repeat's `got` for a box of raw sides `w x h`
+/// on a texture of `pw x ph` raw units: the same answer for an empty box or one at most a
+/// period long on both axes; for a longer one a refusal, `OutsidePlan { LongerThanPeriod }`
+/// unless an earlier check (the one Repeat gives too) refused it first.
+fn check_within<T: PartialEq + Debug>(
+    got: &std::result::Result<T, Error>,
+    within: &std::result::Result<T, Error>,
+    (w, h): (u64, u64),
+    (pw, ph): (u64, u64),
+    what: &dyn Debug,
+) {
+    if w == 0 || h == 0 || (w <= pw && h <= ph) {
+        assert_eq!(
+            got, within,
+            "{what:?}: Repeat and RepeatWithinPeriod disagree"
+        );
+        return;
+    }
+    let longer = Error::OutsidePlan {
+        limit: texsat::plan::PlanLimit::LongerThanPeriod,
+    };
+    match within {
+        Err(e) if *e == longer => {}
+        Err(_) => assert_eq!(
+            got, within,
+            "{what:?}: RepeatWithinPeriod's earlier refusal"
+        ),
+        Ok(v) => panic!("{what:?}: RepeatWithinPeriod answered a box longer than a period: {v:?}"),
+    }
 }
 
 /// `mean_rounded_u32` against `mean_rounded`'s answer `wide` for the channel sum `sum` (None:
@@ -1021,6 +1062,15 @@ where
             check_reads(&k, facts, q);
             let zst = with_mode!(mode, |m| l.box_sum_int(&rect, m, &mut NoCount));
             same(&got, &zst, q);
+            if mode == Mode::Repeat {
+                let mut kw = Tally::new();
+                let within = l.box_sum_int(&rect, texsat::RepeatWithinPeriod, &mut kw);
+                let sides = (width_of(r64[0], r64[2]), width_of(r64[1], r64[3]));
+                check_within(&got, &within, sides, (tex.w as u64, tex.h as u64), q);
+                if within.is_ok() {
+                    assert_eq!(kw, k, "{q:?}: RepeatWithinPeriod's counted costs");
+                }
+            }
             case.check(&got, q);
             got.map(|s| (sums_of(&s), mean_of(&s, &case)))
         }
@@ -1039,6 +1089,16 @@ where
                 &mut NoCount
             )));
             same(&got, &zst, q);
+            if mode == Mode::Repeat {
+                let mut kw = Tally::new();
+                let within = l.box_sum_raw(&rect, fb, *form, texsat::RepeatWithinPeriod, &mut kw);
+                let sides = (width_of(r[0], r[2]), width_of(r[1], r[3]));
+                let period = ((tex.w as u64) << f, (tex.h as u64) << f);
+                check_within(&got, &within, sides, period, q);
+                if within.is_ok() {
+                    assert_eq!(kw, k, "{q:?}: RepeatWithinPeriod's counted costs");
+                }
+            }
             case.check(&got, q);
             got.map(|s| (sums_of(&s), mean_of(&s, &case)))
         }
