@@ -236,8 +236,8 @@ pub const fn check_entry_worst_case(
     }
 }
 
-/// Largest `F` the fixed-point lookups accept. Keeps `w * 2^F` and the coordinate arithmetic far
-/// inside `i128` and the fraction numerators inside `u32`.
+/// Largest `F` the fixed-point lookups accept. Keeps `w * 2^F` and the placed coordinates inside
+/// `i64` (`2^31 x 2^24 = 2^55`) and the fraction numerators inside `u32`.
 pub const MAX_FRAC_BITS: u32 = 24;
 
 /// Accumulator bits (sign excluded) of the [`crate::Paper`] lookup for a table whose entries are
