@@ -194,20 +194,21 @@ pub const fn bits_of_product(a: u64, b: u64, c: u64) -> u32 {
     0
 }
 
-/// Bits of the product of up to six `u64` factors, exactly, from 32-bit limbs (no 128-bit
-/// operation): the width proofs whose worst case has more factors than [`bits_of_product`]
-/// takes (the tent filter's `m w (w + 2) h (h + 2)`). `None` for more than six factors; the
-/// empty product is 1.
+/// Bits of the product of up to six `u64` factors, exactly, with no 128-bit operation: checked
+/// 64-bit multiplies while the product fits, else from 32-bit limbs. For the width proofs whose
+/// worst case has more factors than [`bits_of_product`] takes (the tent filter's
+/// `m w (w + 2) h (h + 2)`). `None` for more than six factors; the empty product is 1.
 #[cfg(any(feature = "filter-tent", test))]
 #[allow(
     clippy::arithmetic_side_effects,
     clippy::indexing_slicing,
     clippy::as_conversions,
     reason = "one proof for the function (const: no iterators, no From): the loops index limbs \
-              with i, k < LIMBS and factors with f < factors.len() (loop bounds); the product of \
-              at most six 64-bit factors is below 2^384 = 2^(32 LIMBS), so every carry settles \
-              inside the limbs; limbs and factor halves are below 2^32, so each partial product \
-              is below 2^64 and each limb plus a carry's low half below 2^33; 32 i + bits <= 384"
+              with i, k < LIMBS and factors with f < factors.len() (loop bounds, so f + 1 does \
+              not wrap); the product of at most six 64-bit factors is below 2^384 = \
+              2^(32 LIMBS), so every carry settles inside the limbs; limbs and factor halves are \
+              below 2^32, so each partial product is below 2^64 and each limb plus a carry's low \
+              half below 2^33; 32 i + bits <= 384"
 )]
 pub(crate) const fn bits_of_product_n(factors: &[u64]) -> Option<u32> {
     const LIMBS: usize = 12;
@@ -215,7 +216,21 @@ pub(crate) const fn bits_of_product_n(factors: &[u64]) -> Option<u32> {
     if factors.len() > 6 {
         return None;
     }
-    // 32-bit limbs, least significant first.
+    // A product that fits 64 bits (every table a build accepts into `u32` or `u64` entries):
+    // checked 64-bit multiplies.
+    let mut p: u64 = 1;
+    let mut f = 0;
+    while f < factors.len() {
+        match p.checked_mul(factors[f]) {
+            Some(v) => p = v,
+            None => break,
+        }
+        f += 1;
+    }
+    if f == factors.len() {
+        return Some(bits_of_u64(p));
+    }
+    // Past 64 bits: 32-bit limbs, least significant first.
     let mut limbs = [0u64; LIMBS];
     limbs[0] = 1;
     let mut f = 0;

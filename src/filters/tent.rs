@@ -192,16 +192,33 @@ impl_tent_entry!(u128, 127, v => {
 /// has no 128-bit operation; texel widths past 64 bits (which no texel has) and sides past
 /// `2^64 - 3` take the saturating `u128` product.
 pub const fn tent_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
-    let (w, h) = (u64_from_usize(width), u64_from_usize(height));
     if texel_bits <= 64 {
-        if let (Some(w2), Some(h2)) = (w.checked_add(2), h.checked_add(2)) {
-            let m = max_texel_u64(texel_bits);
-            if let Some(bits) = bits_of_product_n(&[m, w, w2, h, h2]) {
-                return saturate_128(bits);
-            }
+        if let Some(bits) = build_entry_bits(texel_bits, width, height) {
+            return bits;
         }
     }
     entry_bits_u128(texel_bits, width, height)
+}
+
+/// [`tent_entry_bits`] for `texel_bits <= 64` (the builds check `<= 16` first) from 32-bit limbs
+/// only: `None` for sides past `2^64 - 3`. What [`TentTable::build`] calls, apart from the
+/// public function's `u128` fallback so that the link gate can refuse any 128-bit operation
+/// in it by name (`examples/firmware/link-gate.sh`).
+const fn build_entry_bits(texel_bits: u32, width: usize, height: usize) -> Option<u32> {
+    let (w, h) = (u64_from_usize(width), u64_from_usize(height));
+    let (Some(w2), Some(h2)) = (w.checked_add(2), h.checked_add(2)) else {
+        return None;
+    };
+    limb_bits(&[max_texel_u64(texel_bits), w, w2, h, h2])
+}
+
+/// The bits of a product of at most six factors (`None` past six), saturated at 128 as the
+/// `u128` formulation has them.
+const fn limb_bits(factors: &[u64]) -> Option<u32> {
+    match bits_of_product_n(factors) {
+        Some(bits) => Some(saturate_128(bits)),
+        None => None,
+    }
 }
 
 /// [`tent_entry_bits`] in saturating `u128` arithmetic (its fallback, and the tests' reference).
@@ -235,15 +252,22 @@ const fn side_product(n: usize) -> u128 {
 /// of `n` texels: `bits_of((2^b - 1) * n (n + 2))`.
 /// From 32-bit limbs as [`tent_entry_bits`] (the same fallback past 64-bit texels).
 pub const fn tent_line_bits(texel_bits: u32, n: usize) -> u32 {
-    let n64 = u64_from_usize(n);
     if texel_bits <= 64 {
-        if let Some(n2) = n64.checked_add(2) {
-            if let Some(bits) = bits_of_product_n(&[max_texel_u64(texel_bits), n64, n2]) {
-                return saturate_128(bits);
-            }
+        if let Some(bits) = build_line_bits(texel_bits, n) {
+            return bits;
         }
     }
     line_bits_u128(texel_bits, n)
+}
+
+/// [`tent_line_bits`] for `texel_bits <= 64` from 32-bit limbs only, as [`build_entry_bits`]:
+/// what [`TentLines::build`] calls.
+const fn build_line_bits(texel_bits: u32, n: usize) -> Option<u32> {
+    let n64 = u64_from_usize(n);
+    let Some(n2) = n64.checked_add(2) else {
+        return None;
+    };
+    limb_bits(&[max_texel_u64(texel_bits), n64, n2])
 }
 
 /// [`tent_line_bits`] in saturating `u128` arithmetic (its fallback, and the tests' reference).
@@ -324,7 +348,9 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         check_texel_bits(T::BITS)?;
-        let bits = tent_entry_bits(T::BITS, w, h);
+        // T::BITS <= 16 (checked): the limb proof; sides past 2^64 - 3 (no texture has them)
+        // need 128 bits, as the saturating product says.
+        let bits = build_entry_bits(T::BITS, w, h).unwrap_or(128);
         if bits > E::VALUE_BITS {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -891,7 +917,8 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         check_texel_bits(T::BITS)?;
-        let bits = tent_line_bits(T::BITS, w.max(h));
+        // As in TentTable::build.
+        let bits = build_line_bits(T::BITS, w.max(h)).unwrap_or(128);
         if bits > E::VALUE_BITS {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
