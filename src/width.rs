@@ -194,6 +194,79 @@ pub const fn bits_of_product(a: u64, b: u64, c: u64) -> u32 {
     0
 }
 
+/// Bits of the product of up to six `u64` factors, exactly, with no 128-bit operation: checked
+/// 64-bit multiplies while the product fits, else from 32-bit limbs. For the width proofs whose
+/// worst case has more factors than [`bits_of_product`] takes (the tent filter's
+/// `m w (w + 2) h (h + 2)`). `None` for more than six factors; the empty product is 1.
+#[cfg(any(feature = "filter-tent", test))]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::indexing_slicing,
+    clippy::as_conversions,
+    reason = "one proof for the function (const: no iterators, no From): the loops index limbs \
+              with i, k < LIMBS and factors with f < factors.len() (loop bounds, so f + 1 does \
+              not wrap); the product of at most six 64-bit factors is below 2^384 = \
+              2^(32 LIMBS), so every carry settles inside the limbs; limbs and factor halves are \
+              below 2^32, so each partial product is below 2^64 and each limb plus a carry's low \
+              half below 2^33; 32 i + bits <= 384"
+)]
+pub(crate) const fn bits_of_product_n(factors: &[u64]) -> Option<u32> {
+    const LIMBS: usize = 12;
+    const MASK: u64 = 0xFFFF_FFFF;
+    if factors.len() > 6 {
+        return None;
+    }
+    // A product that fits 64 bits (every table a build accepts into `u32` or `u64` entries):
+    // checked 64-bit multiplies.
+    let mut p: u64 = 1;
+    let mut f = 0;
+    while f < factors.len() {
+        match p.checked_mul(factors[f]) {
+            Some(v) => p = v,
+            None => break,
+        }
+        f += 1;
+    }
+    if f == factors.len() {
+        return Some(bits_of_u64(p));
+    }
+    // Past 64 bits: 32-bit limbs, least significant first.
+    let mut limbs = [0u64; LIMBS];
+    limbs[0] = 1;
+    let mut f = 0;
+    while f < factors.len() {
+        let (v0, v1) = (factors[f] & MASK, factors[f] >> 32);
+        let mut out = [0u64; LIMBS];
+        let mut i = 0;
+        while i < LIMBS {
+            // limbs[i] v0 adds at limb i, limbs[i] v1 at limb i + 1.
+            let mut half = 0;
+            while half < 2 {
+                let mut k = i + half;
+                let mut carry = limbs[i] * if half == 0 { v0 } else { v1 };
+                while carry != 0 && k < LIMBS {
+                    let t = out[k] + (carry & MASK);
+                    out[k] = t & MASK;
+                    carry = (carry >> 32) + (t >> 32);
+                    k += 1;
+                }
+                half += 1;
+            }
+            i += 1;
+        }
+        limbs = out;
+        f += 1;
+    }
+    let mut i = LIMBS;
+    while i > 0 {
+        i -= 1;
+        if limbs[i] != 0 {
+            return Some(32 * i as u32 + bits_of_u64(limbs[i]));
+        }
+    }
+    Some(0)
+}
+
 /// Exact bits per entry (and channel) the worst case needs: `bits_of((2^b - 1) * w * h)`
 /// (texel widths above 64 bits, which no texel has, saturate at `2^64 - 1`).
 #[allow(
@@ -236,8 +309,8 @@ pub const fn check_entry_worst_case(
     }
 }
 
-/// Largest `F` the fixed-point lookups accept. Keeps `w * 2^F` and the coordinate arithmetic far
-/// inside `i128` and the fraction numerators inside `u32`.
+/// Largest `F` the fixed-point lookups accept. Keeps `w * 2^F` and the placed coordinates inside
+/// `i64` (`2^31 x 2^24 = 2^55`) and the fraction numerators inside `u32`.
 pub const MAX_FRAC_BITS: u32 = 24;
 
 /// Accumulator bits (sign excluded) of the [`crate::Paper`] lookup for a table whose entries are
@@ -503,6 +576,53 @@ mod tests {
         let s = stable_multiplies(200, usize::MAX, u32::MAX);
         assert!(!s[0].fits_signed(18, 25));
         assert_eq!(entry_bits_naive(u32::MAX, usize::MAX, usize::MAX), u32::MAX);
+    }
+
+    #[test]
+    fn bits_of_product_n_matches_u128_and_bits_of_product() {
+        let vals = [
+            0u64,
+            1,
+            2,
+            3,
+            255,
+            65_535,
+            (1 << 32) - 1,
+            1 << 32,
+            (1 << 32) + 1,
+            0xDEAD_BEEF_1234_5678,
+            u64::MAX - 2,
+            u64::MAX,
+        ];
+        for &a in &vals {
+            for &b in &vals {
+                let want2 = bits_of(u128::from(a) * u128::from(b));
+                assert_eq!(bits_of_product_n(&[a, b]), Some(want2), "{a} {b}");
+                for &c in &vals {
+                    let want = bits_of_product(a, b, c);
+                    assert_eq!(bits_of_product_n(&[a, b, c]), Some(want), "{a} {b} {c}");
+                    // Five and six factors: exact where the product fits u128, else past 128
+                    // bits (the sum of the factors' bits bounds it from above, minus the factor
+                    // count from below).
+                    let five = [a, b, c, b, a];
+                    let got = bits_of_product_n(&five).unwrap();
+                    let exact = five
+                        .iter()
+                        .try_fold(1u128, |p, &v| p.checked_mul(u128::from(v)));
+                    match exact {
+                        Some(p) => assert_eq!(got, bits_of(p), "{five:?}"),
+                        None => {
+                            let hi: u32 = five.iter().map(|&v| bits_of_u64(v)).sum();
+                            assert!(got > 128 && got <= hi && got + 5 > hi, "{five:?} {got}");
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(bits_of_product_n(&[]), Some(1));
+        assert_eq!(bits_of_product_n(&[u64::MAX; 6]), Some(384));
+        assert_eq!(bits_of_product_n(&[1 << 63; 6]), Some(379));
+        assert_eq!(bits_of_product_n(&[1; 7]), None);
     }
 
     #[test]

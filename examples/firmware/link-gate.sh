@@ -131,14 +131,20 @@ grep -q "undefined symbol: $UNDEF" "$OUT/selftest/panic.log" ||
 echo "ok: a panic-free firmware links; one with [0u8; 4][black_box(9)] fails with 'undefined symbol: $UNDEF'"
 
 # --- IR check: no 128-bit integer operation on the paths of u16/u32 tables ---------------------
-# The gate's tables are u32 (and its filters' u8/u16 texels), so the optimized, fat-LTO IR of a
-# linking firmware must hold no i128 anywhere except in the helpers whose *signature* is 128-bit
-# (gate_width_u128: width::bits_of(u128) and friends, host/compile-time analysis), the fixed
-# crate's float conversion behind Rect::from_f64/from_f32 (host conveniences), and the firmware's
-# own main, which passes gate_width_u128 its u128 argument, and the tent filter, whose order-2
-# tables are u64/u128 by design (quadratic quantities scaled by 2^2G, 77 bits at F = 8; see
-# src/filters/tent.rs and docs/design.md). (On 32-bit ARM a 128-bit division is
-# inlined, so symbol names cannot show it: the IR is the proof.)
+# The gate's tables are u32 and u16 (flat, tiled, modular; u16: flat and modular, gate_u16_*;
+# and its filters' u8/u16 texels), so the optimized, fat-LTO IR of a linking firmware must hold
+# no i128 anywhere except in the helpers whose *signature* is 128-bit (gate_width_u128:
+# width::bits_of(u128) and friends, host/compile-time analysis), the fixed crate's float
+# conversion behind Rect::from_f64/from_f32 (host conveniences), and the tent filter's lookups,
+# whose order-2 quantities are wider than 64 bits by design (scaled by 2^2G, 77 bits at F = 8;
+# see src/filters/tent.rs and docs/wide-arithmetic.md): its functions and its sample/queries
+# gates, but not its builds (TentTable::build, TentLines::build, their gates and their width
+# proofs build_entry_bits/build_line_bits: 64-bit and limb arithmetic). main is not allowed: it
+# holds no 128-bit value (gate_width_u128 forms its u128 from two u64 halves). Then the call
+# graph (ir-reach.awk): only gate_width_u128, gate_rect_from_f64 and the tent sample/queries
+# gates may reach a function that holds i128, so no other gate (nor main, outside those gates)
+# gets one through an allowed callee either. (On 32-bit ARM a 128-bit division is inlined, so symbol names cannot show it:
+# the IR is the proof.)
 ir_check() {
   local features=$1 name=$2 ll
   rm -f "$TARGET_DIR/$TARGET/release/deps/"*.ll
@@ -152,8 +158,9 @@ ir_check() {
   awk '/^define/{fn=$0; seen=0} /^}/{fn=""} fn != "" && !/^define/ && /^[^;!#]/ && !/#dbg/ && /[ (<{\[]i128[ ,)>}\]*]/ {if(!seen){print fn; seen=1}}' "$ll" \
     | grep -oE '@[^(]+' | sed 's/^@//' >"$OUT/$name/i128-functions.txt"
   local bad
-  local allow='gate_width_u128|from_f(64|32)|__cortex_m_rt_main|^main$|7filters4tent|10tent_gates'
-  bad=$(grep -vE "$allow" "$OUT/$name/i128-functions.txt" || true)
+  local allow='gate_width_u128|6texsat4rect.*from_f(64|32)|7filters4tent|10tent_gates[0-9]+gate_tent_(sample|queries)'
+  local deny='7filters4tent.*(5build|build_entry_bits|build_line_bits|limb_bits)'
+  bad=$({ grep -vE "$allow" "$OUT/$name/i128-functions.txt"; grep -E "$deny" "$OUT/$name/i128-functions.txt"; } || true)
   local allowed
   allowed=$(grep -cE "$allow" "$OUT/$name/i128-functions.txt" || true)
   if [ -n "$bad" ]; then
@@ -161,7 +168,16 @@ ir_check() {
     echo "$bad" | sed 's/^/!!!   /'
     return 1
   fi
-  echo "IR check: no i128 on any u16/u32 path ($allowed allowed function(s) with a 128-bit signature or float conversion; list: $OUT/$name/i128-functions.txt)"
+  # The same through calls: no other gate may reach a function that holds i128 (an allowed one
+  # included), through any chain of calls the IR shows (ir-reach.awk).
+  local allow_gates='gate_width_u128|gate_rect_from_f64|10tent_gates[0-9]+gate_tent_(sample|queries)'
+  awk -v allow_gates="$allow_gates" -f "$HERE/ir-reach.awk" "$ll" >"$OUT/$name/i128-reach.txt"
+  if [ -s "$OUT/$name/i128-reach.txt" ]; then
+    echo "!!! IR CHECK FAILED for '$name': gates that reach a function holding i128 (gate -> function):"
+    sed 's/^/!!!   /' "$OUT/$name/i128-reach.txt"
+    return 1
+  fi
+  echo "IR check: no i128 on any u16/u32 path ($allowed allowed function(s) with a 128-bit signature or float conversion; list: $OUT/$name/i128-functions.txt); no other gate reaches one through calls"
 }
 
 declare -A STATUS

@@ -122,7 +122,7 @@ use crate::filters::{per_channel, u64_from_usize, Sample, OUT_FRAC_BITS};
 use crate::rect::{Coord, FracBits, Rect};
 use crate::texel::Texel;
 use crate::texture::Texture;
-use crate::width::{bits_of, check_texel_bits, max_texel};
+use crate::width::{bits_of, bits_of_product_n, check_texel_bits, max_texel, max_texel_u64};
 
 /// An unsigned entry of the order-2 tables: `u32`, `u64` or `u128`.
 ///
@@ -187,9 +187,53 @@ impl_tent_entry!(u128, 127, v => {
 /// coefficients growing with `X` and `Y`, so the largest entry is `Q(w+1, h+1)` (the padded
 /// corner) of the all-`m` texture, and each axis sums `sum_{i<w} (2w + 1 - 2i) = w (w + 2)`.
 /// Every intermediate of the build is bounded by an entry (see [`TentTable::build`]).
+///
+/// Computed from 32-bit limbs ([`crate::width`]'s exact products), so a build's width proof
+/// has no 128-bit operation; texel widths past 64 bits (which no texel has) and sides past
+/// `2^64 - 3` take the saturating `u128` product.
 pub const fn tent_entry_bits(texel_bits: u32, width: usize, height: usize) -> u32 {
+    if texel_bits <= 64 {
+        if let Some(bits) = build_entry_bits(texel_bits, width, height) {
+            return bits;
+        }
+    }
+    entry_bits_u128(texel_bits, width, height)
+}
+
+/// [`tent_entry_bits`] for `texel_bits <= 64` (the builds check `<= 16` first) from 32-bit limbs
+/// only: `None` for sides past `2^64 - 3`. What [`TentTable::build`] calls, apart from the
+/// public function's `u128` fallback so that the link gate can refuse any 128-bit operation
+/// in it by name (`examples/firmware/link-gate.sh`).
+const fn build_entry_bits(texel_bits: u32, width: usize, height: usize) -> Option<u32> {
+    let (w, h) = (u64_from_usize(width), u64_from_usize(height));
+    let (Some(w2), Some(h2)) = (w.checked_add(2), h.checked_add(2)) else {
+        return None;
+    };
+    limb_bits(&[max_texel_u64(texel_bits), w, w2, h, h2])
+}
+
+/// The bits of a product of at most six factors (`None` past six), saturated at 128 as the
+/// `u128` formulation has them.
+const fn limb_bits(factors: &[u64]) -> Option<u32> {
+    match bits_of_product_n(factors) {
+        Some(bits) => Some(saturate_128(bits)),
+        None => None,
+    }
+}
+
+/// [`tent_entry_bits`] in saturating `u128` arithmetic (its fallback, and the tests' reference).
+const fn entry_bits_u128(texel_bits: u32, width: usize, height: usize) -> u32 {
     let (wx, hy) = (side_product(width), side_product(height));
     bits_of(max_texel(texel_bits).saturating_mul(wx).saturating_mul(hy))
+}
+
+/// Bits of an exact product as the saturating `u128` product has them: at most 128.
+const fn saturate_128(bits: u32) -> u32 {
+    if bits > 128 {
+        128
+    } else {
+        bits
+    }
 }
 
 /// `n (n + 2)` in `u128`, saturating (it never does: `n < 2^64`).
@@ -206,7 +250,28 @@ const fn side_product(n: usize) -> u128 {
 
 /// Exact bits of the largest entry of the per-line order-2 integrals of [`TentLines`] for lines
 /// of `n` texels: `bits_of((2^b - 1) * n (n + 2))`.
+/// From 32-bit limbs as [`tent_entry_bits`] (the same fallback past 64-bit texels).
 pub const fn tent_line_bits(texel_bits: u32, n: usize) -> u32 {
+    if texel_bits <= 64 {
+        if let Some(bits) = build_line_bits(texel_bits, n) {
+            return bits;
+        }
+    }
+    line_bits_u128(texel_bits, n)
+}
+
+/// [`tent_line_bits`] for `texel_bits <= 64` from 32-bit limbs only, as [`build_entry_bits`]:
+/// what [`TentLines::build`] calls.
+const fn build_line_bits(texel_bits: u32, n: usize) -> Option<u32> {
+    let n64 = u64_from_usize(n);
+    let Some(n2) = n64.checked_add(2) else {
+        return None;
+    };
+    limb_bits(&[max_texel_u64(texel_bits), n64, n2])
+}
+
+/// [`tent_line_bits`] in saturating `u128` arithmetic (its fallback, and the tests' reference).
+const fn line_bits_u128(texel_bits: u32, n: usize) -> u32 {
     bits_of(max_texel(texel_bits).saturating_mul(side_product(n)))
 }
 
@@ -283,7 +348,9 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         check_texel_bits(T::BITS)?;
-        let bits = tent_entry_bits(T::BITS, w, h);
+        // T::BITS <= 16 (checked): the limb proof; sides past 2^64 - 3 (no texture has them)
+        // need 128 bits, as the saturating product says.
+        let bits = build_entry_bits(T::BITS, w, h).unwrap_or(128);
         if bits > E::VALUE_BITS {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -850,7 +917,8 @@ impl<'a, E: TentEntry, const C: usize> TentLines<'a, E, C> {
     ) -> Result<Self, Error> {
         let (w, h) = (texture.width(), texture.height());
         check_texel_bits(T::BITS)?;
-        let bits = tent_line_bits(T::BITS, w.max(h));
+        // As in TentTable::build.
+        let bits = build_line_bits(T::BITS, w.max(h)).unwrap_or(128);
         if bits > E::VALUE_BITS {
             return Err(Error::TooWide {
                 what: Quantity::Entry,
@@ -1723,6 +1791,37 @@ mod tests {
     fn widths_and_refusals() {
         // u64 at 8-bit texels: 16399 x 16399 fits, 16400 x 16400 does not; 16-bit: 4095.
         assert_eq!(tent_entry_bits(8, 16399, 16399), 64);
+        // The limb computation against the saturating u128 one, across sizes and texel widths
+        // (past 128 bits both say 128).
+        let sides = [
+            0usize,
+            1,
+            2,
+            3,
+            255,
+            256,
+            4095,
+            4096,
+            16_399,
+            16_400,
+            65_535,
+            (1 << 31) - 1,
+            usize::MAX / 2,
+            usize::MAX - 2,
+            usize::MAX,
+        ];
+        for b in [0, 1, 8, 16, 33, 63, 64, 65, 127, 128, 200] {
+            for &w in &sides {
+                assert_eq!(tent_line_bits(b, w), line_bits_u128(b, w), "{b} {w}");
+                for &h in &sides {
+                    assert_eq!(
+                        tent_entry_bits(b, w, h),
+                        entry_bits_u128(b, w, h),
+                        "{b} {w} {h}"
+                    );
+                }
+            }
+        }
         assert_eq!(tent_entry_bits(8, 16400, 16400), 65);
         assert_eq!(tent_entry_bits(16, 4095, 4095), 64);
         assert_eq!(tent_entry_bits(16, 4096, 4096), 65);

@@ -391,29 +391,15 @@ fn finish<W: Wide, const C: usize, K: Counter>(
         k.adds(1);
         k.divs(1);
         let (sc, qc) = (s.scaled_sum(c), q.scaled_sum(c));
-        *o = if W::BITS <= 64 {
-            // `Wide` hands its value out only as `u128`; for `u64` words the round trip is a
-            // zero extension and back, folded away (no 128-bit operation is emitted).
-            let (sc, qc) = (low_u64(sc), low_u64(qc));
-            variance_u64(sc, qc, wr, hr, c)?
-        } else {
-            variance_u128(sc.into(), qc.into(), wr, hr, c)?
+        // Dispatched by the word's width (a constant per instantiation): `u64` words (`u16` and
+        // `u32` tables) take the 64-bit formulation, whose `to_u64` is the word itself, and
+        // never reach the `u128` one (docs/wide-arithmetic.md).
+        *o = match (W::BITS <= 64, sc.to_u64(), qc.to_u64()) {
+            (true, Some(sc), Some(qc)) => variance_u64(sc, qc, wr, hr, c)?,
+            _ => variance_u128(sc.into(), qc.into(), wr, hr, c)?,
         };
     }
     Ok(Sample { values: out })
-}
-
-/// A `u64` word's value (`W::BITS <= 64`).
-#[inline(always)]
-fn low_u64<W: Wide>(v: W) -> u64 {
-    let v: u128 = v.into();
-    #[allow(
-        clippy::as_conversions,
-        reason = "callers take this branch only for W::BITS <= 64: v < 2^64, lossless (the \
-                  truncating cast folds the round trip away, where try_from would leave a test)"
-    )]
-    let low = v as u64;
-    low
 }
 
 fn mean_too_wide(needed: u32, available: u32) -> Error {

@@ -23,6 +23,7 @@ use core::hint::black_box;
 
 use cortex_m_rt::entry;
 use texsat::layouts::{Modular, ModularBuilder, Tiled, TiledBuilder, TiledSpec};
+use texsat::lookup::BatchLookup;
 use texsat::{
     Border, BoxLookup, BoxSum, ClampToEdge, DefaultCoord, EdgeKind, FormKind, FracBits, Layout,
     MirroredRepeat, NoCount, Paper, Rect, Repeat, RepeatWithinPeriod, RowStreamBuilder, Sat,
@@ -311,6 +312,91 @@ fn gate_means_rounded(sum: &BoxSum<u64, 1>, out_frac_bits: u32) {
     keep(sum.means_rounded(out_frac_bits, &mut NoCount));
 }
 
+/// `BoxSum::mean_rounded_u32`: the plan's 32-bit mean (one 64-by-32-bit division), and its
+/// refusals.
+#[inline(never)]
+fn gate_mean_rounded_u32(sum: &BoxSum<u64, 1>, c: usize, out_frac_bits: u32) {
+    keep(sum.mean_rounded_u32(c, out_frac_bits, &mut NoCount));
+    let mut tally = Tally::new();
+    keep(sum.mean_rounded_u32(c, out_frac_bits, &mut tally));
+    keep(tally);
+}
+
+/// `BatchLookup::box_sums_raw` (`F`, the mode and the form at run time) and
+/// `BatchLookup::box_sums_int` over a slice of boxes.
+#[inline(never)]
+fn gate_batch(sat: &Sat<'_, En>, r: &Rect<Co>, ri: &Rect<i32>) {
+    let Some((rr, f, kind, form)) = raw_args(r) else {
+        return;
+    };
+    let rects = black_box([rr, ri.to_raw_int()]);
+    let mut out: [Result<BoxSum<u64, 1>, texsat::Error>; 2] =
+        core::array::from_fn(|_| Err(texsat::Error::ZeroArea));
+    keep(sat.box_sums_raw(&rects, f, form, kind, &mut NoCount, &mut out));
+    keep(out);
+    let ints = black_box([*ri, *ri]);
+    keep(sat.box_sums_int(&ints, ClampToEdge, &mut NoCount, &mut out));
+    keep(out);
+}
+
+/// `Layout::quad` and `Layout::cell_corners` on each layout (what the lookups read, called
+/// directly).
+macro_rules! quad_gates {
+    ($($name:ident: $l:ty;)*) => {$(
+        #[inline(never)]
+        fn $name(l: &$l, x: [usize; 2], y: [usize; 2]) {
+            keep(Layout::quad(l, x[0], x[1], y[0], y[1], &mut NoCount));
+            keep(Layout::cell_corners(l, x[0], y[0], &mut NoCount));
+        }
+    )*};
+}
+
+quad_gates! {
+    gate_sat_quad: Sat<'_, En>;
+    gate_tiled_quad: Tiled<'_, En>;
+    gate_modular_quad: Modular<'_, En>;
+}
+
+/// `Sat::build_strips` with the jobs run in order (a firmware has one core), and `StripJob::rows`.
+#[inline(never)]
+fn gate_sat_build_strips<'a>(
+    t: &Texture<'_, Tx>,
+    storage: &'a mut [En],
+    strips: usize,
+) -> Option<Sat<'a, En>> {
+    black_box(Sat::build_strips(t, storage, strips, |jobs| {
+        for j in jobs.iter_mut() {
+            keep(j.rows());
+            j.run();
+        }
+    }))
+    .ok()
+}
+
+/// `RowStreamBuilder::push_row_into`: each finished row written into its place in a table.
+#[inline(never)]
+fn gate_row_stream_builder_into(
+    t: &Texture<'_, Tx>,
+    row: &mut [En],
+    table: &mut [En],
+    texel_bits: u32,
+) {
+    let r = (|| {
+        let mut b = RowStreamBuilder::<En>::new(t.width(), t.height(), texel_bits, row)?;
+        let mut rest = &mut *table;
+        for y in 0..t.height() {
+            let texels = t.row(y).ok_or(texsat::Error::EmptyTexture)?;
+            let (out, tail) = rest
+                .split_at_mut_checked(t.width())
+                .ok_or(texsat::Error::EmptyTexture)?;
+            b.push_row_into(texels, out)?;
+            rest = tail;
+        }
+        b.finish().map(|last| black_box(last).len())
+    })();
+    keep(r);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Core: layouts.
 // ---------------------------------------------------------------------------------------------
@@ -488,8 +574,10 @@ fn gate_width(texel_bits: u32, w: usize, h: usize, entry_bits: u32, frac_bits: u
 /// analysis that no build or lookup calls. The IR check (link-gate.sh) allows 128-bit
 /// operations here and nowhere else.
 #[inline(never)]
-fn gate_width_u128(texel_bits: u32, w: usize, h: usize, v: u128) {
+fn gate_width_u128(texel_bits: u32, w: usize, h: usize, halves: [u64; 2]) {
     use texsat::width;
+    // Formed here, not in `main`, so that no other function of the gate holds a 128-bit value.
+    let v = (u128::from(halves[0]) << 64) | u128::from(halves[1]);
     keep((
         width::bits_of(v),
         width::ceil_log2(v),
@@ -527,6 +615,27 @@ fn gate_shortcut_bound(x: f64, y: f64) {
     keep(Shortcut::error_bound(8, x, y));
 }
 
+/// The small public helpers no other gate calls by name: `EdgeKind::texel_index` (a mode's
+/// texel index at run time), the `from_name`s, `Rect::to_raw_int`, the accumulator widths,
+/// `FormKind::modular_headroom_bits`, `packed::words_for_checked`, `Sat::entries_needed`,
+/// `build_kernel`.
+#[inline(never)]
+fn gate_helpers(i: i64, n: usize, name: &str, ri: &Rect<i32>, bits: [u32; 3]) {
+    use texsat::width;
+    for kind in EdgeKind::ALL {
+        keep(kind.texel_index(i, n));
+    }
+    keep((EdgeKind::from_name(name), FormKind::from_name(name)));
+    keep(ri.to_raw_int());
+    keep(width::acc_value_bits(bits[0]));
+    keep(width::max_frac_bits(FormKind::Stable, bits[1], bits[2]));
+    keep(width::max_frac_bits(FormKind::Paper, bits[1], bits[2]));
+    keep(FormKind::Paper.modular_headroom_bits(bits[2]));
+    keep(texsat::layouts::packed::words_for_checked(n, bits[0]));
+    keep(Sat::<En>::entries_needed(n, n));
+    keep(texsat::build_kernel());
+}
+
 /// Scene plans at run time (facts opaque to the compiler): `Plan::for_scene`, the accessors,
 /// `check_box`, the rejections.
 #[inline(never)]
@@ -540,6 +649,7 @@ fn gate_plan(facts: &texsat::plan::SceneFacts, r: &Rect<Co>) {
         p.lookup(),
         p.acc_bits(),
         p.storage_len(),
+        p.mean_fits_u32(),
     ));
     keep((
         p.table_bytes(),
@@ -551,6 +661,63 @@ fn gate_plan(facts: &texsat::plan::SceneFacts, r: &Rect<Co>) {
     keep(p.check_box(&r.to_raw()));
     for rej in p.rejected() {
         keep(rej);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Core: `u16` tables (the smallest plans' values; their lookups compute in `i32`), so the IR check
+// covers their paths too.
+// ---------------------------------------------------------------------------------------------
+
+/// Table entry type of the narrow tables.
+type En16 = u16;
+
+/// A flat `u16` table: build, integer lookups, the run-time-`F` lookup, both means.
+#[inline(never)]
+fn gate_u16_sat(
+    t: &Texture<'_, Tx>,
+    storage: &mut [En16],
+    r: &Rect<Co>,
+    ri: &Rect<i32>,
+    out_frac_bits: u32,
+) {
+    let Ok(sat) = black_box(Sat::<En16>::build(t, storage)) else {
+        return;
+    };
+    keep(sat.box_sum_int(ri, Border, &mut NoCount));
+    keep(sat.box_sum_int(ri, Repeat, &mut NoCount));
+    let s = sat.box_sum_int(ri, ClampToEdge, &mut NoCount);
+    if let Some((rr, f, kind, form)) = raw_args(r) {
+        keep(sat.box_sum_raw(&rr, f, form, kind, &mut NoCount));
+    }
+    if let Ok(s) = black_box(s) {
+        keep(s.mean_rounded(0, out_frac_bits, &mut NoCount));
+        keep(s.mean_rounded_u32(0, out_frac_bits, &mut NoCount));
+    }
+}
+
+/// A modular layout with `u16` values (the demo's `small` plan): build, integer lookups, the
+/// run-time-`F` lookup, the 32-bit mean.
+#[inline(never)]
+fn gate_u16_modular(
+    t: &Texture<'_, Tx>,
+    k: u32,
+    words: &mut [u32],
+    row: &mut [En16],
+    r: &Rect<Co>,
+    ri: &Rect<i32>,
+    out_frac_bits: u32,
+) {
+    let Ok(m) = black_box(Modular::<En16>::build(t, k, words, row)) else {
+        return;
+    };
+    keep(BoxLookup::box_sum_int(&m, ri, MirroredRepeat, &mut NoCount));
+    let s = BoxLookup::box_sum_int(&m, ri, ClampToEdge, &mut NoCount);
+    if let Some((rr, f, kind, form)) = raw_args(r) {
+        keep(BoxLookup::box_sum_raw(&m, &rr, f, form, kind, &mut NoCount));
+    }
+    if let Ok(s) = black_box(s) {
+        keep(s.mean_rounded_u32(0, out_frac_bits, &mut NoCount));
     }
 }
 
@@ -629,6 +796,7 @@ mod mip_gates {
     #[inline(never)]
     pub fn gate_mip_queries(p: &MipPyramid<'_, Tx>, r: &Rect<Co>, l: usize, x: usize, y: usize) {
         keep(texsat::filters::mip::trilinear_error_bound(black_box(8)));
+        keep(texsat::filters::mip::weight_bits(black_box(8)));
         keep(p.lod(r));
         if let Some((rr, f, _, _)) = raw_args(r) {
             keep(p.lod_raw(&rr, f));
@@ -961,7 +1129,7 @@ fn main() -> ! {
         black_box([0.25, 0.0, 2.0, 1.5]),
     );
     gate_width(black_box(8), w, h, black_box(32), black_box(8));
-    gate_width_u128(black_box(8), w, h, black_box(12345));
+    gate_width_u128(black_box(8), w, h, black_box([0, 12345]));
     let mut field_words = [0u32; 8];
     gate_packed(
         black_box(&mut field_words[..]),
@@ -978,6 +1146,13 @@ fn main() -> ! {
         black_box(64),
     );
     gate_shortcut_bound(black_box(12.5), black_box(7.25));
+    gate_helpers(
+        black_box(-37),
+        black_box(8),
+        black_box("repeat"),
+        &rect_int,
+        black_box([32, 28, 63]),
+    );
     {
         let facts = texsat::plan::SceneFacts {
             max_box: black_box([16 << 8, 16 << 8]),
@@ -1009,11 +1184,25 @@ fn main() -> ! {
     let sat = gate_sat_build(&tex, black_box(&mut table[..]));
     let sat2 = gate_sat_build_checked(&tex, black_box(&mut table2[..]));
     gate_row_stream_builder(&tex, black_box(&mut row[..]), black_box(8));
+    let mut table3 = [0 as En; MAX_TEXELS];
+    keep(gate_sat_build_strips(
+        &tex,
+        black_box(&mut table3[..]),
+        black_box(3),
+    ));
+    gate_row_stream_builder_into(
+        &tex,
+        black_box(&mut row[..]),
+        black_box(&mut table3[..]),
+        black_box(8),
+    );
 
     if let Some(sat) = black_box(sat.or(sat2)) {
         let from = gate_sat_from_table(black_box(sat.entries()), w, h, black_box(8));
         let sat = black_box(from.unwrap_or(sat));
         gate_sat_accessors(&sat, x, y);
+        gate_sat_quad(&sat, black_box([1, 4]), black_box([0, 3]));
+        gate_batch(&sat, &rect_fix, &rect_int);
 
         let s0 = gate_box_sum_int_border(&sat, &rect_int);
         gate_box_sum_inside(&sat, &rect_int);
@@ -1043,6 +1232,7 @@ fn main() -> ! {
         if let Some(sum) = black_box(s1.or(s0)) {
             gate_mean_rounded(&sum, black_box(0), out_frac_bits);
             gate_means_rounded(&sum, out_frac_bits);
+            gate_mean_rounded_u32(&sum, black_box(0), out_frac_bits);
             #[cfg(feature = "defmt")]
             gate_defmt_format(
                 &black_box(texsat::Error::EmptyTexture),
@@ -1075,6 +1265,7 @@ fn main() -> ! {
         let from = gate_tiled_from_words(black_box(t.words()), black_box([4, 4]), w, h);
         let t = black_box(from.unwrap_or(t));
         gate_tiled_accessors(&t, x, y, black_box(1), black_box(0));
+        gate_tiled_quad(&t, black_box([1, 4]), black_box([0, 3]));
         gate_tiled_box_sum_int(&t, &rect_int);
         gate_tiled_box_sum(&t, &rect_fix);
     }
@@ -1097,9 +1288,31 @@ fn main() -> ! {
         let from = gate_modular_from_words(black_box(m.words()), w, h, black_box(14));
         let m = black_box(from.unwrap_or(m));
         gate_modular_accessors(&m, x, y);
+        gate_modular_quad(&m, black_box([1, 4]), black_box([0, 3]));
         gate_modular_box_sum_int(&m, &rect_int);
         gate_modular_box_sum(&m, &rect_fix);
     }
+
+    // u16 tables.
+    let mut table16 = [0 as En16; MAX_TEXELS];
+    gate_u16_sat(
+        &tex,
+        black_box(&mut table16[..]),
+        &rect_fix,
+        &rect_int,
+        out_frac_bits,
+    );
+    let mut words16 = [0u32; MAX_WORDS];
+    let mut row16 = [0 as En16; MAX_SIDE];
+    gate_u16_modular(
+        &tex,
+        black_box(14),
+        black_box(&mut words16[..]),
+        black_box(&mut row16[..]),
+        &rect_fix,
+        &rect_int,
+        out_frac_bits,
+    );
 
     // Filters.
     #[cfg(feature = "filter-point")]
