@@ -1,7 +1,9 @@
 //! Texture boundary modes (Crow §2.4): what a box reaching outside `[0, w) x [0, h)` sums.
 //!
 //! Each mode is a zero-sized type, passed by value to the lookups, so a build that names one
-//! mode compiles only its branch: [`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`].
+//! mode compiles only its branch: [`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`],
+//! and [`RepeatWithinPeriod`] (Repeat for boxes at most one period long, what a scene plan
+//! states).
 //! [`EdgeKind`] is the same choice as a run-time value (a tool that reads the mode from its
 //! command line compiles one lookup for all four). [`EdgeMode`] is sealed; its one piece of
 //! behaviour is [`EdgeMode::kind`], and everything a mode means is written once, on
@@ -277,7 +279,8 @@ mod sealed {
     pub trait Sealed {}
 }
 
-/// A boundary mode: one of [`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`] (zero-sized)
+/// A boundary mode: one of [`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`],
+/// [`RepeatWithinPeriod`] (zero-sized)
 /// or [`EdgeKind`] (chosen at run time). Sealed.
 pub trait EdgeMode: Copy + sealed::Sealed {
     /// Which mode this is. Constant for the zero-sized types, so their lookups compile one branch.
@@ -303,12 +306,16 @@ pub struct Repeat;
 
 /// [`Repeat`] for boxes at most one period (the texture's side) long on each axis, as a scene
 /// plan states when its largest box is at most the texture
-/// ([`crate::plan::Plan::repeat_within_period`]). The same sums as [`Repeat`] for those boxes;
-/// a longer box is refused with [`crate::Error::OutsidePlan`]
-/// ([`crate::plan::PlanLimit::LongerThanPeriod`]). What it leaves out: a box crossing the edge
-/// is at most 2 x 2 in-range pieces of multiplicity 1, so the whole periods' division and the
-/// multiplies are not compiled (Stable + Repeat firmware on a Cortex-M4: docs/firmware.md).
-/// Its [`EdgeMode::kind`] is [`EdgeKind::Repeat`]: counted costs and errors are Repeat's.
+/// ([`crate::plan::Plan::repeat_within_period`]). The box lookups (every layout, form and
+/// path: `box_sum*`, the batch, the shortcut) give [`Repeat`]'s sums, errors, counted costs and
+/// read order for those boxes, and refuse a longer, non-empty one with
+/// [`crate::Error::OutsidePlan`] ([`crate::plan::PlanLimit::LongerThanPeriod`]), unless the
+/// placement refuses its coordinates first ([`crate::Error::CoordinateOutOfRange`], as for
+/// Repeat); never a wrong sum. What it leaves out: a box crossing the edge is at most 2 x 2
+/// in-range pieces of multiplicity 1, so the whole periods' division and the multiplies are not
+/// compiled (Stable + Repeat firmware on a Cortex-M4: docs/firmware.md). Its [`EdgeMode::kind`]
+/// is [`EdgeKind::Repeat`]; the filters that take a mode (point, mip, rip, dip, tent) sample
+/// with it as with [`Repeat`], with no period limit.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RepeatWithinPeriod;
 

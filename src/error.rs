@@ -142,7 +142,8 @@ pub enum Error {
     /// No candidate table fits the scene's facts (a word for its values and accumulator, and
     /// its read bound): see [`crate::plan::Plan::for_scene`].
     NoPlan,
-    /// A box outside the facts its plan was made for ([`crate::plan::Plan::check_box`]).
+    /// A box outside the facts its plan was made for ([`crate::plan::Plan::check_box`]), or
+    /// longer than a period under [`crate::RepeatWithinPeriod`] (the lookups).
     OutsidePlan {
         /// Which fact it breaks.
         limit: crate::plan::PlanLimit,

@@ -15,8 +15,9 @@
 //!   bilinear interpolation at each corner) and [`Stable`] (differences first; multiplier operands
 //!   bounded by the box's edge strips). [`Sat::box_mean_shortcut`] is Crow's 4-read shortcut for
 //!   large footprints with a proven error bound.
-//! * Boundary modes ([`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`], Crow §2.4) are
-//!   zero-sized type parameters: a build that uses one mode compiles no code for the others.
+//! * Boundary modes ([`Border`], [`ClampToEdge`], [`Repeat`], [`MirroredRepeat`], Crow §2.4, and
+//!   [`RepeatWithinPeriod`] for a plan's boxes at most the texture) are zero-sized type
+//!   parameters: a build that uses one mode compiles no code for the others.
 //! * Every lookup takes a [`Counter`]: [`NoCount`] compiles away, [`Tally`] counts reads,
 //!   multiplies, divides and additive operations the way Crow §2.2 counts them.
 //!

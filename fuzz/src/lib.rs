@@ -892,7 +892,6 @@ macro_rules! with_form {
     };
 }
 
-/// The same result, as a run-time choice and as zero-sized types, must agree exactly.
 /// `hi - lo` for `hi >= lo` (as the lookups compute it; 0 for an inverted box, which both
 /// modes refuse alike).
 fn width_of(lo: i64, hi: i64) -> u64 {
@@ -903,6 +902,7 @@ fn width_of(lo: i64, hi: i64) -> u64 {
     }
 }
 
+/// The same result, as a run-time choice and as zero-sized types, must agree exactly.
 fn same<T: PartialEq + Debug>(a: &T, b: &T, what: &dyn Debug) {
     assert_eq!(a, b, "{what:?}: run-time and zero-sized mode/form disagree");
 }

@@ -532,6 +532,29 @@ fn check_modular<L: Layout<C>, const C: usize>(
     Ok(())
 }
 
+/// Refuses, for [`crate::RepeatWithinPeriod`], a non-empty box of raw sides `w x h` longer than
+/// one period (the texture's side, `n 2^F` raw units) on some axis.
+#[inline(always)]
+pub(crate) fn refuse_longer_than_period<L: Layout<C>, const C: usize>(
+    layout: &L,
+    w: u64,
+    h: u64,
+    f: u32,
+) -> Result<(), Error> {
+    #[allow(
+        clippy::as_conversions,
+        reason = "sides <= 2^31 - 1 (check_dimensions) and f <= MAX_FRAC_BITS = 24: lossless, and \
+                  the shifted values stay below 2^55"
+    )]
+    let (pw, ph) = ((layout.width() as u64) << f, (layout.height() as u64) << f);
+    if w != 0 && h != 0 && (w > pw || h > ph) {
+        return Err(Error::OutsidePlan {
+            limit: crate::plan::PlanLimit::LongerThanPeriod,
+        });
+    }
+    Ok(())
+}
+
 /// Checks that the form's accumulator holds its intermediates on this table.
 #[inline(always)]
 fn check_acc<L: Layout<C>, Fm: FormImpl, const C: usize>(
@@ -742,6 +765,11 @@ pub(crate) fn sum_raw_with<
             };
         }
         (px, py) => {
+            if M::WITHIN_PERIOD {
+                // Only a box crossing the edge can be longer than a period (one placed in range
+                // never is): the in-period lookup carries no test.
+                refuse_longer_than_period(layout, out.width_raw, out.height_raw, f)?;
+            }
             check_modular(layout, r, f, form.modular_headroom_bits(f))?;
             acc()?;
             out.sums = if M::WITHIN_PERIOD {

@@ -134,6 +134,10 @@ pub(crate) fn mean<L: Layout<C>, Fm: Form, M: EdgeMode, K: Counter, const C: usi
     if r.x1 < r.x0 || r.y1 < r.y0 {
         return Err(Error::InvertedBox);
     }
+    if M::WITHIN_PERIOD {
+        // Before the rounding to whole texels, which could shorten a longer box to a period.
+        super::refuse_longer_than_period(layout, width_u64(r.x0, r.x1), width_u64(r.y0, r.y1), f)?;
+    }
     let min_raw = shortcut.min_side.saturating_mul(1u64 << f);
     if width_u64(r.x0, r.x1) >= min_raw && width_u64(r.y0, r.y1) >= min_raw {
         let round = |v: i64| round_raw(v, f).ok_or(Error::CoordinateOutOfRange);

@@ -115,35 +115,26 @@ pub(crate) fn sum<L: Layout<C>, Fm: FormImpl, M: EdgeMode, K: Counter, const C: 
     Ok(acc)
 }
 
-/// The pieces of a Repeat axis whose box is at most one period `p` long, as `[a, b)` and
-/// `[0, c)` (`c = 0`: none): an in-range axis is its one piece; a split one is the head
-/// `[r0, p)` of the first period and the tail `[0, rest)` of the next (`rest <= r0`: the box
-/// is at most `p` long).
-/// [`Error::OutsidePlan`] ([`crate::plan::PlanLimit::LongerThanPeriod`]) for a box longer
-/// than `p` (`rest > r0`); an in-range axis is never longer.
+/// The pieces of a Repeat axis whose box is at most one period `p` long (the driver has refused
+/// a longer one), as `[a, b)` and `[0, c)` (`c = 0`: none): an in-range axis is its one piece;
+/// a split one is the head `[r0, p)` of the first period and the tail `[0, rest)` of the next
+/// (`rest <= r0` for a box at most `p` long).
 #[inline(always)]
-fn within_pieces(plan: AxisPlan, p: i64) -> Result<(i64, i64, i64), Error> {
+fn within_pieces(plan: AxisPlan, p: i64) -> (i64, i64, i64) {
     match plan {
-        AxisPlan::InRange(lo, hi) => Ok((lo, hi, 0)),
-        AxisPlan::Split(AxisSplit::Periodic { r0, rest, .. }) => {
-            // r0 >= 0: its bit pattern is its value; rest <= r0 < p <= 2^55 below.
-            if rest > r0.cast_unsigned() {
-                return Err(Error::OutsidePlan {
-                    limit: crate::plan::PlanLimit::LongerThanPeriod,
-                });
-            }
-            Ok((r0, p, rest.cast_signed()))
-        }
-        _ => Ok((0, 0, 0)),
+        AxisPlan::InRange(lo, hi) => (lo, hi, 0),
+        // rest <= r0 < p <= 2^55: the bit pattern is the value.
+        AxisPlan::Split(AxisSplit::Periodic { r0, rest, .. }) => (r0, p, rest.cast_signed()),
+        _ => (0, 0, 0),
     }
 }
 
 /// [`sum`] for [`crate::RepeatWithinPeriod`]: a box at most one period long on each axis
 /// crossing the edge is at most 2 x 2 in-range pieces, each of multiplicity 1 (Crow §2.4's
-/// pieces with no whole periods): no division, no multiply. A longer box is refused here (a
-/// box placed in range is never longer than a period, so the in-range path needs no test).
-/// The pieces' sums are added with checked arithmetic, as in [`sum`]. Not inlined: the common
-/// in-range case stays small.
+/// pieces with no whole periods): no division, no multiply. The driver has refused a longer
+/// box ([`super::refuse_longer_than_period`]). The pieces are visited in [`sum`]'s order (`x`
+/// outer, `y` inner), so the reads come in the same sequence, and their sums are added with
+/// checked arithmetic, as in [`sum`]. Not inlined: the common in-range case stays small.
 #[inline(never)]
 pub(crate) fn sum_within<L: Layout<C>, Fm: FormImpl, K: Counter, const C: usize>(
     layout: &L,
@@ -159,13 +150,13 @@ pub(crate) fn sum_within<L: Layout<C>, Fm: FormImpl, K: Counter, const C: usize>
                   the shifted values stay below 2^55"
     )]
     let (pw, ph) = ((layout.width() as i64) << f, (layout.height() as i64) << f);
-    let (xa, xb, xc) = within_pieces(px, pw)?;
-    let (ya, yb, yc) = within_pieces(py, ph)?;
+    let (xa, xb, xc) = within_pieces(px, pw);
+    let (ya, yb, yc) = within_pieces(py, ph);
     let mut acc = [<WideOf<L, C> as Wide>::ZERO; C];
     let mut first = true;
     for i in 0..4u32 {
-        let (x0, x1) = if i & 1 == 0 { (xa, xb) } else { (0, xc) };
-        let (y0, y1) = if i & 2 == 0 { (ya, yb) } else { (0, yc) };
+        let (x0, x1) = if i & 2 == 0 { (xa, xb) } else { (0, xc) };
+        let (y0, y1) = if i & 1 == 0 { (ya, yb) } else { (0, yc) };
         if x1 <= x0 || y1 <= y0 {
             continue;
         }

@@ -210,10 +210,11 @@ fn split_boxes_match_direct_sums() {
     assert!(n > if cfg!(miri) { 40 } else { 1000 });
 }
 
-/// `RepeatWithinPeriod` gives Repeat's sums and counted costs for every box at most one period
-/// long on each axis (in the first period, in another, crossing an edge or a corner: every
-/// start and size at F = 2 on a 5 x 4 texture, both forms, and every integer box through the
-/// 4-read lookup), and refuses every longer box with `OutsidePlan { LongerThanPeriod }`.
+/// `RepeatWithinPeriod` gives Repeat's sums and counted costs for boxes at most one period long
+/// on each axis (in the first period, in another, crossing an edge or a corner: starts and sizes
+/// on a grid at F = 2 on a 5 x 4 texture, every x start and width, every third y start and
+/// second height, both forms; every integer box through the 4-read lookup), and refuses the
+/// longer ones with `OutsidePlan { LongerThanPeriod }`.
 #[test]
 fn repeat_within_period_equals_repeat_and_refuses_longer_boxes() {
     use crate::plan::PlanLimit;
@@ -270,6 +271,104 @@ fn repeat_within_period_equals_repeat_and_refuses_longer_boxes() {
                 }
             }
         }
+    }
+}
+
+/// `RepeatWithinPeriod` reads the table in Repeat's order (a counter that records each read's
+/// address, as a cache model does, sees the same sequence) for boxes crossing an edge and a
+/// corner.
+#[test]
+fn repeat_within_period_reads_in_repeats_order() {
+    use crate::cost::{Counter, Region};
+    use crate::RepeatWithinPeriod;
+    extern crate std;
+    #[derive(Default, PartialEq, Debug)]
+    struct Trace(std::vec::Vec<u64>);
+    impl Counter for Trace {
+        fn reads(&mut self, _: u32, _: u32) {}
+        fn muls(&mut self, _: u32) {}
+        fn divs(&mut self, _: u32) {}
+        fn adds(&mut self, _: u32) {}
+        fn read_at(&mut self, _: Region, offset: u64, _: u32) {
+            self.0.push(offset);
+        }
+    }
+    let t = Texture::<u8>::new(&TEX, W, H).unwrap();
+    let mut st = [0u32; W * H];
+    let sat = Sat::build(&t, &mut st).unwrap();
+    let q = |v: f64| I24F8::from_num(v);
+    for b in [
+        [3.5, 1.25, 6.5, 2.5],
+        [3.5, 2.25, 6.5, 5.5],
+        [-1.5, -2.0, 2.5, 1.75],
+    ] {
+        let r = Rect::new(q(b[0]), q(b[1]), q(b[2]), q(b[3]));
+        let (mut a, mut c) = (Trace::default(), Trace::default());
+        let want = sat.box_sum(&r, Stable, Repeat, &mut a);
+        let got = sat.box_sum(&r, Stable, RepeatWithinPeriod, &mut c);
+        assert_eq!(got, want, "{b:?}");
+        assert!(a.0.len() > 16, "{b:?}: {a:?}");
+        assert_eq!(c, a, "{b:?}");
+    }
+}
+
+/// `RepeatWithinPeriod` refuses a longer box with `OutsidePlan { LongerThanPeriod }` before the
+/// checks that come after placement (a modular layout's bound on the box's sum, here `k = 10`
+/// on a 5 x 4 texture of 8-bit texels, which such a box breaks too) and before the shortcut
+/// rounds the box to whole texels (a box 5.39 texels wide would round to one period); a box at
+/// most a period long gets Repeat's answer on both paths.
+#[test]
+fn repeat_within_period_refuses_first_on_every_path() {
+    use crate::layouts::Modular;
+    use crate::plan::PlanLimit;
+    use crate::{BoxLookup, EdgeKind, Error, FracBits, RepeatWithinPeriod, Shortcut};
+    let t = Texture::<u8>::new(&TEX, W, H).unwrap();
+    let longer = Err(Error::OutsidePlan {
+        limit: PlanLimit::LongerThanPeriod,
+    });
+    let fb = FracBits::new(8).unwrap();
+    let q = |v: f64| (v * 256.0) as i64;
+    let mut words = [0u32; 64];
+    let mut row = [0u32; W];
+    let m = Modular::<u32>::build(&t, 10, &mut words, &mut row).unwrap();
+    // Crossing the right edge, 6 texels wide: Repeat says the modular bound, the mode its own.
+    let r = Rect::new(q(3.5), q(1.0), q(9.5), q(3.0));
+    assert!(matches!(
+        m.box_sum_raw(&r, fb, Stable, Repeat, &mut NoCount),
+        Err(Error::TooWide { .. })
+    ));
+    assert_eq!(
+        m.box_sum_raw(&r, fb, Stable, RepeatWithinPeriod, &mut NoCount)
+            .map(|_| ()),
+        longer
+    );
+    let mut st = [0u32; W * H];
+    let sat = Sat::build(&t, &mut st).unwrap();
+    let sc = Shortcut::with_min_side(1);
+    let shortcut = |r: &Rect<i64>, mode| {
+        sat.box_mean_shortcut_raw(r, fb, Stable, mode, &sc, 8, &mut NoCount)
+            .map(|s| s.means)
+    };
+    let long = Rect::new(0, 0, q(5.39), q(2.0));
+    assert!(sat
+        .box_mean_shortcut_raw(&long, fb, Stable, Repeat, &sc, 8, &mut NoCount)
+        .is_ok());
+    assert_eq!(
+        sat.box_mean_shortcut_raw(&long, fb, Stable, RepeatWithinPeriod, &sc, 8, &mut NoCount)
+            .map(|s| s.means),
+        longer.map(|()| [0u64])
+    );
+    for r in [
+        Rect::new(0, 0, q(5.0), q(2.0)),
+        Rect::new(q(3.4), q(2.6), q(8.3), q(6.5)),
+        Rect::new(q(-7.5), q(-1.25), q(-2.5), q(2.75)),
+    ] {
+        assert_eq!(
+            shortcut(&r, EdgeKind::Repeat),
+            sat.box_mean_shortcut_raw(&r, fb, Stable, RepeatWithinPeriod, &sc, 8, &mut NoCount)
+                .map(|s| s.means),
+            "{r:?}"
+        );
     }
 }
 

@@ -333,8 +333,8 @@ fn the_u32_mean_serves_every_box_of_a_plan_that_says_so() {
 }
 
 /// `repeat_within_period` holds exactly for Repeat facts whose largest box is at most the
-/// texture on both axes, and then `RepeatWithinPeriod` answers every box `check_box` accepts
-/// (leaving the texture included) with Repeat's sum.
+/// texture on both axes, and then `RepeatWithinPeriod` answers the boxes `check_box` accepts
+/// (a grid of starts and sizes, leaving the texture included) with Repeat's sum.
 #[test]
 fn repeat_within_period_follows_the_facts() {
     let (w, h) = (12usize, 7usize);

@@ -1138,17 +1138,16 @@ fn answer_shortcut<L: BoxLookup<C>, const C: usize>(
 ) -> Result<Value, String> {
     let mut tally = Tally::new();
     let fb = FracBits::new(o.frac_bits).map_err(|e| e.to_string())?;
-    let m = l
-        .box_mean_shortcut_raw(
-            r,
-            fb,
-            o.form.kind(),
-            o.edge.kind(),
-            shortcut,
-            o.mean_bits,
-            &mut tally,
-        )
-        .map_err(|e| e.to_string())?;
+    let form = o.form.kind();
+    // The plan's mode, as in `lookup`.
+    let m = if o.plan.as_ref().is_some_and(|p| p.repeat_within_period()) {
+        let mode = RepeatWithinPeriod;
+        l.box_mean_shortcut_raw(r, fb, form, mode, shortcut, o.mean_bits, &mut tally)
+    } else {
+        let mode = o.edge.kind();
+        l.box_mean_shortcut_raw(r, fb, form, mode, shortcut, o.mean_bits, &mut tally)
+    }
+    .map_err(|e| e.to_string())?;
     Ok(json!({
         "sum": Value::Null,
         "mean": per_channel(m.to_u128().means, o.mean_bits),
@@ -1167,7 +1166,8 @@ type Looked<const C: usize> = Result<(BoxSum<u128, C>, &'static str), String>;
 
 /// The lookup: the 4-read integer lookup at `F = 0` (or for integer boxes with `--int4`), else
 /// the 16-read lookup with `F` as a value and the mode and form as run-time values
-/// (`EdgeKind`, `FormKind`): one compiled lookup per layout serves every `F`, mode and form.
+/// (`EdgeKind`, `FormKind`): one compiled lookup per layout serves every `F`, mode and form
+/// (and one more, `RepeatWithinPeriod`, for a plan that says so).
 fn lookup<L: BoxLookup<C>, const C: usize>(
     l: &L,
     o: &QueryOpts,

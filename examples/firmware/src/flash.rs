@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | `flash-int4` / `flash-int4-hand` | `Sat::build` (u32), `box_sum_int` under `ClampToEdge`, the plan's mean (`mean_rounded_u32`) | the same in `hand.rs` (a `u64` mean) |
 //! | `flash-inside` / `flash-inside-hand` | `Sat::build` (u32), `Sat::box_sum_inside` | the same |
-//! | `flash-stable-repeat` / `flash-stable-repeat-hand` | `Sat::build` (u32), `box_sum` Stable under `Repeat` (split boxes included), the plan's mean (`mean_rounded_u32`) | the same for boxes inside one period |
+//! | `flash-stable-repeat` / `flash-stable-repeat-hand` | `Sat::build` (u32), `box_sum` Stable under the plan's mode (`RepeatWithinPeriod`: boxes crossing the edge included, up to the texture's size), the plan's mean (`mean_rounded_u32`) | the same for boxes inside one period |
 //! | `flash-all` | every cargo feature: the Stable + Repeat plan, `box_sum_raw` with the form and mode at run time, and every filter's raw sampler | |
 //!
 //! Inputs and results go through `black_box`, so nothing is folded away; the panic handler is

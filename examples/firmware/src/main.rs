@@ -650,6 +650,7 @@ fn gate_plan(facts: &texsat::plan::SceneFacts, r: &Rect<Co>) {
         p.acc_bits(),
         p.storage_len(),
         p.mean_fits_u32(),
+        p.repeat_within_period(),
     ));
     keep((
         p.table_bytes(),
