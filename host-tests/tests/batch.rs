@@ -1,12 +1,13 @@
 //! `BatchLookup` answers exactly what the single lookups answer, box by box, errors included:
 //! random boxes (inside, crossing the edges, far outside, inverted, empty, huge) on the flat,
-//! tiled and modular layouts, in every boundary mode, for the 4-read and both 16-read forms.
+//! tiled and modular layouts, in every boundary mode, for the 4-read and both 16-read forms;
+//! and `RepeatWithinPeriod` answers what `Repeat` does for boxes at most a period long.
 
 use texsat::layouts::{modulus_bits_for, Modular, Tiled, TiledSpec};
 use texsat::lookup::BatchLookup;
 use texsat::{
     Border, BoxLookup, ClampToEdge, EdgeMode, FracBits, MirroredRepeat, NoCount, Paper, Rect,
-    Repeat, Sat, Stable, Tally, Texture,
+    Repeat, RepeatWithinPeriod, Sat, Stable, Tally, Texture,
 };
 use texsat_host_tests::RngExt;
 
@@ -104,6 +105,59 @@ where
     check(layout, ClampToEdge, what);
     check(layout, Repeat, what);
     check(layout, MirroredRepeat, what);
+    check(layout, RepeatWithinPeriod, what);
+    within_equals_repeat(layout, what);
+}
+
+/// `RepeatWithinPeriod` against `Repeat` on the same random boxes: for a box at most a period
+/// long on both axes (or empty) the same answer, single and batch, raw and integer; for a
+/// longer one a refusal (`OutsidePlan`, or the error Repeat gives first).
+fn within_equals_repeat<L: BoxLookup<1> + BatchLookup<1>>(layout: &L, what: &str)
+where
+    L::Value: std::fmt::Debug,
+{
+    let (w, h) = (layout.width() as u64, layout.height() as u64);
+    let (raw, int) = boxes(600, w as i64, 77 + w);
+    let f = FracBits::new(8).unwrap();
+    let longer = texsat::Error::OutsidePlan {
+        limit: texsat::plan::PlanLimit::LongerThanPeriod,
+    };
+    let side = |lo: i64, hi: i64| hi.wrapping_sub(lo) as u64;
+    let (mut same, mut refused) = (0, 0);
+    for (r, ri) in raw.iter().zip(&int) {
+        let cases = [
+            (
+                side(r.x0, r.x1),
+                side(r.y0, r.y1),
+                w << 8,
+                h << 8,
+                layout.box_sum_raw(r, f, Stable, Repeat, &mut NoCount),
+                layout.box_sum_raw(r, f, Stable, RepeatWithinPeriod, &mut NoCount),
+            ),
+            (
+                side(ri.x0.into(), ri.x1.into()),
+                side(ri.y0.into(), ri.y1.into()),
+                w,
+                h,
+                layout.box_sum_int(ri, Repeat, &mut NoCount),
+                layout.box_sum_int(ri, RepeatWithinPeriod, &mut NoCount),
+            ),
+        ];
+        for (bw, bh, pw, ph, want, got) in cases {
+            let inverted = bw > i64::MAX as u64 || bh > i64::MAX as u64;
+            if inverted || bw == 0 || bh == 0 || (bw <= pw && bh <= ph) {
+                assert_eq!(got, want, "{what}: {r:?} {ri:?}");
+                same += 1;
+            } else {
+                match got {
+                    Err(e) if e == longer => refused += 1,
+                    Err(_) => assert_eq!(got, want, "{what}: {r:?}"),
+                    Ok(_) => panic!("{what}: a box longer than a period answered: {r:?} {ri:?}"),
+                }
+            }
+        }
+    }
+    assert!(same > 300 && refused > 50, "{what}: {same} {refused}");
 }
 
 #[test]
