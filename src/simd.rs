@@ -480,7 +480,7 @@ mod avx512vnni {
         w
     }
 
-    const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
+    pub(super) const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
 
     /// One `vpdpbusd` per group of 4 texels (unsigned texel bytes times signed 0/1 weights,
     /// summed per 32-bit lane; each lane at most 16 x 255, far from any saturation).
@@ -608,7 +608,7 @@ mod pack512 {
     /// and a blend (slower, same lanes): Miri still checks every load and store of the kernel.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
+    pub(super) fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
         #[cfg(not(miri))]
         let v = _mm512_permutex2var_epi32(a, idx, b);
         #[cfg(miri)]
@@ -686,6 +686,231 @@ mod pack512 {
                 }
             }
         }
+    }
+}
+
+/// The tiled builder's row step with AVX-512 (VNNI for the prefix sums, as the build kernel),
+/// fused into one pass over the row: for `u8` texels, `u32` entries, one channel and tiles of
+/// `tile` in {2, 4, 8, 16} texels along x (a tile never straddles a 16-lane block).
+///
+/// With `v[x] = acc[x] + lower[x] + (t_0 + ... + t_{x-1})` (wrapping; `acc[x]` at `acc[x - 1]`,
+/// `x = 1..=n`, `lower` optional and zeroed as it is read), it stores `v` back into `acc`, each
+/// `v[x]` at a multiple of `tile` into `bnd` (in order) and every other `v[x] -
+/// v[trunc(x)]` into `local` (in order; `trunc(x)` is `x` rounded down to a multiple of `tile`,
+/// `v[0] = 0`): the accumulation, the fold of the level below and the split into the local sums
+/// and the tile boundaries that `layouts::tiled`'s builder does per row in three passes (there:
+/// `add_prefix_row`, the fold, `split_fields`). Returns the values written to `bnd` and `local`;
+/// `None` (nothing written) for other types, tile widths or CPUs, or slices shorter than the row
+/// needs (`acc`, `lower`: `n`; `bnd`: `n / tile`; `local`: `n - n / tile`).
+///
+/// Per block of 16 texels: the prefix sums as in the build kernel, the row added, one
+/// `vpermt2d` gathering each lane's `v[trunc(x)]` (from this block, or the previous block's
+/// last lane), one subtraction, and two `vpermd` with masked stores compacting the lanes into
+/// the two streams (the lane pattern is the same in every block: constant tables per tile width,
+/// [`TILE_TABLES`]).
+pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    lower: Option<&mut [E]>,
+    acc: &mut [E],
+    tile: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+) -> Option<(usize, usize)> {
+    let t = as_u8(texels)?;
+    let acc = as_u32_mut::<E, C>(acc)?;
+    let mut lower = match lower {
+        None => None,
+        Some(l) => Some(as_u32_mut::<E, C>(l)?),
+    };
+    let bnd = as_u32_mut::<E, C>(bnd)?;
+    let local = as_u32_mut::<E, C>(local)?;
+    if Kernel::best() != Kernel::Avx512Vnni || !matches!(tile, 2 | 4 | 8 | 16) {
+        return None;
+    }
+    let n = t.len();
+    let nb = n / tile;
+    if acc.len() < n
+        || lower.as_ref().is_some_and(|l| l.len() < n)
+        || bnd.len() < nb
+        || local.len() < n - nb
+    {
+        return None;
+    }
+    let table = &TILE_TABLES[tile.trailing_zeros() as usize - 1];
+    let blocks = n / BLOCK;
+    let lp = match &mut lower {
+        Some(l) => l.as_mut_ptr(),
+        None => core::ptr::null_mut(),
+    };
+    // SAFETY: AVX-512F and VNNI are available (Kernel::best(), argument 1); the kernel reads
+    // `t[..16 blocks]`, reads and writes `acc` and (if not null) `lower` there, and writes
+    // `bnd[..16 blocks / tile]` and `local[..16 blocks - 16 blocks / tile]`, all inside the
+    // slices (checked above; 16 blocks <= n); the five slices are distinct borrows.
+    let mut run = unsafe {
+        if lp.is_null() {
+            tiled512::kernel::<false>(
+                t.as_ptr(),
+                lp,
+                acc.as_mut_ptr(),
+                bnd.as_mut_ptr(),
+                local.as_mut_ptr(),
+                blocks,
+                table,
+            )
+        } else {
+            tiled512::kernel::<true>(
+                t.as_ptr(),
+                lp,
+                acc.as_mut_ptr(),
+                bnd.as_mut_ptr(),
+                local.as_mut_ptr(),
+                blocks,
+                table,
+            )
+        }
+    };
+    // The tail after the last full block, portable: the same values.
+    let i0 = blocks * BLOCK;
+    let (mut kb, mut kl) = (i0 / tile, i0 - i0 / tile);
+    let mut base = if i0 == 0 { 0 } else { acc[i0 - 1] };
+    for i in i0..n {
+        run = run.wrapping_add(u32::from(t[i]));
+        let mut v = acc[i].wrapping_add(run);
+        if let Some(l) = &mut lower {
+            v = v.wrapping_add(l[i]);
+            l[i] = 0;
+        }
+        acc[i] = v;
+        if (i + 1) % tile == 0 {
+            bnd[kb] = v;
+            kb += 1;
+            base = v;
+        } else {
+            local[kl] = v.wrapping_sub(base);
+            kl += 1;
+        }
+    }
+    Some((kb, kl))
+}
+
+/// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds `x = 16 b + l +
+/// 1`; with `r = (l + 1) mod tile`, it is a tile boundary if `r = 0`, else a local sum whose
+/// base `v[x - r]` is lane `l - r` of the block (index `16 + l - r` in `vpermt2d`'s second
+/// operand) or, for `l - r = -1`, the previous block's lane 15 (index 15 of the first).
+struct TileTable {
+    /// Per lane, where its base is (`vpermt2d` indices; a boundary lane's own lane).
+    base: [i32; 16],
+    /// The local lanes in order, then zeros (`vpermd` indices).
+    local: [i32; 16],
+    /// The boundary lanes in order, then zeros.
+    bnd: [i32; 16],
+    /// How many of each per block.
+    n_local: usize,
+    n_bnd: usize,
+}
+
+const fn tile_table(tile: usize) -> TileTable {
+    let mut tab = TileTable {
+        base: [0; 16],
+        local: [0; 16],
+        bnd: [0; 16],
+        n_local: 0,
+        n_bnd: 0,
+    };
+    let mut l = 0;
+    while l < 16 {
+        let r = (l + 1) % tile;
+        if r == 0 {
+            tab.base[l] = 16 + l as i32;
+            tab.bnd[tab.n_bnd] = l as i32;
+            tab.n_bnd += 1;
+        } else {
+            tab.base[l] = if l + 1 == r { 15 } else { 16 + (l - r) as i32 };
+            tab.local[tab.n_local] = l as i32;
+            tab.n_local += 1;
+        }
+        l += 1;
+    }
+    tab
+}
+
+/// Tile widths 2, 4, 8, 16 (index `log2 tile - 1`).
+static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8), tile_table(16)];
+
+mod tiled512 {
+    use super::*;
+
+    /// The kernel of [`tiled_row`] over `blocks` blocks of 16 texels; returns the running sum
+    /// after them.
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F and AVX-512 VNNI; `t` is valid for reads and `acc` (and, if
+    /// `LOWER`, `lower`) for reads and writes of `16 blocks` values; `bnd` for writes of
+    /// `16 blocks / tile` and `local` of `16 blocks - 16 blocks / tile` values (`tile` the table's);
+    /// no two of them overlap.
+    #[target_feature(enable = "avx512f,avx512vnni")]
+    pub(super) unsafe fn kernel<const LOWER: bool>(
+        t: *const u8,
+        lower: *mut u32,
+        acc: *mut u32,
+        bnd: *mut u32,
+        local: *mut u32,
+        blocks: usize,
+        table: &TileTable,
+    ) -> u32 {
+        let w = super::avx512vnni::W.map(|g| {
+            let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
+            _mm512_setr_epi32(
+                a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
+            )
+        });
+        // SAFETY: each table row is 16 i32: one 64-byte unaligned load.
+        let (base_ix, local_ix, bnd_ix) = unsafe {
+            (
+                _mm512_loadu_si512(table.base.as_ptr().cast()),
+                _mm512_loadu_si512(table.local.as_ptr().cast()),
+                _mm512_loadu_si512(table.bnd.as_ptr().cast()),
+            )
+        };
+        let (nl, nb) = (table.n_local, table.n_bnd);
+        let (ml, mb) = (((1u32 << nl) - 1) as u16, ((1u32 << nb) - 1) as u16);
+        let last = _mm512_set1_epi32(15);
+        let zero = _mm512_setzero_si512();
+        let mut carry = zero;
+        let mut prev = zero;
+        for b in 0..blocks {
+            let i = BLOCK * b;
+            // SAFETY: i + 16 <= 16 blocks: inside every slice (the caller's contract); the
+            // masked stores write nl lanes at local[b nl..] and nb at bnd[b nb..], so
+            // local[..blocks nl] = local[..16 blocks - 16 blocks / tile] and bnd[..16 blocks / tile].
+            unsafe {
+                let tp = t.add(i);
+                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
+                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                let mut v = _mm512_add_epi32(p, carry);
+                carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                if LOWER {
+                    v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
+                    _mm512_storeu_si512(lower.add(i).cast(), zero);
+                }
+                v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
+                _mm512_storeu_si512(acc.add(i).cast(), v);
+                let loc = _mm512_sub_epi32(v, super::pack512::perm2(prev, base_ix, v));
+                prev = v;
+                _mm512_mask_storeu_epi32(
+                    local.add(b * nl).cast(),
+                    ml,
+                    _mm512_permutexvar_epi32(local_ix, loc),
+                );
+                _mm512_mask_storeu_epi32(
+                    bnd.add(b * nb).cast(),
+                    mb,
+                    _mm512_permutexvar_epi32(bnd_ix, v),
+                );
+            }
+        }
+        _mm512_cvtsi512_si32(carry) as u32
     }
 }
 

@@ -1605,9 +1605,13 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
         let (tiles, _) = acc.as_chunks::<B>();
         let step = B.checked_sub(1)?;
         let mut at = 0usize;
-        for a in tiles.iter().take(blocks) {
+        for (t, a) in tiles.iter().take(blocks).enumerate() {
             let lo = a.first().copied().unwrap_or(E::ZERO);
-            let d = out.get_mut(at..)?.first_chunk_mut::<B>()?;
+            // No room for the array (a row of few blocks over the tile boundaries): the
+            // blocks from here on go through the caller's general loop.
+            let Some(d) = out.get_mut(at..).and_then(|o| o.first_chunk_mut::<B>()) else {
+                return Some((at, t.checked_mul(B)?));
+            };
             for (j, d) in d.iter_mut().enumerate() {
                 *d = a
                     .get(j.wrapping_add(1))
@@ -1631,6 +1635,128 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
         }
     }
     Some((dst.len(), blocks.checked_mul(B)?))
+}
+
+/// The row step of [`TiledBuilder::push_row`] for the accumulator `acc` (`acc[x]` for `x =
+/// 1..=n`, `C` values each) and, when the row ends a block of a level above 0, the level below,
+/// `lower` (folded into `acc` and cleared): `acc[x] += lower[x] + t_0 + ... + t_{x-1}` per
+/// channel (wrapping), then the row split by the tile width `t = b_1` (0 for an axis without
+/// levels: no boundary) into the tile boundaries, `acc[x]` for `x` a multiple of `t`, into `bnd`,
+/// and the local sums `acc[x] - acc[trunc_1(x)]` of every other `x` into `local`, both in order
+/// of `x`. Returns the values written to each; `None` if a slice is too short (never, for the
+/// builder's rows). With `simd`, one fused pass where it applies ([`crate::simd::tiled_row`]).
+fn row_fields<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    lower: Option<&mut [E]>,
+    acc: &mut [E],
+    t: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+) -> Option<(usize, usize)> {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    let lower = match lower {
+        // The fused kernel needs its own borrow of `lower`: try it, then fall through.
+        Some(l) => {
+            if let Some(done) =
+                crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local)
+            {
+                return Some(done);
+            }
+            Some(l)
+        }
+        None => {
+            if let Some(done) = crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local)
+            {
+                return Some(done);
+            }
+            None
+        }
+    };
+    if let Some(l) = lower {
+        for (h, b) in acc.iter_mut().zip(l.iter_mut()) {
+            *h = h.wrapping_add(*b);
+            *b = E::ZERO;
+        }
+    }
+    add_prefix_row::<T, E, C>(texels, acc);
+    split_fields::<E, C>(acc, t, bnd, local)
+}
+
+/// The split of [`row_fields`]: from `acc` (`acc[x]` at `(x - 1) C`, `x = 1..=n`), the
+/// boundaries `acc[x]` (`x` a multiple of `t`) into `bnd` and the local sums `acc[x] -
+/// acc[trunc_1(x)]` into `local`, in order; `t = 0`: every `x` local, from 0.
+fn split_fields<E: Entry, const C: usize>(
+    acc: &[E],
+    t: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+) -> Option<(usize, usize)> {
+    if C == 1 {
+        match t {
+            2 => return split_tiles::<E, 2>(acc, bnd, local),
+            4 => return split_tiles::<E, 4>(acc, bnd, local),
+            8 => return split_tiles::<E, 8>(acc, bnd, local),
+            16 => return split_tiles::<E, 16>(acc, bnd, local),
+            _ => {}
+        }
+    }
+    let (mut kb, mut kl) = (0usize, 0usize);
+    let mut base = [E::ZERO; C];
+    let mut d = 0usize;
+    for v in acc.chunks_exact(C) {
+        // d counts the positions since the last boundary (t = 0: never one).
+        d = d.wrapping_add(1);
+        if d == t {
+            let end = kb.checked_add(C)?;
+            bnd.get_mut(kb..end)?.copy_from_slice(v);
+            base.copy_from_slice(v);
+            kb = end;
+            d = 0;
+        } else {
+            let end = kl.checked_add(C)?;
+            for ((o, v), b) in local.get_mut(kl..end)?.iter_mut().zip(v).zip(&base) {
+                *o = v.wrapping_sub(*b);
+            }
+            kl = end;
+        }
+    }
+    Some((kb, kl))
+}
+
+/// [`split_fields`] for one channel and tiles of `T` texels: per whole tile, `T - 1` local sums
+/// (written as an array of `T`, the last overwritten by the next tile's first: constant lengths,
+/// which LLVM vectorizes) and one boundary; the partial tile at the end, value by value.
+fn split_tiles<E: Entry, const T: usize>(
+    acc: &[E],
+    bnd: &mut [E],
+    local: &mut [E],
+) -> Option<(usize, usize)> {
+    let (tiles, rest) = acc.as_chunks::<T>();
+    let step = T.checked_sub(1)?;
+    let (mut kb, mut kl) = (0usize, 0usize);
+    let mut base = E::ZERO;
+    for a in tiles {
+        if let Some(d) = local.get_mut(kl..).and_then(|s| s.first_chunk_mut::<T>()) {
+            for (d, v) in d.iter_mut().zip(a) {
+                *d = v.wrapping_sub(base);
+            }
+        } else {
+            // The last tile of a row that ends at a tile boundary: no room for the array.
+            let end = kl.checked_add(step)?;
+            for (d, v) in local.get_mut(kl..end)?.iter_mut().zip(a) {
+                *d = v.wrapping_sub(base);
+            }
+        }
+        base = a.last().copied().unwrap_or(E::ZERO);
+        *bnd.get_mut(kb)? = base;
+        kb = kb.checked_add(1)?;
+        kl = kl.checked_add(step)?;
+    }
+    let end = kl.checked_add(rest.len())?;
+    for (d, v) in local.get_mut(kl..end)?.iter_mut().zip(rest) {
+        *d = v.wrapping_sub(base);
+    }
+    Some((kb, end))
 }
 
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
@@ -1721,13 +1847,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             needed: row_len,
             got: scratch.len(),
         };
-        // The first scratch row holds one row of fields at a time; then one accumulator row per
-        // y component, acc_q[x] at x C.. for x = 0..=w (x = 0 always zero).
+        // The first scratch row holds the current row's tile boundaries and local sums (then
+        // the fields of the x components above 0); then one accumulator row per y component,
+        // acc_q[x] at x C.. for x = 0..=w (x = 0 always zero).
         let (buf, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
-        // acc_0 += the row's prefix sums. Wrapping additions: without a modulus every sum is at
-        // most the texture's total, which `E` holds (`check_value_type`); with one, only the
-        // low k bits are stored, and those of a sum depend only on the low k bits of its terms.
-        add_prefix_row::<T, E, C>(texels, accs.get_mut(C..row_len).ok_or(short)?);
         // Row y ends a block of exactly one y component: that of its lowest non-zero digit
         // (a multiple of b_q with d_q != 0).
         #[allow(
@@ -1748,13 +1871,14 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let iy = dy.index.get(q).copied().unwrap_or(0);
         // Invariant between rows: acc_j holds the rows in [trunc_{j+1}(y), trunc_j(y)) for
         // j >= 1 and acc_0 those in [trunc_1(y), y). Here y is a multiple of b_1, ..., b_q, so
-        // folding acc_{j-1} into acc_j for j = 1..=q (and clearing it) leaves in acc_q the rows
-        // of I_q(y) = [trunc_{q+1}(y), y), the sums C_pq(., y) need, and restores the
-        // invariant: one pass over a row when y ends a tile row (1 row in b_1), none otherwise.
-        for j in 1..=q {
+        // adding the row and acc_0, ..., acc_{q-1} into acc_q (and clearing them) leaves in
+        // acc_q the rows of I_q(y) = [trunc_{q+1}(y), y], the sums C_pq(., y) need, and restores
+        // the invariant. Levels 1..q-1 first (a pass over a row, 1 row in b_2); acc_{q-1} goes
+        // with the row, in the row step's own pass.
+        for j in 1..q {
             #[allow(
                 clippy::arithmetic_side_effects,
-                reason = "j <= q <= Ly < MAX_LEVELS + 1 and (Ly + 2) row_len fits usize \
+                reason = "j < q <= Ly < MAX_LEVELS + 1 and (Ly + 2) row_len fits usize \
                           (scratch_needed): no overflow"
             )]
             let (lower, upper) = accs.split_at_mut_checked(j * row_len).ok_or(short)?;
@@ -1767,11 +1891,47 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             }
         }
         let from = q.checked_mul(row_len).ok_or(short)?;
-        let acc = accs
-            .get(from..from.checked_add(row_len).ok_or(short)?)
+        let (below, at_q) = accs.split_at_mut_checked(from).ok_or(short)?;
+        let acc = at_q.get_mut(C..row_len).ok_or(short)?;
+        let lower = match from.checked_sub(row_len) {
+            Some(f) => Some(
+                below
+                    .get_mut(f.checked_add(C).ok_or(short)?..)
+                    .ok_or(short)?,
+            ),
+            None => None,
+        };
+        // The tile width b_1 (0 for an axis without levels: every position local), and the
+        // first row split: the boundaries after acc[0] = 0 ((n / t + 1) C values), then the
+        // local sums (the rest: (n - n / t) C, as many as there are).
+        #[allow(
+            clippy::as_conversions,
+            reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+        )]
+        let t = if g.ax.levels >= 1 {
+            g.ax.block(1) as usize
+        } else {
+            0
+        };
+        let nb = n.checked_div(t).unwrap_or(0);
+        let split = nb
+            .checked_add(1)
+            .and_then(|b| b.checked_mul(C))
             .ok_or(short)?;
+        let (bnd, local) = buf.split_at_mut_checked(split).ok_or(short)?;
+        bnd.get_mut(..C).ok_or(short)?.fill(E::ZERO);
+        // acc_q += acc_{q-1} + the row's prefix sums, split. Wrapping additions: without a
+        // modulus every sum is at most the texture's total, which `E` holds
+        // (`check_value_type`); with one, only the low k bits are stored, and those of a sum
+        // depend only on the low k bits of its terms.
+        let (kb, kl) =
+            row_fields::<T, E, C>(texels, lower, acc, t, bnd.get_mut(C..).ok_or(short)?, local)
+                .ok_or(short)?;
         // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
         // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
+        // p = 0: the local sums; p >= 1: the same differences over the tile boundaries (x a
+        // multiple of t: positions x / t, blocks b_p / t), the top one (one level) being the
+        // boundaries themselves.
         for p in 0..g.ax.components() {
             let comp = g.component(p, q).ok_or(short)?;
             let big = if p < g.ax.levels {
@@ -1784,11 +1944,24 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 reason = "u32 -> usize is lossless (MAX_DIMENSION)"
             )]
             let (b, big) = (g.ax.block(p) as usize, big as usize);
-            let count = component_fields::<E, C>(acc, n, b, big, buf).ok_or(short)?;
-            let fields = buf.get(..count).ok_or(short)?;
+            let fields: &[E] = if p == 0 {
+                local.get(..kl).ok_or(short)?
+            } else {
+                // p >= 1: t = b_1 >= 2 divides b_p and b_{p+1}.
+                let (b, big) = (
+                    b.checked_div(t).ok_or(short)?,
+                    big.checked_div(t).ok_or(short)?,
+                );
+                if b == 1 && big == 0 {
+                    bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?
+                } else {
+                    let count = component_fields::<E, C>(bnd, nb, b, big, local).ok_or(short)?;
+                    local.get(..count).ok_or(short)?
+                }
+            };
             // The stored positions, counted as Geometry::new counted them: a mismatch would
             // be a bug here, refused rather than written across the next row.
-            let bits = u64::try_from(count)
+            let bits = u64::try_from(fields.len())
                 .ok()
                 .and_then(|c| c.checked_mul(u64::from(comp.bits)));
             if bits != Some(comp.row_bits) {
