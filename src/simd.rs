@@ -715,6 +715,7 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     tile: usize,
     bnd: &mut [E],
     local: &mut [E],
+    ahead: [&[u32]; 2],
 ) -> Option<(usize, usize)> {
     let t = as_u8(texels)?;
     let acc = as_u32_mut::<E, C>(acc)?;
@@ -736,39 +737,33 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     {
         return None;
     }
-    let table = &TILE_TABLES[tile.trailing_zeros() as usize - 1];
     let blocks = n / BLOCK;
     let lp = match &mut lower {
         Some(l) => l.as_mut_ptr(),
         None => core::ptr::null_mut(),
     };
+    let (tp, ap, bp, op) = (
+        t.as_ptr(),
+        acc.as_mut_ptr(),
+        bnd.as_mut_ptr(),
+        local.as_mut_ptr(),
+    );
+    macro_rules! run {
+        ($($tile:literal)*) => {
+            match (tile, lp.is_null()) {
+                $(
+                    ($tile, true) => tiled512::kernel::<false, $tile>(tp, lp, ap, bp, op, blocks, ahead),
+                    ($tile, false) => tiled512::kernel::<true, $tile>(tp, lp, ap, bp, op, blocks, ahead),
+                )*
+                _ => return None,
+            }
+        };
+    }
     // SAFETY: AVX-512F and VNNI are available (Kernel::best(), argument 1); the kernel reads
     // `t[..16 blocks]`, reads and writes `acc` and (if not null) `lower` there, and writes
     // `bnd[..16 blocks / tile]` and `local[..16 blocks - 16 blocks / tile]`, all inside the
     // slices (checked above; 16 blocks <= n); the five slices are distinct borrows.
-    let mut run = unsafe {
-        if lp.is_null() {
-            tiled512::kernel::<false>(
-                t.as_ptr(),
-                lp,
-                acc.as_mut_ptr(),
-                bnd.as_mut_ptr(),
-                local.as_mut_ptr(),
-                blocks,
-                table,
-            )
-        } else {
-            tiled512::kernel::<true>(
-                t.as_ptr(),
-                lp,
-                acc.as_mut_ptr(),
-                bnd.as_mut_ptr(),
-                local.as_mut_ptr(),
-                blocks,
-                table,
-            )
-        }
-    };
+    let mut run = unsafe { run!(2 4 8 16) };
     // The tail after the last full block, portable: the same values.
     let i0 = blocks * BLOCK;
     let (mut kb, mut kl) = (i0 / tile, i0 - i0 / tile);
@@ -840,24 +835,36 @@ static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8
 mod tiled512 {
     use super::*;
 
-    /// The kernel of [`tiled_row`] over `blocks` blocks of 16 texels; returns the running sum
-    /// after them.
+    /// The kernel of [`tiled_row`] over `blocks` blocks of 16 texels, tiles of `TILE` texels
+    /// (2, 4, 8 or 16); returns the running sum after them.
+    ///
+    /// Stores: `acc` (and `lower`) whole; per block the `nb = 16 / TILE` boundaries by one
+    /// store of exactly `nb` lanes (4 to 32 bytes); the `nl = 16 - nb` local sums by a
+    /// 16-lane store whose last `nb` lanes the next block's store overwrites (`nl >= 8`, so it
+    /// ends inside the `blocks nl` values written in all), a masked store for the last block.
     ///
     /// # Safety
     /// The CPU has AVX-512F and AVX-512 VNNI; `t` is valid for reads and `acc` (and, if
     /// `LOWER`, `lower`) for reads and writes of `16 blocks` values; `bnd` for writes of
-    /// `16 blocks / tile` and `local` of `16 blocks - 16 blocks / tile` values (`tile` the table's);
-    /// no two of them overlap.
+    /// `16 blocks / TILE` and `local` of `16 blocks - 16 blocks / TILE` values; no two of them
+    /// overlap; `TILE` is 2, 4, 8 or 16.
     #[target_feature(enable = "avx512f,avx512vnni")]
-    pub(super) unsafe fn kernel<const LOWER: bool>(
+    pub(super) unsafe fn kernel<const LOWER: bool, const TILE: usize>(
         t: *const u8,
         lower: *mut u32,
         acc: *mut u32,
         bnd: *mut u32,
         local: *mut u32,
         blocks: usize,
-        table: &TileTable,
+        ahead: [&[u32]; 2],
     ) -> u32 {
+        // Prefetch cursors: line `pos >> 16` of each `ahead` slice at each block, spread
+        // evenly over the blocks (16.16 fixed point; at most 2^26 lines of 64 bytes per slice
+        // on any texture, so no overflow).
+        let lines = ahead.map(|a| a.len().div_ceil(16));
+        let step = lines.map(|l| if blocks == 0 { 0 } else { (l << 16) / blocks });
+        let mut pos = [0usize; 2];
+        let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = super::avx512vnni::W.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
             _mm512_setr_epi32(
@@ -872,17 +879,28 @@ mod tiled512 {
                 _mm512_loadu_si512(table.bnd.as_ptr().cast()),
             )
         };
-        let (nl, nb) = (table.n_local, table.n_bnd);
-        let (ml, mb) = (((1u32 << nl) - 1) as u16, ((1u32 << nb) - 1) as u16);
+        let nb = BLOCK / TILE;
+        let nl = BLOCK - nb;
+        let ml = ((1u32 << nl) - 1) as u16;
         let last = _mm512_set1_epi32(15);
         let zero = _mm512_setzero_si512();
         let mut carry = zero;
         let mut prev = zero;
         for b in 0..blocks {
             let i = BLOCK * b;
-            // SAFETY: i + 16 <= 16 blocks: inside every slice (the caller's contract); the
-            // masked stores write nl lanes at local[b nl..] and nb at bnd[b nb..], so
-            // local[..blocks nl] = local[..16 blocks - 16 blocks / tile] and bnd[..16 blocks / tile].
+            for r in 0..2 {
+                let line = pos[r] >> 16;
+                if line < lines[r] {
+                    // A hint (reads and writes nothing, never faults); 16 line < len: in the slice.
+                    _mm_prefetch::<_MM_HINT_T0>(ahead[r].as_ptr().wrapping_add(16 * line).cast());
+                }
+                pos[r] += step[r];
+            }
+            // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+            // contract). The boundary store writes nb lanes at bnd[b nb..], inside
+            // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
+            // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
+            // last block.
             unsafe {
                 let tp = t.add(i);
                 let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
@@ -898,16 +916,21 @@ mod tiled512 {
                 _mm512_storeu_si512(acc.add(i).cast(), v);
                 let loc = _mm512_sub_epi32(v, super::pack512::perm2(prev, base_ix, v));
                 prev = v;
-                _mm512_mask_storeu_epi32(
-                    local.add(b * nl).cast(),
-                    ml,
-                    _mm512_permutexvar_epi32(local_ix, loc),
-                );
-                _mm512_mask_storeu_epi32(
-                    bnd.add(b * nb).cast(),
-                    mb,
-                    _mm512_permutexvar_epi32(bnd_ix, v),
-                );
+                let loc = _mm512_permutexvar_epi32(local_ix, loc);
+                let lo = local.add(b * nl);
+                if b + 1 < blocks {
+                    _mm512_storeu_si512(lo.cast(), loc);
+                } else {
+                    _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
+                }
+                let bv = _mm512_permutexvar_epi32(bnd_ix, v);
+                let bo = bnd.add(b * nb);
+                match nb {
+                    1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
+                    2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
+                    4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
+                    _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
+                }
             }
         }
         _mm512_cvtsi512_si32(carry) as u32

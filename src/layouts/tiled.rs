@@ -1652,20 +1652,24 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     t: usize,
     bnd: &mut [E],
     local: &mut [E],
+    ahead: [&[u32]; 2],
 ) -> Option<(usize, usize)> {
+    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+    let _ = ahead;
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     let lower = match lower {
         // The fused kernel needs its own borrow of `lower`: try it, then fall through.
         Some(l) => {
             if let Some(done) =
-                crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local)
+                crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local, ahead)
             {
                 return Some(done);
             }
             Some(l)
         }
         None => {
-            if let Some(done) = crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local)
+            if let Some(done) =
+                crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local, ahead)
             {
                 return Some(done);
             }
@@ -1920,13 +1924,33 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             .ok_or(short)?;
         let (bnd, local) = buf.split_at_mut_checked(split).ok_or(short)?;
         bnd.get_mut(..C).ok_or(short)?.fill(E::ZERO);
+        // The words this row's fields go to in the first two x components (with `simd`, the
+        // row step asks for them while it computes: a table being built is usually not in
+        // cache, and the packing would wait on each line).
+        let mut ahead: [&[u32]; 2] = [&[], &[]];
+        for (p, a) in ahead.iter_mut().enumerate() {
+            if let Some(c) = g.component(p, q) {
+                let from = usize::try_from(c.offset(0, iy) / 32);
+                let to = usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
+                if let (Ok(from), Ok(to)) = (from, to) {
+                    *a = words.get(from..to).unwrap_or(&[]);
+                }
+            }
+        }
         // acc_q += acc_{q-1} + the row's prefix sums, split. Wrapping additions: without a
         // modulus every sum is at most the texture's total, which `E` holds
         // (`check_value_type`); with one, only the low k bits are stored, and those of a sum
         // depend only on the low k bits of its terms.
-        let (kb, kl) =
-            row_fields::<T, E, C>(texels, lower, acc, t, bnd.get_mut(C..).ok_or(short)?, local)
-                .ok_or(short)?;
+        let (kb, kl) = row_fields::<T, E, C>(
+            texels,
+            lower,
+            acc,
+            t,
+            bnd.get_mut(C..).ok_or(short)?,
+            local,
+            ahead,
+        )
+        .ok_or(short)?;
         // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
         // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
         // p = 0: the local sums; p >= 1: the same differences over the tile boundaries (x a
