@@ -944,6 +944,7 @@ mod tiled512 {
     reason = "tests: a panic is a failed test"
 )]
 mod tests {
+    extern crate std;
     use super::*;
 
     /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
@@ -994,6 +995,160 @@ mod tests {
         assert_eq!(pack_u32(&mut w, &[1u32; 64], MIN_PACK_BITS - 1), 0);
         assert_eq!(pack_u32(&mut w, &[1u32; 64], 33), 0);
         assert_eq!(w, [0; 64]);
+    }
+
+    /// The reference of `tiled_row`, written independently: per position `x = 1..=n` the new
+    /// accumulator `acc + lower + prefix`, then every value at a multiple of `tile` into
+    /// `bnd` and every other one minus the value at the last multiple into `local`.
+    fn tiled_reference(
+        t: &[u8],
+        lower: Option<&mut [u32]>,
+        acc: &mut [u32],
+        tile: usize,
+    ) -> (std::vec::Vec<u32>, std::vec::Vec<u32>) {
+        let (mut bnd, mut local) = (std::vec::Vec::new(), std::vec::Vec::new());
+        let mut lower = lower;
+        let mut prefix = 0u32;
+        let mut v = std::vec![0u32; t.len() + 1];
+        for x in 1..=t.len() {
+            prefix = prefix.wrapping_add(u32::from(t[x - 1]));
+            let l = lower.as_mut().map_or(0, |l| core::mem::take(&mut l[x - 1]));
+            v[x] = acc[x - 1].wrapping_add(l).wrapping_add(prefix);
+            acc[x - 1] = v[x];
+            if x % tile == 0 {
+                bnd.push(v[x]);
+            } else {
+                local.push(v[x].wrapping_sub(v[x - x % tile]));
+            }
+        }
+        (bnd, local)
+    }
+
+    /// `tiled_row` (the best kernel; AVX-512 VNNI, where it runs: else it must decline) equals
+    /// the reference for every tile width 2, 4, 8 and 16, every row width up to 6 blocks and a
+    /// tail, with and without the level below, texels all 0, all 255, a ramp and random,
+    /// accumulators near `u32::MAX` (wrapping): the accumulators, the cleared level below, the
+    /// boundaries and the local sums, their counts, and nothing written past them (the slices
+    /// are exactly as long as the row needs, then sentinels). Also: other types, tile widths
+    /// and short slices decline, writing nothing.
+    #[test]
+    fn tiled_row_equals_the_reference() {
+        extern crate std;
+        use std::vec::Vec;
+        const MAX: usize = 6 * BLOCK + 7;
+        let avx512 = Kernel::best() == Kernel::Avx512Vnni;
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let widths: Vec<usize> = if cfg!(miri) {
+            std::vec![0, 15, 16, 17, 33, 48, 50]
+        } else {
+            (0..=MAX).collect()
+        };
+        let words = [0u32; 100];
+        for tile in [2usize, 4, 8, 16] {
+            for &n in &widths {
+                for pattern in 0..4 {
+                    if cfg!(miri) && pattern != 3 {
+                        continue;
+                    }
+                    let t: Vec<u8> = (0..n)
+                        .map(|i| match pattern {
+                            0 => 0,
+                            1 => 255,
+                            2 => (i % 256) as u8,
+                            _ => rng(&mut seed),
+                        })
+                        .collect();
+                    let acc0: Vec<u32> = (0..n)
+                        .map(|i| (u32::MAX - 1000).wrapping_add(37 * i as u32))
+                        .collect();
+                    let low0: Vec<u32> = (0..n)
+                        .map(|i| 3 * i as u32 + u32::from(rng(&mut seed)))
+                        .collect();
+                    for with_lower in [false, true] {
+                        let (nb, nl) = (n / tile, n - n / tile);
+                        let mut acc = acc0.clone();
+                        let mut low = low0.clone();
+                        let mut bnd = std::vec![7u32; nb + 20];
+                        let mut local = std::vec![9u32; nl + 20];
+                        let ahead = [&words[..n.min(100)], &words[..3]];
+                        let got = tiled_row::<u8, u32, 1>(
+                            &t,
+                            with_lower.then_some(&mut low[..]),
+                            &mut acc,
+                            tile,
+                            &mut bnd[..nb],
+                            &mut local[..nl],
+                            ahead,
+                        );
+                        let what = (tile, n, pattern, with_lower);
+                        if !avx512 {
+                            assert_eq!(got, None, "{what:?}");
+                            assert_eq!(acc, acc0, "{what:?}");
+                            continue;
+                        }
+                        let mut want_acc = acc0.clone();
+                        let mut want_low = low0.clone();
+                        let (want_b, want_l) = tiled_reference(
+                            &t,
+                            with_lower.then_some(&mut want_low[..]),
+                            &mut want_acc,
+                            tile,
+                        );
+                        assert_eq!(got, Some((nb, nl)), "{what:?}");
+                        assert_eq!(acc, want_acc, "{what:?}");
+                        assert_eq!(
+                            low,
+                            if with_lower { want_low } else { low0.clone() },
+                            "{what:?}"
+                        );
+                        assert_eq!(bnd[..nb], want_b[..], "{what:?}");
+                        assert_eq!(local[..nl], want_l[..], "{what:?}");
+                        assert!(bnd[nb..].iter().all(|&v| v == 7), "{what:?}: past bnd");
+                        assert!(local[nl..].iter().all(|&v| v == 9), "{what:?}: past local");
+                    }
+                }
+            }
+        }
+        // Declined: a tile width the kernel has no table for, another type, short slices.
+        let (mut acc, mut b, mut l) = ([1u32; 40], [0u32; 40], [0u32; 40]);
+        let t = [3u8; 32];
+        let none: [&[u32]; 2] = [&[], &[]];
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 3, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 32, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc[..31], 8, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b[..3], &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b, &mut l[..27], none),
+            None
+        );
+        let mut low = [5u32; 31];
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, Some(&mut low), &mut acc, 8, &mut b, &mut l, none),
+            None
+        );
+        let mut acc16 = [1u16; 40];
+        let (mut b16, mut l16) = ([0u16; 40], [0u16; 40]);
+        assert_eq!(
+            tiled_row::<u8, u16, 1>(&t, None, &mut acc16, 8, &mut b16, &mut l16, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 2>(&[3u8; 64], None, &mut [1u32; 80], 8, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!((acc, b, l, low), ([1; 40], [0; 40], [0; 40], [5; 31]));
     }
 
     /// The portable row (the reference): running sum plus the entry above.

@@ -1763,6 +1763,95 @@ fn split_tiles<E: Entry, const T: usize>(
     Some((kb, end))
 }
 
+#[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    clippy::unwrap_used,
+    reason = "tests: a panic is a failed test"
+)]
+mod row_step_tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// `row_fields` (with `simd`, the fused kernel where it applies, else the portable
+    /// passes: `u8` into `u32` and `u64`, one and two channels) equals a value-by-value
+    /// reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
+    /// positions, with and without the level below: accumulators, the cleared level below,
+    /// boundaries, local sums and their counts.
+    #[test]
+    fn row_fields_equal_the_reference() {
+        fn check<E: Entry + core::fmt::Debug, const C: usize>(to: fn(u64) -> E) {
+            let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+            let mut next = move || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed
+            };
+            for t in [0usize, 2, 3, 4, 5, 8, 16] {
+                for n in 0..=70usize {
+                    // Under Miri (slow): the short rows and a stride of the rest.
+                    if cfg!(miri) && n > 20 && n % 9 != 0 {
+                        continue;
+                    }
+                    for with_lower in [false, true] {
+                        let texels: Vec<u8> = (0..n * C).map(|_| next() as u8).collect();
+                        let acc0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
+                        let low0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
+                        // Reference, value by value.
+                        let (mut want_acc, mut want_b, mut want_l) =
+                            (acc0.clone(), Vec::new(), Vec::new());
+                        let mut run = [E::ZERO; C];
+                        let mut base = [E::ZERO; C];
+                        for x in 1..=n {
+                            for c in 0..C {
+                                let i = (x - 1) * C + c;
+                                run[c] = run[c].wrapping_add(E::from(u16::from(texels[i])));
+                                let l = if with_lower { low0[i] } else { E::ZERO };
+                                want_acc[i] = acc0[i].wrapping_add(l).wrapping_add(run[c]);
+                            }
+                            let v = &want_acc[(x - 1) * C..x * C];
+                            if t != 0 && x % t == 0 {
+                                want_b.extend_from_slice(v);
+                                base.copy_from_slice(v);
+                            } else {
+                                want_l.extend(v.iter().zip(&base).map(|(v, b)| v.wrapping_sub(*b)));
+                            }
+                        }
+                        let mut acc = acc0.clone();
+                        let mut low = low0.clone();
+                        let mut bnd = std::vec![to(7); want_b.len()];
+                        let mut local = std::vec![to(9); want_l.len()];
+                        let got = row_fields::<u8, E, C>(
+                            &texels,
+                            with_lower.then_some(&mut low[..]),
+                            &mut acc,
+                            t,
+                            &mut bnd,
+                            &mut local,
+                            [&[], &[]],
+                        );
+                        let what = (t, n, with_lower, C);
+                        assert_eq!(got, Some((want_b.len(), want_l.len())), "{what:?}");
+                        assert_eq!(acc, want_acc, "{what:?}");
+                        if with_lower {
+                            assert!(low.iter().all(|&v| v == E::ZERO), "{what:?}");
+                        }
+                        assert_eq!(bnd, want_b, "{what:?}");
+                        assert_eq!(local, want_l, "{what:?}");
+                    }
+                }
+            }
+        }
+        check::<u32, 1>(|v| v as u32);
+        check::<u64, 1>(|v| v);
+        check::<u32, 2>(|v| v as u32);
+    }
+}
+
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
 /// component (two for one level of tiles) plus one row of fields.
 ///
