@@ -862,7 +862,7 @@ mod tiled512 {
         // evenly over the blocks (16.16 fixed point; at most 2^26 lines of 64 bytes per slice
         // on any texture, so no overflow).
         let lines = ahead.map(|a| a.len().div_ceil(16));
-        let step = lines.map(|l| if blocks == 0 { 0 } else { (l << 16) / blocks });
+        let step = lines.map(|l| (l << 16).checked_div(blocks).unwrap_or(0));
         let mut pos = [0usize; 2];
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = super::avx512vnni::W.map(|g| {

@@ -1769,7 +1769,8 @@ fn split_tiles<E: Entry, const T: usize>(
     clippy::arithmetic_side_effects,
     clippy::as_conversions,
     clippy::unwrap_used,
-    reason = "tests: a panic is a failed test"
+    clippy::needless_range_loop,
+    reason = "tests: a panic is a failed test; the reference indexes by position on purpose"
 )]
 mod row_step_tests {
     extern crate std;
