@@ -1508,8 +1508,11 @@ fn component_fields<E: Entry, const C: usize>(
     out: &mut [E],
 ) -> Option<usize> {
     let at = |x: usize| x.checked_mul(C);
-    // The local sums of the common power-of-two tiles: whole tiles by code specialized for the
-    // width; the last, partial tile below.
+    // The differences inside blocks of the common powers of two (the builder calls this over
+    // the tile boundaries, for hierarchical tiles): whole blocks by code specialized for the
+    // width; the last, partial block below. Not on 32-bit targets (flash: the general loop
+    // does the same, and the local sums themselves are `split_fields`'s).
+    #[cfg(target_pointer_width = "64")]
     let (mut k, mut base) = match (b, big) {
         (1, 2) => local_fields::<E, C, 2>(acc, n, out)?,
         (1, 4) => local_fields::<E, C, 4>(acc, n, out)?,
@@ -1518,6 +1521,8 @@ fn component_fields<E: Entry, const C: usize>(
         (1, 32) => local_fields::<E, C, 32>(acc, n, out)?,
         _ => (0, 0),
     };
+    #[cfg(not(target_pointer_width = "64"))]
+    let (mut k, mut base) = (0usize, 0usize);
     if big != 0 && base >= n {
         return Some(k);
     }
@@ -1587,6 +1592,7 @@ fn component_fields<E: Entry, const C: usize>(
 /// of the row (those whose `B - 1` positions are all at most `n`): per block, `acc[base + d] -
 /// acc[base]` for `d = 1..B`, loops of constant length that LLVM unrolls and vectorizes.
 /// Returns the values written and the first block not done.
+#[cfg(target_pointer_width = "64")]
 fn local_fields<E: Entry, const C: usize, const B: usize>(
     acc: &[E],
     n: usize,
@@ -1695,13 +1701,20 @@ fn split_fields<E: Entry, const C: usize>(
     bnd: &mut [E],
     local: &mut [E],
 ) -> Option<(usize, usize)> {
+    // Tiles of common power-of-two widths by code specialized for the width; on 32-bit
+    // targets (flash) only 8, the width of the plans' tiles.
     if C == 1 {
+        #[cfg(target_pointer_width = "64")]
         match t {
             2 => return split_tiles::<E, 2>(acc, bnd, local),
             4 => return split_tiles::<E, 4>(acc, bnd, local),
             8 => return split_tiles::<E, 8>(acc, bnd, local),
             16 => return split_tiles::<E, 16>(acc, bnd, local),
             _ => {}
+        }
+        #[cfg(not(target_pointer_width = "64"))]
+        if t == 8 {
+            return split_tiles::<E, 8>(acc, bnd, local);
         }
     }
     let (mut kb, mut kl) = (0usize, 0usize);
