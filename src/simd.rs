@@ -480,7 +480,7 @@ mod avx512vnni {
         w
     }
 
-    pub(super) const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
+    const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
 
     /// One `vpdpbusd` per group of 4 texels (unsigned texel bytes times signed 0/1 weights,
     /// summed per 32-bit lane; each lane at most 16 x 255, far from any saturation).
@@ -608,7 +608,7 @@ mod pack512 {
     /// and a blend (slower, same lanes): Miri still checks every load and store of the kernel.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    pub(super) fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
+    fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
         #[cfg(not(miri))]
         let v = _mm512_permutex2var_epi32(a, idx, b);
         #[cfg(miri)]
@@ -689,25 +689,25 @@ mod pack512 {
     }
 }
 
-/// The tiled builder's row step with AVX-512 (VNNI for the prefix sums, as the build kernel),
-/// fused into one pass over the row: for `u8` texels, `u32` entries, one channel and tiles of
-/// `tile` in {2, 4, 8, 16} texels along x (a tile never straddles a 16-lane block).
+/// The tiled builder's row step (`layouts::tiled`'s `row_fields`, the same values) with
+/// AVX-512 VNNI, one pass over the row: for `u8` texels, `u32` entries, one channel and tiles
+/// of `tile` in {2, 4, 8, 16} texels along x (a tile never straddles a 16-lane block).
 ///
-/// With `v[x] = acc[x] + lower[x] + (t_0 + ... + t_{x-1})` (wrapping; `acc[x]` at `acc[x - 1]`,
-/// `x = 1..=n`, `lower` optional and zeroed as it is read), it stores `v` back into `acc`, each
-/// `v[x]` at a multiple of `tile` into `bnd` (in order) and every other `v[x] -
-/// v[trunc(x)]` into `local` (in order; `trunc(x)` is `x` rounded down to a multiple of `tile`,
-/// `v[0] = 0`): the accumulation, the fold of the level below and the split into the local sums
-/// and the tile boundaries that `layouts::tiled`'s builder does per row in three passes (there:
-/// `add_prefix_row`, the fold, `split_fields`). Returns the values written to `bnd` and `local`;
-/// `None` (nothing written) for other types, tile widths or CPUs, or slices shorter than the row
-/// needs (`acc`, `lower`: `n`; `bnd`: `n / tile`; `local`: `n - n / tile`).
+/// Position `x = 1..=n` is at index `x - 1` of `acc` and `lower`. Per `x`, with `r(x)` the
+/// row's prefix sum `t_0 + ... + t_{x-1}` at a boundary (`x` a multiple of `tile`) and the sum
+/// `t_{trunc(x)} + ... + t_{x-1}` inside its tile elsewhere (`trunc(x)`: `x` rounded down to
+/// a multiple of `tile`): `acc[x] += lower[x] + r(x)` (wrapping; `lower` optional and cleared
+/// as it is read), then the boundaries' `acc[x]` into `bnd` and the others into `local`, in
+/// order of `x`. Returns the values written to `bnd` and `local`; `None` (nothing written) for
+/// other types, tile widths or CPUs, or slices shorter than the row needs (`acc`, `lower`: `n`;
+/// `bnd`: `n / tile`; `local`: `n - n / tile`).
 ///
-/// Per block of 16 texels: the prefix sums as in the build kernel, the row added, one
-/// `vpermt2d` gathering each lane's `v[trunc(x)]` (from this block, or the previous block's
-/// last lane), one subtraction, and two `vpermd` with masked stores compacting the lanes into
-/// the two streams (the lane pattern is the same in every block: constant tables per tile width,
-/// [`TILE_TABLES`]).
+/// Per block of 16 texels: four `vpdpbusd` with weights that give each lane its `r(x)` (the
+/// build kernel's triangle, cut at the tile starts for the local lanes), the running sum added
+/// to the boundary lanes (a masked add), the rows added and stored, and two `vpermd` with
+/// stores compacting the lanes into the two streams (the lane pattern is the same in every
+/// block: constant tables per tile width, [`TILE_TABLES`]). While it computes, it prefetches
+/// the words of `ahead` (where the caller will pack the fields), spread over the blocks.
 pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     lower: Option<&mut [E]>,
@@ -764,65 +764,75 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     // `bnd[..16 blocks / tile]` and `local[..16 blocks - 16 blocks / tile]`, all inside the
     // slices (checked above; 16 blocks <= n); the five slices are distinct borrows.
     let mut run = unsafe { run!(2 4 8 16) };
-    // The tail after the last full block, portable: the same values.
+    // The tail after the last full block, portable: the same values (it starts at a tile
+    // boundary: 16 blocks is a multiple of the tile).
     let i0 = blocks * BLOCK;
     let (mut kb, mut kl) = (i0 / tile, i0 - i0 / tile);
-    let mut base = if i0 == 0 { 0 } else { acc[i0 - 1] };
+    let mut inner = 0u32;
     for i in i0..n {
         run = run.wrapping_add(u32::from(t[i]));
-        let mut v = acc[i].wrapping_add(run);
+        inner = inner.wrapping_add(u32::from(t[i]));
+        let boundary = (i + 1) % tile == 0;
+        let mut v = acc[i].wrapping_add(if boundary { run } else { inner });
         if let Some(l) = &mut lower {
             v = v.wrapping_add(l[i]);
             l[i] = 0;
         }
         acc[i] = v;
-        if (i + 1) % tile == 0 {
+        if boundary {
             bnd[kb] = v;
             kb += 1;
-            base = v;
+            inner = 0;
         } else {
-            local[kl] = v.wrapping_sub(base);
+            local[kl] = v;
             kl += 1;
         }
     }
     Some((kb, kl))
 }
 
-/// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds `x = 16 b + l +
-/// 1`; with `r = (l + 1) mod tile`, it is a tile boundary if `r = 0`, else a local sum whose
-/// base `v[x - r]` is lane `l - r` of the block (index `16 + l - r` in `vpermt2d`'s second
-/// operand) or, for `l - r = -1`, the previous block's lane 15 (index 15 of the first).
+/// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds position `x =
+/// 16 b + l + 1`, texel `j` of the block (`16 b + j`) counts in every `x > 16 b + j`. With `r =
+/// (l + 1) mod tile`, lane `l` is a tile boundary if `r = 0`: it takes the block's prefix sum
+/// (texels `j <= l`; plus the running sum before the block); else a local sum, which takes the
+/// texels of its tile before it, `l + 1 - r <= j <= l`.
 struct TileTable {
-    /// Per lane, where its base is (`vpermt2d` indices; a boundary lane's own lane).
-    base: [i32; 16],
+    /// `vpdpbusd` weights, as the build kernel's (`avx512vnni::W`): byte `j` of lane `l` of
+    /// group `g` is 1 when texel `4 g + j` counts in lane `l`.
+    w: [[i32; 16]; 4],
+    /// The boundary lanes (bit `l`).
+    bmask: u16,
     /// The local lanes in order, then zeros (`vpermd` indices).
     local: [i32; 16],
     /// The boundary lanes in order, then zeros.
     bnd: [i32; 16],
-    /// How many of each per block.
-    n_local: usize,
-    n_bnd: usize,
 }
 
 const fn tile_table(tile: usize) -> TileTable {
     let mut tab = TileTable {
-        base: [0; 16],
+        w: [[0; 16]; 4],
+        bmask: 0,
         local: [0; 16],
         bnd: [0; 16],
-        n_local: 0,
-        n_bnd: 0,
     };
+    let (mut nl, mut nb) = (0, 0);
     let mut l = 0;
     while l < 16 {
         let r = (l + 1) % tile;
+        // The first texel lane l takes: 0 at a boundary, its tile's first otherwise.
+        let first = if r == 0 { 0 } else { l + 1 - r };
         if r == 0 {
-            tab.base[l] = 16 + l as i32;
-            tab.bnd[tab.n_bnd] = l as i32;
-            tab.n_bnd += 1;
+            tab.bmask |= 1 << l;
+            tab.bnd[nb] = l as i32;
+            nb += 1;
         } else {
-            tab.base[l] = if l + 1 == r { 15 } else { 16 + (l - r) as i32 };
-            tab.local[tab.n_local] = l as i32;
-            tab.n_local += 1;
+            tab.local[nl] = l as i32;
+            nl += 1;
+        }
+        let mut j = first;
+        while j <= l {
+            tab.w[j / 4][l] |= 1 << (8 * (j % 4));
+            j += 1;
         }
         l += 1;
     }
@@ -865,27 +875,26 @@ mod tiled512 {
         let step = lines.map(|l| (l << 16).checked_div(blocks).unwrap_or(0));
         let mut pos = [0usize; 2];
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
-        let w = super::avx512vnni::W.map(|g| {
+        let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
             _mm512_setr_epi32(
                 a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
             )
         });
         // SAFETY: each table row is 16 i32: one 64-byte unaligned load.
-        let (base_ix, local_ix, bnd_ix) = unsafe {
+        let (local_ix, bnd_ix) = unsafe {
             (
-                _mm512_loadu_si512(table.base.as_ptr().cast()),
                 _mm512_loadu_si512(table.local.as_ptr().cast()),
                 _mm512_loadu_si512(table.bnd.as_ptr().cast()),
             )
         };
+        let bmask = table.bmask;
         let nb = BLOCK / TILE;
         let nl = BLOCK - nb;
         let ml = ((1u32 << nl) - 1) as u16;
         let last = _mm512_set1_epi32(15);
         let zero = _mm512_setzero_si512();
         let mut carry = zero;
-        let mut prev = zero;
         for b in 0..blocks {
             let i = BLOCK * b;
             for r in 0..2 {
@@ -906,7 +915,9 @@ mod tiled512 {
                 let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
                 let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
                 let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-                let mut v = _mm512_add_epi32(p, carry);
+                // The running sum before the block into the boundary lanes only (lane 15, a
+                // boundary, holds the block's total).
+                let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
                 carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
                 if LOWER {
                     v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
@@ -914,9 +925,7 @@ mod tiled512 {
                 }
                 v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
                 _mm512_storeu_si512(acc.add(i).cast(), v);
-                let loc = _mm512_sub_epi32(v, super::pack512::perm2(prev, base_ix, v));
-                prev = v;
-                let loc = _mm512_permutexvar_epi32(local_ix, loc);
+                let loc = _mm512_permutexvar_epi32(local_ix, v);
                 let lo = local.add(b * nl);
                 if b + 1 < blocks {
                     _mm512_storeu_si512(lo.cast(), loc);
@@ -997,9 +1006,10 @@ mod tests {
         assert_eq!(w, [0; 64]);
     }
 
-    /// The reference of `tiled_row`, written independently: per position `x = 1..=n` the new
-    /// accumulator `acc + lower + prefix`, then every value at a multiple of `tile` into
-    /// `bnd` and every other one minus the value at the last multiple into `local`.
+    /// The reference of `tiled_row`, written independently: per position `x = 1..=n`, the sum
+    /// of the row's texels since the last multiple of `tile` (all of them up to `x` at a
+    /// multiple) added to `acc` with `lower`, summed texel by texel; then every value at a
+    /// multiple of `tile` into `bnd` and every other one into `local`.
     fn tiled_reference(
         t: &[u8],
         lower: Option<&mut [u32]>,
@@ -1008,17 +1018,17 @@ mod tests {
     ) -> (std::vec::Vec<u32>, std::vec::Vec<u32>) {
         let (mut bnd, mut local) = (std::vec::Vec::new(), std::vec::Vec::new());
         let mut lower = lower;
-        let mut prefix = 0u32;
-        let mut v = std::vec![0u32; t.len() + 1];
         for x in 1..=t.len() {
-            prefix = prefix.wrapping_add(u32::from(t[x - 1]));
+            let from = if x % tile == 0 { 0 } else { x - x % tile };
+            let r = t[from..x]
+                .iter()
+                .fold(0u32, |s, &v| s.wrapping_add(u32::from(v)));
             let l = lower.as_mut().map_or(0, |l| core::mem::take(&mut l[x - 1]));
-            v[x] = acc[x - 1].wrapping_add(l).wrapping_add(prefix);
-            acc[x - 1] = v[x];
+            acc[x - 1] = acc[x - 1].wrapping_add(l).wrapping_add(r);
             if x % tile == 0 {
-                bnd.push(v[x]);
+                bnd.push(acc[x - 1]);
             } else {
-                local.push(v[x].wrapping_sub(v[x - x % tile]));
+                local.push(acc[x - 1]);
             }
         }
         (bnd, local)

@@ -1643,14 +1643,21 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     Some((dst.len(), blocks.checked_mul(B)?))
 }
 
-/// The row step of [`TiledBuilder::push_row`] for the accumulator `acc` (`acc[x]` for `x =
-/// 1..=n`, `C` values each) and, when the row ends a block of a level above 0, the level below,
-/// `lower` (folded into `acc` and cleared): `acc[x] += lower[x] + t_0 + ... + t_{x-1}` per
-/// channel (wrapping), then the row split by the tile width `t = b_1` (0 for an axis without
-/// levels: no boundary) into the tile boundaries, `acc[x]` for `x` a multiple of `t`, into `bnd`,
-/// and the local sums `acc[x] - acc[trunc_1(x)]` of every other `x` into `local`, both in order
-/// of `x`. Returns the values written to each; `None` if a slice is too short (never, for the
-/// builder's rows). With `simd`, one fused pass where it applies ([`crate::simd::tiled_row`]).
+/// The row step of [`TiledBuilder::push_row`] on one accumulator row `acc` (position `x =
+/// 1..=n` at `(x - 1) C`, `C` values each) and, when the row ends a block of a level above 0,
+/// the level below, `lower` (same form; added into `acc` and cleared).
+///
+/// The accumulators are kept in the form the fields are read from. With the tile width `t =
+/// b_1` (0 for an axis without levels: no boundary), a *boundary* `x` (a multiple of `t`) holds
+/// the sum `A(x)` of the rows' prefix sums `t_0 + ... + t_{x-1}`; every other `x` holds the
+/// local sum `A(x) - A(trunc_1(x))`, the sum of the texels of `[trunc_1(x), x)` over the rows
+/// (`A(0) = 0`; for `t = 0`, `A(x)` itself). Per row: `acc[x] += lower[x] + r(x)` with `r(x)` the
+/// row's prefix sum at a boundary (the running sum) and its sum from `trunc_1(x)` elsewhere
+/// (the running sum inside the tile), per channel, wrapping; then the boundaries are copied
+/// into `bnd` and the local sums into `local`, in order of `x`: the fields of the first two x
+/// components, without a subtraction. Returns the values written to each; `None` if a slice
+/// is too short (never, for the builder's rows). With `simd`, one vectorized pass where it
+/// applies ([`crate::simd::tiled_row`], the same values).
 fn row_fields<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     lower: Option<&mut [E]>,
@@ -1664,7 +1671,7 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     let _ = ahead;
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     let lower = match lower {
-        // The fused kernel needs its own borrow of `lower`: try it, then fall through.
+        // The kernel needs its own borrow of `lower`: try it, then fall through.
         Some(l) => {
             if let Some(done) =
                 crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local, ahead)
@@ -1688,90 +1695,98 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
             *b = E::ZERO;
         }
     }
-    add_prefix_row::<T, E, C>(texels, acc);
-    split_fields::<E, C>(acc, t, bnd, local)
-}
-
-/// The split of [`row_fields`]: from `acc` (`acc[x]` at `(x - 1) C`, `x = 1..=n`), the
-/// boundaries `acc[x]` (`x` a multiple of `t`) into `bnd` and the local sums `acc[x] -
-/// acc[trunc_1(x)]` into `local`, in order; `t = 0`: every `x` local, from 0.
-fn split_fields<E: Entry, const C: usize>(
-    acc: &[E],
-    t: usize,
-    bnd: &mut [E],
-    local: &mut [E],
-) -> Option<(usize, usize)> {
     // Tiles of common power-of-two widths by code specialized for the width; on 32-bit
     // targets (flash) only 8, the width of the plans' tiles.
     if C == 1 {
         #[cfg(target_pointer_width = "64")]
         match t {
-            2 => return split_tiles::<E, 2>(acc, bnd, local),
-            4 => return split_tiles::<E, 4>(acc, bnd, local),
-            8 => return split_tiles::<E, 8>(acc, bnd, local),
-            16 => return split_tiles::<E, 16>(acc, bnd, local),
+            2 => return row_tiles::<T, E, 2>(texels, acc, bnd, local),
+            4 => return row_tiles::<T, E, 4>(texels, acc, bnd, local),
+            8 => return row_tiles::<T, E, 8>(texels, acc, bnd, local),
+            16 => return row_tiles::<T, E, 16>(texels, acc, bnd, local),
             _ => {}
         }
         #[cfg(not(target_pointer_width = "64"))]
         if t == 8 {
-            return split_tiles::<E, 8>(acc, bnd, local);
+            return row_tiles::<T, E, 8>(texels, acc, bnd, local);
         }
     }
     let (mut kb, mut kl) = (0usize, 0usize);
-    let mut base = [E::ZERO; C];
+    let (mut run, mut inner) = ([E::ZERO; C], [E::ZERO; C]);
     let mut d = 0usize;
-    for v in acc.chunks_exact(C) {
-        // d counts the positions since the last boundary (t = 0: never one).
+    for (a, tx) in acc.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+        // d counts the positions since the last boundary (t = 0: never one, and the running
+        // sum inside the "tile" is the running sum).
         d = d.wrapping_add(1);
-        if d == t {
+        let boundary = d == t;
+        for (((a, tx), r), i) in a.iter_mut().zip(tx).zip(&mut run).zip(&mut inner) {
+            let v = E::from(tx.to_u16());
+            *r = r.wrapping_add(v);
+            *i = i.wrapping_add(v);
+            *a = a.wrapping_add(if boundary { *r } else { *i });
+        }
+        if boundary {
             let end = kb.checked_add(C)?;
-            bnd.get_mut(kb..end)?.copy_from_slice(v);
-            base.copy_from_slice(v);
+            bnd.get_mut(kb..end)?.copy_from_slice(a);
             kb = end;
+            inner = [E::ZERO; C];
             d = 0;
         } else {
             let end = kl.checked_add(C)?;
-            for ((o, v), b) in local.get_mut(kl..end)?.iter_mut().zip(v).zip(&base) {
-                *o = v.wrapping_sub(*b);
-            }
+            local.get_mut(kl..end)?.copy_from_slice(a);
             kl = end;
         }
     }
     Some((kb, kl))
 }
 
-/// [`split_fields`] for one channel and tiles of `T` texels: per whole tile, `T - 1` local sums
-/// (written as an array of `T`, the last overwritten by the next tile's first: constant lengths,
-/// which LLVM vectorizes) and one boundary; the partial tile at the end, value by value.
-fn split_tiles<E: Entry, const T: usize>(
-    acc: &[E],
+/// [`row_fields`] for one channel and tiles of `T` texels: per whole tile, the running sum
+/// inside the tile (a chain of `T` additions, independent from tile to tile) added into the
+/// `T - 1` local sums, and the tile's total into the running sum (one addition per tile on
+/// the chain from tile to tile) added into the boundary; the local sums copied out as an array
+/// of `T` (the last overwritten by the next tile's first: constant lengths); the partial tile
+/// at the end, value by value.
+fn row_tiles<T: Texel, E: Entry, const TW: usize>(
+    texels: &[T],
+    acc: &mut [E],
     bnd: &mut [E],
     local: &mut [E],
 ) -> Option<(usize, usize)> {
-    let (tiles, rest) = acc.as_chunks::<T>();
-    let step = T.checked_sub(1)?;
+    let step = TW.checked_sub(1)?;
+    let (tiles, rest) = acc.as_chunks_mut::<TW>();
+    let (tx, tx_rest) = texels.as_chunks::<TW>();
     let (mut kb, mut kl) = (0usize, 0usize);
-    let mut base = E::ZERO;
-    for a in tiles {
-        if let Some(d) = local.get_mut(kl..).and_then(|s| s.first_chunk_mut::<T>()) {
-            for (d, v) in d.iter_mut().zip(a) {
-                *d = v.wrapping_sub(base);
+    let mut run = E::ZERO;
+    for (a, tx) in tiles.iter_mut().zip(tx) {
+        let mut inner = E::ZERO;
+        for (j, (a, t)) in a.iter_mut().zip(tx).enumerate() {
+            inner = inner.wrapping_add(E::from(t.to_u16()));
+            if j < step {
+                *a = a.wrapping_add(inner);
+            } else {
+                run = run.wrapping_add(inner);
+                *a = a.wrapping_add(run);
             }
+        }
+        if let Some(d) = local.get_mut(kl..).and_then(|s| s.first_chunk_mut::<TW>()) {
+            *d = *a;
         } else {
             // The last tile of a row that ends at a tile boundary: no room for the array.
             let end = kl.checked_add(step)?;
-            for (d, v) in local.get_mut(kl..end)?.iter_mut().zip(a) {
-                *d = v.wrapping_sub(base);
+            for (d, v) in local.get_mut(kl..end)?.iter_mut().zip(a.iter()) {
+                *d = *v;
             }
         }
-        base = a.last().copied().unwrap_or(E::ZERO);
-        *bnd.get_mut(kb)? = base;
+        *bnd.get_mut(kb)? = a.last().copied().unwrap_or(E::ZERO);
         kb = kb.checked_add(1)?;
         kl = kl.checked_add(step)?;
     }
     let end = kl.checked_add(rest.len())?;
-    for (d, v) in local.get_mut(kl..end)?.iter_mut().zip(rest) {
-        *d = v.wrapping_sub(base);
+    let mut inner = E::ZERO;
+    for ((d, a), t) in local.get_mut(kl..end)?.iter_mut().zip(rest).zip(tx_rest) {
+        inner = inner.wrapping_add(E::from(t.to_u16()));
+        *a = a.wrapping_add(inner);
+        *d = *a;
     }
     Some((kb, end))
 }
@@ -1790,9 +1805,8 @@ mod row_step_tests {
     use super::*;
     use std::vec::Vec;
 
-    /// `row_fields` (with `simd`, the fused kernel where it applies, else the portable
-    /// passes: `u8` into `u32` and `u64`, one and two channels) equals a value-by-value
-    /// reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
+    /// `row_fields` (with `simd`, the kernel where it applies, else the portable loops: `u8`
+    /// into `u32` and `u64`, one and two channels) equals a value-by-value reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
     /// positions, with and without the level below: accumulators, the cleared level below,
     /// boundaries, local sums and their counts.
     #[test]
@@ -1815,24 +1829,26 @@ mod row_step_tests {
                         let texels: Vec<u8> = (0..n * C).map(|_| next() as u8).collect();
                         let acc0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
                         let low0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
-                        // Reference, value by value.
+                        // Reference, value by value: the texels since the last boundary
+                        // (all of them at a boundary; t = 0: all), summed afresh per x.
                         let (mut want_acc, mut want_b, mut want_l) =
                             (acc0.clone(), Vec::new(), Vec::new());
-                        let mut run = [E::ZERO; C];
-                        let mut base = [E::ZERO; C];
                         for x in 1..=n {
+                            let boundary = t != 0 && x % t == 0;
+                            let from = if boundary || t == 0 { 0 } else { x - x % t };
                             for c in 0..C {
                                 let i = (x - 1) * C + c;
-                                run[c] = run[c].wrapping_add(E::from(u16::from(texels[i])));
+                                let r = (from..x).fold(E::ZERO, |s, j| {
+                                    s.wrapping_add(E::from(u16::from(texels[j * C + c])))
+                                });
                                 let l = if with_lower { low0[i] } else { E::ZERO };
-                                want_acc[i] = acc0[i].wrapping_add(l).wrapping_add(run[c]);
+                                want_acc[i] = acc0[i].wrapping_add(l).wrapping_add(r);
                             }
                             let v = &want_acc[(x - 1) * C..x * C];
-                            if t != 0 && x % t == 0 {
+                            if boundary {
                                 want_b.extend_from_slice(v);
-                                base.copy_from_slice(v);
                             } else {
-                                want_l.extend(v.iter().zip(&base).map(|(v, b)| v.wrapping_sub(*b)));
+                                want_l.extend_from_slice(v);
                             }
                         }
                         let mut acc = acc0.clone();
