@@ -1758,23 +1758,38 @@ fn row_tiles<T: Texel, E: Entry, const TW: usize>(
     let (mut kb, mut kl) = (0usize, 0usize);
     let mut run = E::ZERO;
     for (a, tx) in tiles.iter_mut().zip(tx) {
+        // Each value written to the accumulator and to the field row from a register (a
+        // reload of the accumulator as a vector would wait on the scalar stores).
         let mut inner = E::ZERO;
-        for (j, (a, t)) in a.iter_mut().zip(tx).enumerate() {
-            inner = inner.wrapping_add(E::from(t.to_u16()));
-            if j < step {
-                *a = a.wrapping_add(inner);
-            } else {
-                run = run.wrapping_add(inner);
-                *a = a.wrapping_add(run);
+        match local.get_mut(kl..).and_then(|s| s.first_chunk_mut::<TW>()) {
+            Some(d) => {
+                for (j, ((a, t), d)) in a.iter_mut().zip(tx).zip(d.iter_mut()).enumerate() {
+                    inner = inner.wrapping_add(E::from(t.to_u16()));
+                    if j < step {
+                        *a = a.wrapping_add(inner);
+                    } else {
+                        run = run.wrapping_add(inner);
+                        *a = a.wrapping_add(run);
+                    }
+                    *d = *a;
+                }
             }
-        }
-        if let Some(d) = local.get_mut(kl..).and_then(|s| s.first_chunk_mut::<TW>()) {
-            *d = *a;
-        } else {
-            // The last tile of a row that ends at a tile boundary: no room for the array.
-            let end = kl.checked_add(step)?;
-            for (d, v) in local.get_mut(kl..end)?.iter_mut().zip(a.iter()) {
-                *d = *v;
+            None => {
+                // The last tile of a row that ends at a tile boundary: no room for the array.
+                let end = kl.checked_add(step)?;
+                let mut d = local.get_mut(kl..end)?.iter_mut();
+                for (j, (a, t)) in a.iter_mut().zip(tx).enumerate() {
+                    inner = inner.wrapping_add(E::from(t.to_u16()));
+                    if j < step {
+                        *a = a.wrapping_add(inner);
+                    } else {
+                        run = run.wrapping_add(inner);
+                        *a = a.wrapping_add(run);
+                    }
+                    if let Some(d) = d.next() {
+                        *d = *a;
+                    }
+                }
             }
         }
         *bnd.get_mut(kb)? = a.last().copied().unwrap_or(E::ZERO);
