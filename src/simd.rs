@@ -868,12 +868,11 @@ mod tiled512 {
         blocks: usize,
         ahead: [&[u32]; 2],
     ) -> u32 {
-        // Prefetch cursors: line `pos >> 16` of each `ahead` slice at each block, spread
-        // evenly over the blocks (16.16 fixed point; at most 2^26 lines of 64 bytes per slice
-        // on any texture, so no overflow).
+        // Prefetching: the 64-byte lines of each `ahead` slice, spread evenly over the blocks,
+        // asked for a group of blocks at a time (the bookkeeping once per group).
+        const GROUP: usize = 8;
         let lines = ahead.map(|a| a.len().div_ceil(16));
-        let step = lines.map(|l| (l << 16).checked_div(blocks).unwrap_or(0));
-        let mut pos = [0usize; 2];
+        let mut asked = [0usize; 2];
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -895,52 +894,63 @@ mod tiled512 {
         let last = _mm512_set1_epi32(15);
         let zero = _mm512_setzero_si512();
         let mut carry = zero;
-        for b in 0..blocks {
-            let i = BLOCK * b;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
             for r in 0..2 {
-                let line = pos[r] >> 16;
-                if line < lines[r] {
-                    // A hint (reads and writes nothing, never faults); 16 line < len: in the slice.
-                    _mm_prefetch::<_MM_HINT_T0>(ahead[r].as_ptr().wrapping_add(16 * line).cast());
-                }
-                pos[r] += step[r];
-            }
-            // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
-            // contract). The boundary store writes nb lanes at bnd[b nb..], inside
-            // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
-            // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
-            // last block.
-            unsafe {
-                let tp = t.add(i);
-                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-                // The running sum before the block into the boundary lanes only (lane 15, a
-                // boundary, holds the block's total).
-                let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
-                carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
-                if LOWER {
-                    v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
-                    _mm512_storeu_si512(lower.add(i).cast(), zero);
-                }
-                v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
-                _mm512_storeu_si512(acc.add(i).cast(), v);
-                let loc = _mm512_permutexvar_epi32(local_ix, v);
-                let lo = local.add(b * nl);
-                if b + 1 < blocks {
-                    _mm512_storeu_si512(lo.cast(), loc);
-                } else {
-                    _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
-                }
-                let bv = _mm512_permutexvar_epi32(bnd_ix, v);
-                let bo = bnd.add(b * nb);
-                match nb {
-                    1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
-                    2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
-                    4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
-                    _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
+                // The lines due by the end of the group: lines end / blocks, rounded up (a
+                // slice holds fewer than 2^32 words and blocks < 2^28: no overflow).
+                let due = (lines[r] * end).div_ceil(blocks);
+                while asked[r] < due {
+                    // A hint (reads and writes nothing, never faults); 16 asked < len: inside
+                    // the slice.
+                    _mm_prefetch::<_MM_HINT_T0>(
+                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
+                    );
+                    asked[r] += 1;
                 }
             }
+            for b in from..end {
+                let i = BLOCK * b;
+                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+                // contract). The boundary store writes nb lanes at bnd[b nb..], inside
+                // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
+                // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
+                // last block.
+                unsafe {
+                    let tp = t.add(i);
+                    let g =
+                        |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
+                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                    // The running sum before the block into the boundary lanes only (lane 15, a
+                    // boundary, holds the block's total).
+                    let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
+                    carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                    if LOWER {
+                        v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
+                        _mm512_storeu_si512(lower.add(i).cast(), zero);
+                    }
+                    v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
+                    _mm512_storeu_si512(acc.add(i).cast(), v);
+                    let loc = _mm512_permutexvar_epi32(local_ix, v);
+                    let lo = local.add(b * nl);
+                    if b + 1 < blocks {
+                        _mm512_storeu_si512(lo.cast(), loc);
+                    } else {
+                        _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
+                    }
+                    let bv = _mm512_permutexvar_epi32(bnd_ix, v);
+                    let bo = bnd.add(b * nb);
+                    match nb {
+                        1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
+                        2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
+                        4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
+                        _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
+                    }
+                }
+            }
+            from = end;
         }
         _mm512_cvtsi512_si32(carry) as u32
     }
