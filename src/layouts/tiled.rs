@@ -1835,9 +1835,13 @@ mod row_step_tests {
                 seed
             };
             for t in [0usize, 2, 3, 4, 5, 8, 16] {
+                // Under Miri (slow): no level, a non-power of two and 8; short rows and a few
+                // long ones.
+                if cfg!(miri) && ![0, 3, 8].contains(&t) {
+                    continue;
+                }
                 for n in 0..=70usize {
-                    // Under Miri (slow): the short rows and a stride of the rest.
-                    if cfg!(miri) && n > 20 && n % 9 != 0 {
+                    if cfg!(miri) && n > 17 && ![33, 64, 70].contains(&n) {
                         continue;
                     }
                     for with_lower in [false, true] {
@@ -1892,7 +1896,9 @@ mod row_step_tests {
             }
         }
         check::<u32, 1>(|v| v as u32);
-        check::<u64, 1>(|v| v);
+        if !cfg!(miri) {
+            check::<u64, 1>(|v| v);
+        }
         check::<u32, 2>(|v| v as u32);
     }
 }
