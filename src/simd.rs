@@ -716,10 +716,8 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     bnd: &mut [E],
     local: &mut [E],
     ahead: [&[u32]; 2],
-    run: &mut [E; C],
 ) -> Option<(usize, usize)> {
     let t = as_u8(texels)?;
-    let run = as_u32_mut::<E, C>(run.as_mut_slice())?.first_mut()?;
     let acc = as_u32_mut::<E, C>(acc)?;
     let mut lower = match lower {
         None => None,
@@ -754,8 +752,8 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
         ($($tile:literal)*) => {
             match (tile, lp.is_null()) {
                 $(
-                    ($tile, true) => tiled512::kernel::<false, $tile>(tp, lp, ap, bp, op, blocks, ahead, *run),
-                    ($tile, false) => tiled512::kernel::<true, $tile>(tp, lp, ap, bp, op, blocks, ahead, *run),
+                    ($tile, true) => tiled512::kernel::<false, $tile>(tp, lp, ap, bp, op, blocks, ahead),
+                    ($tile, false) => tiled512::kernel::<true, $tile>(tp, lp, ap, bp, op, blocks, ahead),
                 )*
                 _ => return None,
             }
@@ -765,17 +763,17 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     // `t[..16 blocks]`, reads and writes `acc` and (if not null) `lower` there, and writes
     // `bnd[..16 blocks / tile]` and `local[..16 blocks - 16 blocks / tile]`, all inside the
     // slices (checked above; 16 blocks <= n); the five slices are distinct borrows.
-    *run = unsafe { run!(2 4 8 16) };
+    let mut run = unsafe { run!(2 4 8 16) };
     // The tail after the last full block, portable: the same values (it starts at a tile
     // boundary: 16 blocks is a multiple of the tile).
     let i0 = blocks * BLOCK;
     let (mut kb, mut kl) = (i0 / tile, i0 - i0 / tile);
     let mut inner = 0u32;
     for i in i0..n {
-        *run = run.wrapping_add(u32::from(t[i]));
+        run = run.wrapping_add(u32::from(t[i]));
         inner = inner.wrapping_add(u32::from(t[i]));
         let boundary = (i + 1) % tile == 0;
-        let mut v = acc[i].wrapping_add(if boundary { *run } else { inner });
+        let mut v = acc[i].wrapping_add(if boundary { run } else { inner });
         if let Some(l) = &mut lower {
             v = v.wrapping_add(l[i]);
             l[i] = 0;
@@ -869,16 +867,12 @@ mod tiled512 {
         local: *mut u32,
         blocks: usize,
         ahead: [&[u32]; 2],
-        run: u32,
     ) -> u32 {
-        // The words the caller packs the fields into next: one prefetch per 64-byte line, all
-        // asked for now (a chunk's worth: a few lines), while the blocks compute.
-        for a in ahead {
-            for i in (0..a.len()).step_by(16) {
-                // A hint (reads and writes nothing, never faults); i < len: inside the slice.
-                _mm_prefetch::<_MM_HINT_T0>(a.as_ptr().wrapping_add(i).cast());
-            }
-        }
+        // Prefetching: the 64-byte lines of each `ahead` slice, spread evenly over the blocks,
+        // asked for a group of blocks at a time (the bookkeeping once per group).
+        const GROUP: usize = 8;
+        let lines = ahead.map(|a| a.len().div_ceil(16));
+        let mut asked = [0usize; 2];
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -899,45 +893,64 @@ mod tiled512 {
         let ml = ((1u32 << nl) - 1) as u16;
         let last = _mm512_set1_epi32(15);
         let zero = _mm512_setzero_si512();
-        let mut carry = _mm512_set1_epi32(run as i32);
-        for b in 0..blocks {
-            let i = BLOCK * b;
-            // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
-            // contract). The boundary store writes nb lanes at bnd[b nb..], inside
-            // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
-            // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
-            // last block.
-            unsafe {
-                let tp = t.add(i);
-                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-                // The running sum before the block into the boundary lanes only (lane 15, a
-                // boundary, holds the block's total).
-                let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
-                carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
-                if LOWER {
-                    v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
-                    _mm512_storeu_si512(lower.add(i).cast(), zero);
-                }
-                v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
-                _mm512_storeu_si512(acc.add(i).cast(), v);
-                let loc = _mm512_permutexvar_epi32(local_ix, v);
-                let lo = local.add(b * nl);
-                if b + 1 < blocks {
-                    _mm512_storeu_si512(lo.cast(), loc);
-                } else {
-                    _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
-                }
-                let bv = _mm512_permutexvar_epi32(bnd_ix, v);
-                let bo = bnd.add(b * nb);
-                match nb {
-                    1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
-                    2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
-                    4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
-                    _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
+        let mut carry = zero;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
+            for r in 0..2 {
+                // The lines due by the end of the group: lines end / blocks, rounded up (a
+                // slice holds fewer than 2^32 words and blocks < 2^28: no overflow).
+                let due = (lines[r] * end).div_ceil(blocks);
+                while asked[r] < due {
+                    // A hint (reads and writes nothing, never faults); 16 asked < len: inside
+                    // the slice.
+                    _mm_prefetch::<_MM_HINT_T0>(
+                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
+                    );
+                    asked[r] += 1;
                 }
             }
+            for b in from..end {
+                let i = BLOCK * b;
+                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+                // contract). The boundary store writes nb lanes at bnd[b nb..], inside
+                // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
+                // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
+                // last block.
+                unsafe {
+                    let tp = t.add(i);
+                    let g =
+                        |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
+                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                    // The running sum before the block into the boundary lanes only (lane 15, a
+                    // boundary, holds the block's total).
+                    let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
+                    carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                    if LOWER {
+                        v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
+                        _mm512_storeu_si512(lower.add(i).cast(), zero);
+                    }
+                    v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
+                    _mm512_storeu_si512(acc.add(i).cast(), v);
+                    let loc = _mm512_permutexvar_epi32(local_ix, v);
+                    let lo = local.add(b * nl);
+                    if b + 1 < blocks {
+                        _mm512_storeu_si512(lo.cast(), loc);
+                    } else {
+                        _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
+                    }
+                    let bv = _mm512_permutexvar_epi32(bnd_ix, v);
+                    let bo = bnd.add(b * nb);
+                    match nb {
+                        1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
+                        2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
+                        4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
+                        _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
+                    }
+                }
+            }
+            from = end;
         }
         _mm512_cvtsi512_si32(carry) as u32
     }
@@ -1012,17 +1025,14 @@ mod tests {
         lower: Option<&mut [u32]>,
         acc: &mut [u32],
         tile: usize,
-        run: u32,
     ) -> (std::vec::Vec<u32>, std::vec::Vec<u32>) {
         let (mut bnd, mut local) = (std::vec::Vec::new(), std::vec::Vec::new());
         let mut lower = lower;
         for x in 1..=t.len() {
             let from = if x % tile == 0 { 0 } else { x - x % tile };
-            // The running sum before the row counts at the boundaries only.
-            let r0 = if x % tile == 0 { run } else { 0 };
             let r = t[from..x]
                 .iter()
-                .fold(r0, |s, &v| s.wrapping_add(u32::from(v)));
+                .fold(0u32, |s, &v| s.wrapping_add(u32::from(v)));
             let l = lower.as_mut().map_or(0, |l| core::mem::take(&mut l[x - 1]));
             acc[x - 1] = acc[x - 1].wrapping_add(l).wrapping_add(r);
             if x % tile == 0 {
@@ -1081,8 +1091,6 @@ mod tests {
                         let mut bnd = std::vec![7u32; nb + 20];
                         let mut local = std::vec![9u32; nl + 20];
                         let ahead = [&words[..n.min(100)], &words[..3]];
-                        let run0 = u32::MAX - 3 * n as u32;
-                        let mut run = [run0];
                         let got = tiled_row::<u8, u32, 1>(
                             &t,
                             with_lower.then_some(&mut low[..]),
@@ -1091,7 +1099,6 @@ mod tests {
                             &mut bnd[..nb],
                             &mut local[..nl],
                             ahead,
-                            &mut run,
                         );
                         let what = (tile, n, pattern, with_lower);
                         if !avx512 {
@@ -1106,10 +1113,7 @@ mod tests {
                             with_lower.then_some(&mut want_low[..]),
                             &mut want_acc,
                             tile,
-                            run0,
                         );
-                        let sum = t.iter().fold(run0, |s, &v| s.wrapping_add(u32::from(v)));
-                        assert_eq!(run, [sum], "{what:?}: the running sum");
                         assert_eq!(got, Some((nb, nl)), "{what:?}");
                         assert_eq!(acc, want_acc, "{what:?}");
                         assert_eq!(
@@ -1130,65 +1134,38 @@ mod tests {
         let t = [3u8; 32];
         let none: [&[u32]; 2] = [&[], &[]];
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 3, &mut b, &mut l, none, &mut [0]),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 3, &mut b, &mut l, none),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 32, &mut b, &mut l, none, &mut [0]),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 32, &mut b, &mut l, none),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc[..31], 8, &mut b, &mut l, none, &mut [0]),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc[..31], 8, &mut b, &mut l, none),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b[..3], &mut l, none, &mut [0]),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b[..3], &mut l, none),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b, &mut l[..27], none, &mut [0]),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b, &mut l[..27], none),
             None
         );
         let mut low = [5u32; 31];
         assert_eq!(
-            tiled_row::<u8, u32, 1>(
-                &t,
-                Some(&mut low),
-                &mut acc,
-                8,
-                &mut b,
-                &mut l,
-                none,
-                &mut [0]
-            ),
+            tiled_row::<u8, u32, 1>(&t, Some(&mut low), &mut acc, 8, &mut b, &mut l, none),
             None
         );
         let mut acc16 = [1u16; 40];
         let (mut b16, mut l16) = ([0u16; 40], [0u16; 40]);
         assert_eq!(
-            tiled_row::<u8, u16, 1>(
-                &t,
-                None,
-                &mut acc16,
-                8,
-                &mut b16,
-                &mut l16,
-                none,
-                &mut [0u16]
-            ),
+            tiled_row::<u8, u16, 1>(&t, None, &mut acc16, 8, &mut b16, &mut l16, none),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 2>(
-                &[3u8; 64],
-                None,
-                &mut [1u32; 80],
-                8,
-                &mut b,
-                &mut l,
-                none,
-                &mut [0; 2]
-            ),
+            tiled_row::<u8, u32, 2>(&[3u8; 64], None, &mut [1u32; 80], 8, &mut b, &mut l, none),
             None
         );
         assert_eq!((acc, b, l, low), ([1; 40], [0; 40], [0; 40], [5; 31]));

@@ -1666,7 +1666,6 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     bnd: &mut [E],
     local: &mut [E],
     ahead: [&[u32]; 2],
-    run: &mut [E; C],
 ) -> Option<(usize, usize)> {
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
     let _ = ahead;
@@ -1674,23 +1673,16 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     let lower = match lower {
         // The kernel needs its own borrow of `lower`: try it, then fall through.
         Some(l) => {
-            if let Some(done) = crate::simd::tiled_row::<T, E, C>(
-                texels,
-                Some(&mut *l),
-                acc,
-                t,
-                bnd,
-                local,
-                ahead,
-                run,
-            ) {
+            if let Some(done) =
+                crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local, ahead)
+            {
                 return Some(done);
             }
             Some(l)
         }
         None => {
             if let Some(done) =
-                crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local, ahead, run)
+                crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local, ahead)
             {
                 return Some(done);
             }
@@ -1708,30 +1700,30 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     if C == 1 {
         #[cfg(target_pointer_width = "64")]
         match t {
-            2 => return row_tiles::<T, E, 2>(texels, acc, bnd, local, run.first_mut()?),
-            4 => return row_tiles::<T, E, 4>(texels, acc, bnd, local, run.first_mut()?),
-            8 => return row_tiles::<T, E, 8>(texels, acc, bnd, local, run.first_mut()?),
-            16 => return row_tiles::<T, E, 16>(texels, acc, bnd, local, run.first_mut()?),
+            2 => return row_tiles::<T, E, 2>(texels, acc, bnd, local),
+            4 => return row_tiles::<T, E, 4>(texels, acc, bnd, local),
+            8 => return row_tiles::<T, E, 8>(texels, acc, bnd, local),
+            16 => return row_tiles::<T, E, 16>(texels, acc, bnd, local),
             _ => {}
         }
         #[cfg(not(target_pointer_width = "64"))]
         if t == 8 {
-            return row_tiles::<T, E, 8>(texels, acc, bnd, local, run.first_mut()?);
+            return row_tiles::<T, E, 8>(texels, acc, bnd, local);
         }
     }
     let (mut kb, mut kl) = (0usize, 0usize);
-    let mut inner = [E::ZERO; C];
+    let (mut run, mut inner) = ([E::ZERO; C], [E::ZERO; C]);
     let mut d = 0usize;
     for (a, tx) in acc.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-        // d counts the positions since the last boundary (t = 0: never one, and every
-        // position takes the running sum, carried in from the chunks before).
+        // d counts the positions since the last boundary (t = 0: never one, and the running
+        // sum inside the "tile" is the running sum).
         d = d.wrapping_add(1);
         let boundary = d == t;
-        for (((a, tx), r), i) in a.iter_mut().zip(tx).zip(run.iter_mut()).zip(&mut inner) {
+        for (((a, tx), r), i) in a.iter_mut().zip(tx).zip(&mut run).zip(&mut inner) {
             let v = E::from(tx.to_u16());
             *r = r.wrapping_add(v);
             *i = i.wrapping_add(v);
-            *a = a.wrapping_add(if boundary || t == 0 { *r } else { *i });
+            *a = a.wrapping_add(if boundary { *r } else { *i });
         }
         if boundary {
             let end = kb.checked_add(C)?;
@@ -1759,13 +1751,12 @@ fn row_tiles<T: Texel, E: Entry, const TW: usize>(
     acc: &mut [E],
     bnd: &mut [E],
     local: &mut [E],
-    run_in: &mut E,
 ) -> Option<(usize, usize)> {
     let step = TW.checked_sub(1)?;
     let (tiles, rest) = acc.as_chunks_mut::<TW>();
     let (tx, tx_rest) = texels.as_chunks::<TW>();
     let (mut kb, mut kl) = (0usize, 0usize);
-    let mut run = *run_in;
+    let mut run = E::ZERO;
     for (a, tx) in tiles.iter_mut().zip(tx) {
         // Each value written to the accumulator and to the field row from a register (a
         // reload of the accumulator as a vector would wait on the scalar stores).
@@ -1805,7 +1796,6 @@ fn row_tiles<T: Texel, E: Entry, const TW: usize>(
         kb = kb.checked_add(1)?;
         kl = kl.checked_add(step)?;
     }
-    *run_in = run;
     let end = kl.checked_add(rest.len())?;
     let mut inner = E::ZERO;
     for ((d, a), t) in local.get_mut(kl..end)?.iter_mut().zip(rest).zip(tx_rest) {
@@ -1831,8 +1821,7 @@ mod row_step_tests {
     use std::vec::Vec;
 
     /// `row_fields` (with `simd`, the kernel where it applies, else the portable loops: `u8`
-    /// into `u32` and `u64`, one and two channels), from a running sum carried in, equals a
-    /// value-by-value reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
+    /// into `u32` and `u64`, one and two channels) equals a value-by-value reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
     /// positions, with and without the level below: accumulators, the cleared level below,
     /// boundaries, local sums and their counts.
     #[test]
@@ -1858,7 +1847,6 @@ mod row_step_tests {
                     for with_lower in [false, true] {
                         let texels: Vec<u8> = (0..n * C).map(|_| next() as u8).collect();
                         let acc0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
-                        let run0: [E; C] = core::array::from_fn(|_| to(next() >> 8));
                         let low0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
                         // Reference, value by value: the texels since the last boundary
                         // (all of them at a boundary; t = 0: all), summed afresh per x.
@@ -1869,14 +1857,7 @@ mod row_step_tests {
                             let from = if boundary || t == 0 { 0 } else { x - x % t };
                             for c in 0..C {
                                 let i = (x - 1) * C + c;
-                                // The running sum before the row counts where the sum
-                                // runs from 0: at the boundaries, everywhere without a level.
-                                let r0 = if from == 0 && (boundary || t == 0) {
-                                    run0[c]
-                                } else {
-                                    E::ZERO
-                                };
-                                let r = (from..x).fold(r0, |s, j| {
+                                let r = (from..x).fold(E::ZERO, |s, j| {
                                     s.wrapping_add(E::from(u16::from(texels[j * C + c])))
                                 });
                                 let l = if with_lower { low0[i] } else { E::ZERO };
@@ -1893,7 +1874,6 @@ mod row_step_tests {
                         let mut low = low0.clone();
                         let mut bnd = std::vec![to(7); want_b.len()];
                         let mut local = std::vec![to(9); want_l.len()];
-                        let mut run = run0;
                         let got = row_fields::<u8, E, C>(
                             &texels,
                             with_lower.then_some(&mut low[..]),
@@ -1902,19 +1882,8 @@ mod row_step_tests {
                             &mut bnd,
                             &mut local,
                             [&[], &[]],
-                            &mut run,
                         );
                         let what = (t, n, with_lower, C);
-                        // The running sum after a row that ends at a tile boundary (where the
-                        // builder continues it): all of the row added.
-                        if t == 0 || n % t == 0 {
-                            let want: [E; C] = core::array::from_fn(|c| {
-                                (0..n).fold(run0[c], |s, j| {
-                                    s.wrapping_add(E::from(u16::from(texels[j * C + c])))
-                                })
-                            });
-                            assert_eq!(run, want, "{what:?}");
-                        }
                         assert_eq!(got, Some((want_b.len(), want_l.len())), "{what:?}");
                         assert_eq!(acc, want_acc, "{what:?}");
                         if with_lower {
@@ -1931,69 +1900,6 @@ mod row_step_tests {
             check::<u64, 1>(|v| v);
         }
         check::<u32, 2>(|v| v as u32);
-    }
-
-    /// Rows wider than the builder's chunks (512 positions; 480 for 3- and 5-texel tiles):
-    /// every corner of the layout equals the summed-area table computed directly, for one
-    /// level of 8, 3 and 16 texels, the packed flat layout (no level), 2 in 4 and 2 in 6 in 12
-    /// (the components above 0 from the boundaries of every chunk), one and two channels, a
-    /// width that ends inside a tile. Checks the chunks' running sums, bit offsets and
-    /// boundary counts (the other tests' textures are narrower than a chunk).
-    #[test]
-    fn rows_wider_than_a_chunk() {
-        use crate::NoCount;
-        fn check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
-            let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
-            let texels: Vec<u8> = (0..w * h * C)
-                .map(|_| {
-                    seed ^= seed << 13;
-                    seed ^= seed >> 7;
-                    seed ^= seed << 17;
-                    (seed >> 32) as u8
-                })
-                .collect();
-            let tex = Texture::<u8, C>::new(&texels, w, h).unwrap();
-            let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
-            let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
-            let t = Tiled::<u32, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
-            // S(x, y) row by row.
-            let mut s = std::vec![[0u32; C]; (w + 1) * (h + 1)];
-            for y in 1..=h {
-                for x in 1..=w {
-                    for c in 0..C {
-                        s[y * (w + 1) + x][c] = s[(y - 1) * (w + 1) + x][c]
-                            .wrapping_add(s[y * (w + 1) + x - 1][c])
-                            .wrapping_sub(s[(y - 1) * (w + 1) + x - 1][c])
-                            .wrapping_add(u32::from(texels[((y - 1) * w + x - 1) * C + c]));
-                    }
-                }
-            }
-            let step = if cfg!(miri) { 37 } else { 1 };
-            for y in 0..=h {
-                for x in (0..=w).step_by(step).chain([w]) {
-                    assert_eq!(
-                        t.corner(x, y, &mut NoCount),
-                        s[y * (w + 1) + x],
-                        "{spec:?} {w}x{h} C {C} at ({x}, {y})"
-                    );
-                }
-            }
-        }
-        let (w, h) = if cfg!(miri) { (1030, 3) } else { (1100, 17) };
-        for spec in [
-            TiledSpec::tiles(8, 8).unwrap(),
-            TiledSpec::tiles(3, 5).unwrap(),
-            TiledSpec::tiles(16, 2).unwrap(),
-            TiledSpec::FLAT_PACKED,
-            TiledSpec::square(&[2, 4]).unwrap(),
-            TiledSpec::square(&[2, 6, 12]).unwrap(),
-        ] {
-            check::<1>(w, h, spec);
-            check::<1>(w - 5, h, spec);
-            if !cfg!(miri) {
-                check::<2>(w, h, spec);
-            }
-        }
     }
 }
 
@@ -2158,104 +2064,39 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             .ok_or(short)?;
         let (bnd, local) = buf.split_at_mut_checked(split).ok_or(short)?;
         bnd.get_mut(..C).ok_or(short)?.fill(E::ZERO);
-        // acc_q += acc_{q-1} + the row's sums, split, and the local sums packed as row iy of
-        // component (0, q), in chunks of the row: each chunk's field row is packed while it is
-        // in L1, and the words it goes to are asked for (with `simd`) while it is computed (a
-        // table being built is usually not in cache). A chunk is a multiple of t (it starts at
-        // a tile boundary) and of 16 (the vector kernel's blocks), and its local sums are whole
-        // groups of 32 fields (32 t positions hold 32 (t - 1)): packed from a word boundary
-        // when the row starts at one. Wrapping additions: without a modulus every sum is at
-        // most the texture's total, which `E` holds (`check_value_type`); with one, only the
-        // low k bits are stored, and those of a sum depend only on the low k bits of its
-        // terms.
-        let chunk = if t == 0 {
-            512
-        } else {
-            t.checked_mul(32)
-                .and_then(|c| c.checked_mul(16usize.checked_div(t).unwrap_or(1).max(1)))
-                .ok_or(short)?
-        };
-        let comp0 = g.component(0, q).ok_or(short)?;
-        // The words of a component's row for positions x0..x1 (in proportion: the chunk's
-        // share of the row, for the prefetch only).
-        let part = |c: &Component, x0: usize, x1: usize| -> Option<core::ops::Range<usize>> {
-            let n = u64::try_from(n).ok()?;
-            let at = |x: usize| {
-                c.row_bits
-                    .checked_mul(u64::try_from(x).ok()?)?
-                    .checked_div(n)
-                    .map(|b| c.offset(0, iy).saturating_add(b))
-            };
-            let from = usize::try_from(at(x0)? / 32).ok()?;
-            let to = usize::try_from(at(x1)?.div_ceil(32)).ok()?;
-            Some(from..to)
-        };
-        let mut lower = lower;
-        let mut run = [E::ZERO; C];
-        let (mut kb, mut kl) = (0usize, 0usize);
-        let mut x0 = 0usize;
-        while x0 < n {
-            let x1 = n.min(x0.saturating_add(chunk));
-            let (v0, v1) = (
-                x0.checked_mul(C).ok_or(short)?,
-                x1.checked_mul(C).ok_or(short)?,
-            );
-            let lo = match &mut lower {
-                Some(l) => Some(l.get_mut(v0..v1).ok_or(short)?),
-                None => None,
-            };
-            let ahead = [
-                part(comp0, x0, x1)
-                    .and_then(|r| words.get(r))
-                    .unwrap_or(&[]),
-                g.component(1, q)
-                    .and_then(|c| part(c, x0, x1))
-                    .and_then(|r| words.get(r))
-                    .unwrap_or(&[]),
-            ];
-            let (b, l) = row_fields::<T, E, C>(
-                texels.get(v0..v1).ok_or(short)?,
-                lo,
-                acc.get_mut(v0..v1).ok_or(short)?,
-                t,
-                bnd.get_mut(kb.checked_add(C).ok_or(short)?..)
-                    .ok_or(short)?,
-                local,
-                ahead,
-                &mut run,
-            )
-            .ok_or(short)?;
-            let fields = local.get(..l).ok_or(short)?;
-            // kl fields of comp0.bits bits before these (the channels side by side).
-            let at = u64::try_from(kl)
-                .ok()
-                .and_then(|k| k.checked_mul(u64::from(comp0.bits)))
-                .and_then(|b| b.checked_add(comp0.offset(0, iy)))
-                .ok_or(short)?;
-            if !fields.is_empty() && !pack_fields(words, at, fields, comp0.bits) {
-                return Err(Error::StorageTooSmall {
-                    needed: g.words,
-                    got: words.len(),
-                });
+        // The words this row's fields go to in the first two x components (with `simd`, the
+        // row step asks for them while it computes: a table being built is usually not in
+        // cache, and the packing would wait on each line).
+        let mut ahead: [&[u32]; 2] = [&[], &[]];
+        for (p, a) in ahead.iter_mut().enumerate() {
+            if let Some(c) = g.component(p, q) {
+                let from = usize::try_from(c.offset(0, iy) / 32);
+                let to = usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
+                if let (Ok(from), Ok(to)) = (from, to) {
+                    *a = words.get(from..to).unwrap_or(&[]);
+                }
             }
-            kb = kb.checked_add(b).ok_or(short)?;
-            kl = kl.checked_add(l).ok_or(short)?;
-            x0 = x1;
         }
-        // The stored positions, counted as Geometry::new counted them: a mismatch would be a
-        // bug here, refused rather than written across the next row (the local sums were
-        // packed inside the component's row: no harm done).
-        let local_bits = u64::try_from(kl)
-            .ok()
-            .and_then(|c| c.checked_mul(u64::from(comp0.bits)));
-        if local_bits != Some(comp0.row_bits) {
-            return Err(short);
-        }
-        // Row iy of the other components (p >= 1, q): for each stored x, C_pq(x, y) = acc_q[x]
-        // - acc_q[trunc_{p+1}(x)], the same differences over the tile boundaries (x a multiple
-        // of t: positions x / t, blocks b_p / t), the top one (one level) being the boundaries
-        // themselves; packed as one stream (the components are stored row by row).
-        for p in 1..g.ax.components() {
+        // acc_q += acc_{q-1} + the row's prefix sums, split. Wrapping additions: without a
+        // modulus every sum is at most the texture's total, which `E` holds
+        // (`check_value_type`); with one, only the low k bits are stored, and those of a sum
+        // depend only on the low k bits of its terms.
+        let (kb, kl) = row_fields::<T, E, C>(
+            texels,
+            lower,
+            acc,
+            t,
+            bnd.get_mut(C..).ok_or(short)?,
+            local,
+            ahead,
+        )
+        .ok_or(short)?;
+        // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
+        // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
+        // p = 0: the local sums; p >= 1: the same differences over the tile boundaries (x a
+        // multiple of t: positions x / t, blocks b_p / t), the top one (one level) being the
+        // boundaries themselves.
+        for p in 0..g.ax.components() {
             let comp = g.component(p, q).ok_or(short)?;
             let big = if p < g.ax.levels {
                 g.ax.block(p.saturating_add(1))
@@ -2267,16 +2108,20 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 reason = "u32 -> usize is lossless (MAX_DIMENSION)"
             )]
             let (b, big) = (g.ax.block(p) as usize, big as usize);
-            // p >= 1: t = b_1 >= 2 divides b_p and b_{p+1}.
-            let (b, big) = (
-                b.checked_div(t).ok_or(short)?,
-                big.checked_div(t).ok_or(short)?,
-            );
-            let fields: &[E] = if b == 1 && big == 0 {
-                bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?
+            let fields: &[E] = if p == 0 {
+                local.get(..kl).ok_or(short)?
             } else {
-                let count = component_fields::<E, C>(bnd, nb, b, big, local).ok_or(short)?;
-                local.get(..count).ok_or(short)?
+                // p >= 1: t = b_1 >= 2 divides b_p and b_{p+1}.
+                let (b, big) = (
+                    b.checked_div(t).ok_or(short)?,
+                    big.checked_div(t).ok_or(short)?,
+                );
+                if b == 1 && big == 0 {
+                    bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?
+                } else {
+                    let count = component_fields::<E, C>(bnd, nb, b, big, local).ok_or(short)?;
+                    local.get(..count).ok_or(short)?
+                }
             };
             // The stored positions, counted as Geometry::new counted them: a mismatch would
             // be a bug here, refused rather than written across the next row.
