@@ -1901,6 +1901,68 @@ mod row_step_tests {
         }
         check::<u32, 2>(|v| v as u32);
     }
+
+    /// Rows of about a thousand positions (the other layout tests' textures are narrow):
+    /// every corner of the layout equals the summed-area table computed directly, for one
+    /// level of 8, 3 and 16 texels, the packed flat layout (no level), 2 in 4 and 2 in 6 in 12
+    /// (the components above 0 from the boundaries), one and two channels, a width that ends
+    /// inside a tile: many kernel blocks and whole groups of packed fields per row.
+    #[test]
+    fn rows_wider_than_a_chunk() {
+        use crate::NoCount;
+        fn check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
+            let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
+            let texels: Vec<u8> = (0..w * h * C)
+                .map(|_| {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    (seed >> 32) as u8
+                })
+                .collect();
+            let tex = Texture::<u8, C>::new(&texels, w, h).unwrap();
+            let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
+            let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+            let t = Tiled::<u32, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
+            // S(x, y) row by row.
+            let mut s = std::vec![[0u32; C]; (w + 1) * (h + 1)];
+            for y in 1..=h {
+                for x in 1..=w {
+                    for c in 0..C {
+                        s[y * (w + 1) + x][c] = s[(y - 1) * (w + 1) + x][c]
+                            .wrapping_add(s[y * (w + 1) + x - 1][c])
+                            .wrapping_sub(s[(y - 1) * (w + 1) + x - 1][c])
+                            .wrapping_add(u32::from(texels[((y - 1) * w + x - 1) * C + c]));
+                    }
+                }
+            }
+            let step = if cfg!(miri) { 37 } else { 1 };
+            for y in 0..=h {
+                for x in (0..=w).step_by(step).chain([w]) {
+                    assert_eq!(
+                        t.corner(x, y, &mut NoCount),
+                        s[y * (w + 1) + x],
+                        "{spec:?} {w}x{h} C {C} at ({x}, {y})"
+                    );
+                }
+            }
+        }
+        let (w, h) = if cfg!(miri) { (1030, 3) } else { (1100, 17) };
+        for spec in [
+            TiledSpec::tiles(8, 8).unwrap(),
+            TiledSpec::tiles(3, 5).unwrap(),
+            TiledSpec::tiles(16, 2).unwrap(),
+            TiledSpec::FLAT_PACKED,
+            TiledSpec::square(&[2, 4]).unwrap(),
+            TiledSpec::square(&[2, 6, 12]).unwrap(),
+        ] {
+            check::<1>(w, h, spec);
+            check::<1>(w - 5, h, spec);
+            if !cfg!(miri) {
+                check::<2>(w, h, spec);
+            }
+        }
+    }
 }
 
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
