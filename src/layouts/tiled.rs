@@ -1908,7 +1908,7 @@ mod row_step_tests {
     /// (the components above 0 from the boundaries), one and two channels, a width that ends
     /// inside a tile: many kernel blocks and whole groups of packed fields per row.
     #[test]
-    fn rows_wider_than_a_chunk() {
+    fn wide_rows_every_corner() {
         use crate::NoCount;
         fn check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
             let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
@@ -1947,7 +1947,8 @@ mod row_step_tests {
                 }
             }
         }
-        let (w, h) = if cfg!(miri) { (1030, 3) } else { (1100, 17) };
+        // Under Miri (slow): one row pair, the 8 x 8 tiles and the flat layout.
+        let (w, h) = if cfg!(miri) { (1030, 2) } else { (1100, 17) };
         for spec in [
             TiledSpec::tiles(8, 8).unwrap(),
             TiledSpec::tiles(3, 5).unwrap(),
@@ -1955,9 +1956,15 @@ mod row_step_tests {
             TiledSpec::FLAT_PACKED,
             TiledSpec::square(&[2, 4]).unwrap(),
             TiledSpec::square(&[2, 6, 12]).unwrap(),
-        ] {
+        ]
+        .into_iter()
+        .filter(|s| {
+            !cfg!(miri) || [TiledSpec::tiles(8, 8).unwrap(), TiledSpec::FLAT_PACKED].contains(s)
+        }) {
             check::<1>(w, h, spec);
-            check::<1>(w - 5, h, spec);
+            if !cfg!(miri) {
+                check::<1>(w - 5, h, spec);
+            }
             if !cfg!(miri) {
                 check::<2>(w, h, spec);
             }
