@@ -1975,12 +1975,15 @@ mod row_step_tests {
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
 /// component (two for one level of tiles) plus one row of fields.
 ///
-/// Per row `y`: the row's prefix sums are added to the accumulator of level 0 (the flat build's
-/// row step, the vectorized kernel with `simd`); when `y` ends a block of level `q >= 1` the
-/// accumulators below are folded into level `q` (one pass over a row, once per tile row); then
-/// for each x level `p` the row's fields `C_pq(X, y) = acc_q[X] - acc_q[trunc_{p+1}(X)]` are
-/// formed into the field row and packed, 32 at a time, as row `iy` of component `(p, q)`: each
-/// output word written once, in order (see the module's "Storage order").
+/// Per row `y`, ending a block of y level `q` (`q = 0` for 7 rows in 8 with 8 x 8 tiles): one
+/// pass over the row (`row_fields`; with `simd`, one AVX-512 kernel) adds the row's sums and the
+/// level below (`q >= 1`) into the accumulator of level `q`, which holds the sums in the form
+/// the fields are read in (inside a tile the local sum, at a tile boundary the total), and
+/// splits it into the row's local sums `C_0q(X, y)` and tile boundaries; the local sums are
+/// packed as row `iy` of component `(0, q)`, and the fields of the x levels above, `C_pq(X, y)
+/// = acc_q[X] - acc_q[trunc_{p+1}(X)]`, are formed over the boundaries and packed as row `iy`
+/// of component `(p, q)`: 32 fields at a time, each output word written once, in order (see
+/// the module's "Storage order").
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
