@@ -717,6 +717,26 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     local: &mut [E],
     ahead: [&[u32]; 2],
 ) -> Option<(usize, usize)> {
+    tiled_row_with::<T, E, C>(Kernel::best(), texels, lower, acc, tile, bnd, local, ahead)
+}
+
+/// [`tiled_row`] with `kernel` (which must be [`Kernel::available`]): AVX-512 VNNI for tiles of
+/// 2, 4, 8 and 16 texels; AVX2 for tiles of 8 (each 128-bit half of its 16 texels is one tile,
+/// see `tiled256`); `None` otherwise.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the row step's slices, as tiled_row's, plus the kernel"
+)]
+fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
+    kernel: Kernel,
+    texels: &[T],
+    lower: Option<&mut [E]>,
+    acc: &mut [E],
+    tile: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+    ahead: [&[u32]; 2],
+) -> Option<(usize, usize)> {
     let t = as_u8(texels)?;
     let acc = as_u32_mut::<E, C>(acc)?;
     let mut lower = match lower {
@@ -725,7 +745,8 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     };
     let bnd = as_u32_mut::<E, C>(bnd)?;
     let local = as_u32_mut::<E, C>(local)?;
-    if Kernel::best() != Kernel::Avx512Vnni || !matches!(tile, 2 | 4 | 8 | 16) {
+    let wide = kernel == Kernel::Avx512Vnni && matches!(tile, 2 | 4 | 8 | 16);
+    if !(wide || kernel == Kernel::Avx2 && tile == 8) {
         return None;
     }
     let n = t.len();
@@ -759,11 +780,20 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
             }
         };
     }
-    // SAFETY: AVX-512F and VNNI are available (Kernel::best(), argument 1); the kernel reads
-    // `t[..16 blocks]`, reads and writes `acc` and (if not null) `lower` there, and writes
-    // `bnd[..16 blocks / tile]` and `local[..16 blocks - 16 blocks / tile]`, all inside the
-    // slices (checked above; 16 blocks <= n); the five slices are distinct borrows.
-    let mut run = unsafe { run!(2 4 8 16) };
+    // SAFETY: the kernel's features are available (`kernel` is, argument 1: AVX-512F and VNNI
+    // for `wide`, else AVX2); the kernel reads `t[..16 blocks]`, reads and writes `acc` and (if
+    // not null) `lower` there, and writes `bnd[..16 blocks / tile]` and `local[..16 blocks -
+    // 16 blocks / tile]`, all inside the slices (checked above; 16 blocks <= n); the five
+    // slices are distinct borrows.
+    let mut run = unsafe {
+        if wide {
+            run!(2 4 8 16)
+        } else if lp.is_null() {
+            tiled256::kernel::<false>(tp, lp, ap, bp, op, blocks, ahead)
+        } else {
+            tiled256::kernel::<true>(tp, lp, ap, bp, op, blocks, ahead)
+        }
+    };
     // The tail after the last full block, portable: the same values (it starts at a tile
     // boundary: 16 blocks is a multiple of the tile).
     let i0 = blocks * BLOCK;
@@ -956,6 +986,105 @@ mod tiled512 {
     }
 }
 
+mod tiled256 {
+    use super::*;
+
+    /// [`tiled_row`]'s kernel for AVX2 and tiles of 8 texels, over `blocks` blocks of 16;
+    /// returns the running sum after them. Per block: the texels widened to 16-bit lanes, the
+    /// prefix inside each 128-bit half by three shift-and-adds (`vpslldq` shifts inside each
+    /// half: a half is a tile, so these are the sums since the tile start; at most 8 x 255, no
+    /// wrap), widened to 32 bits (lanes 0..8 `lo`, 8..16 `hi`); the boundary lanes (7 of each)
+    /// get the running sum, and `hi`'s also the first tile's total; the rows added and stored;
+    /// the local sums stored as two 8-lane stores 7 apart (each one's lane 7, a boundary, is
+    /// overwritten by the next store: through a copy for the last block's `hi`), the two
+    /// boundaries extracted.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; the pointers as for `tiled512::kernel` with `TILE = 8`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn kernel<const LOWER: bool>(
+        t: *const u8,
+        lower: *mut u32,
+        acc: *mut u32,
+        bnd: *mut u32,
+        local: *mut u32,
+        blocks: usize,
+        ahead: [&[u32]; 2],
+    ) -> u32 {
+        const GROUP: usize = 8;
+        let lines = ahead.map(|a| a.len().div_ceil(16));
+        let mut asked = [0usize; 2];
+        let seven = _mm256_set1_epi32(7);
+        let zero = _mm256_setzero_si256();
+        let mut carry = zero;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
+            for r in 0..2 {
+                // As in tiled512::kernel: the lines due by the end of the group.
+                let due = (lines[r] * end).div_ceil(blocks);
+                while asked[r] < due {
+                    // A hint (reads and writes nothing, never faults); inside the slice.
+                    _mm_prefetch::<_MM_HINT_T0>(
+                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
+                    );
+                    asked[r] += 1;
+                }
+            }
+            for b in from..end {
+                let i = BLOCK * b;
+                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+                // contract); the boundaries go to bnd[2 b], bnd[2 b + 1] < 2 blocks; the local
+                // stores write local[14 b .. 14 b + 15] for b + 1 < blocks (inside
+                // local[..14 blocks]), local[14 b .. 14 b + 14] for the last block.
+                unsafe {
+                    let mut p = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+                    p = _mm256_add_epi16(p, _mm256_slli_si256(p, 2));
+                    p = _mm256_add_epi16(p, _mm256_slli_si256(p, 4));
+                    p = _mm256_add_epi16(p, _mm256_slli_si256(p, 8));
+                    let lo = _mm256_cvtepu16_epi32(_mm256_castsi256_si128(p));
+                    let hi = _mm256_cvtepu16_epi32(_mm256_extracti128_si256(p, 1));
+                    // The tiles' totals in every lane.
+                    let t0 = _mm256_permutevar8x32_epi32(lo, seven);
+                    let t1 = _mm256_permutevar8x32_epi32(hi, seven);
+                    let mut a = _mm256_blend_epi32(lo, _mm256_add_epi32(lo, carry), 0x80);
+                    let mut h = _mm256_blend_epi32(
+                        hi,
+                        _mm256_add_epi32(hi, _mm256_add_epi32(carry, t0)),
+                        0x80,
+                    );
+                    carry = _mm256_add_epi32(carry, _mm256_add_epi32(t0, t1));
+                    if LOWER {
+                        a = _mm256_add_epi32(a, _mm256_loadu_si256(lower.add(i).cast()));
+                        h = _mm256_add_epi32(h, _mm256_loadu_si256(lower.add(i + 8).cast()));
+                        _mm256_storeu_si256(lower.add(i).cast(), zero);
+                        _mm256_storeu_si256(lower.add(i + 8).cast(), zero);
+                    }
+                    a = _mm256_add_epi32(a, _mm256_loadu_si256(acc.add(i).cast()));
+                    h = _mm256_add_epi32(h, _mm256_loadu_si256(acc.add(i + 8).cast()));
+                    _mm256_storeu_si256(acc.add(i).cast(), a);
+                    _mm256_storeu_si256(acc.add(i + 8).cast(), h);
+                    let lo_out = local.add(14 * b);
+                    _mm256_storeu_si256(lo_out.cast(), a);
+                    if b + 1 < blocks {
+                        _mm256_storeu_si256(lo_out.add(7).cast(), h);
+                    } else {
+                        let mut last = [0u32; 8];
+                        _mm256_storeu_si256(last.as_mut_ptr().cast(), h);
+                        core::ptr::copy_nonoverlapping(last.as_ptr(), lo_out.add(7), 7);
+                    }
+                    bnd.add(2 * b)
+                        .write_unaligned(_mm256_extract_epi32::<7>(a) as u32);
+                    bnd.add(2 * b + 1)
+                        .write_unaligned(_mm256_extract_epi32::<7>(h) as u32);
+                }
+            }
+            from = end;
+        }
+        _mm256_cvtsi256_si32(carry) as u32
+    }
+}
+
 #[cfg(test)]
 #[allow(
     clippy::unwrap_used,
@@ -1044,8 +1173,9 @@ mod tests {
         (bnd, local)
     }
 
-    /// `tiled_row` (the best kernel; AVX-512 VNNI, where it runs: else it must decline) equals
-    /// the reference for every tile width 2, 4, 8 and 16, every row width up to 6 blocks and a
+    /// `tiled_row_with` every kernel this CPU runs (under Miri: those the build enables; AVX-512
+    /// VNNI for every tile width, AVX2 for tiles of 8; otherwise it must decline) equals the
+    /// reference for every tile width 2, 4, 8 and 16, every row width up to 6 blocks and a
     /// tail, with and without the level below, texels all 0, all 255, a ramp and random,
     /// accumulators near `u32::MAX` (wrapping): the accumulators, the cleared level below, the
     /// boundaries and the local sums, their counts, and nothing written past them (the slices
@@ -1056,7 +1186,6 @@ mod tests {
         extern crate std;
         use std::vec::Vec;
         const MAX: usize = 6 * BLOCK + 7;
-        let avx512 = Kernel::best() == Kernel::Avx512Vnni;
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         let widths: Vec<usize> = if cfg!(miri) {
             std::vec![0, 15, 16, 17, 33, 48, 50]
@@ -1064,71 +1193,84 @@ mod tests {
             (0..=MAX).collect()
         };
         let words = [0u32; 100];
-        for tile in [2usize, 4, 8, 16] {
-            for &n in &widths {
-                for pattern in 0..4 {
-                    if cfg!(miri) && pattern != 3 {
-                        continue;
-                    }
-                    let t: Vec<u8> = (0..n)
-                        .map(|i| match pattern {
-                            0 => 0,
-                            1 => 255,
-                            2 => (i % 256) as u8,
-                            _ => rng(&mut seed),
-                        })
-                        .collect();
-                    let acc0: Vec<u32> = (0..n)
-                        .map(|i| (u32::MAX - 1000).wrapping_add(37 * i as u32))
-                        .collect();
-                    let low0: Vec<u32> = (0..n)
-                        .map(|i| 3 * i as u32 + u32::from(rng(&mut seed)))
-                        .collect();
-                    for with_lower in [false, true] {
-                        let (nb, nl) = (n / tile, n - n / tile);
-                        let mut acc = acc0.clone();
-                        let mut low = low0.clone();
-                        let mut bnd = std::vec![7u32; nb + 20];
-                        let mut local = std::vec![9u32; nl + 20];
-                        let ahead = [&words[..n.min(100)], &words[..3]];
-                        let got = tiled_row::<u8, u32, 1>(
-                            &t,
-                            with_lower.then_some(&mut low[..]),
-                            &mut acc,
-                            tile,
-                            &mut bnd[..nb],
-                            &mut local[..nl],
-                            ahead,
-                        );
-                        let what = (tile, n, pattern, with_lower);
-                        if !avx512 {
-                            assert_eq!(got, None, "{what:?}");
-                            assert_eq!(acc, acc0, "{what:?}");
+        let mut ran = [0usize; 3];
+        for (k, kernel) in Kernel::ALL
+            .into_iter()
+            .enumerate()
+            .filter(|(_, k)| k.available())
+        {
+            for tile in [2usize, 4, 8, 16] {
+                let runs = kernel == Kernel::Avx512Vnni || kernel == Kernel::Avx2 && tile == 8;
+                for &n in &widths {
+                    for pattern in 0..4 {
+                        if cfg!(miri) && pattern != 3 {
                             continue;
                         }
-                        let mut want_acc = acc0.clone();
-                        let mut want_low = low0.clone();
-                        let (want_b, want_l) = tiled_reference(
-                            &t,
-                            with_lower.then_some(&mut want_low[..]),
-                            &mut want_acc,
-                            tile,
-                        );
-                        assert_eq!(got, Some((nb, nl)), "{what:?}");
-                        assert_eq!(acc, want_acc, "{what:?}");
-                        assert_eq!(
-                            low,
-                            if with_lower { want_low } else { low0.clone() },
-                            "{what:?}"
-                        );
-                        assert_eq!(bnd[..nb], want_b[..], "{what:?}");
-                        assert_eq!(local[..nl], want_l[..], "{what:?}");
-                        assert!(bnd[nb..].iter().all(|&v| v == 7), "{what:?}: past bnd");
-                        assert!(local[nl..].iter().all(|&v| v == 9), "{what:?}: past local");
+                        let t: Vec<u8> = (0..n)
+                            .map(|i| match pattern {
+                                0 => 0,
+                                1 => 255,
+                                2 => (i % 256) as u8,
+                                _ => rng(&mut seed),
+                            })
+                            .collect();
+                        let acc0: Vec<u32> = (0..n)
+                            .map(|i| (u32::MAX - 1000).wrapping_add(37 * i as u32))
+                            .collect();
+                        let low0: Vec<u32> = (0..n)
+                            .map(|i| 3 * i as u32 + u32::from(rng(&mut seed)))
+                            .collect();
+                        for with_lower in [false, true] {
+                            let (nb, nl) = (n / tile, n - n / tile);
+                            let mut acc = acc0.clone();
+                            let mut low = low0.clone();
+                            let mut bnd = std::vec![7u32; nb + 20];
+                            let mut local = std::vec![9u32; nl + 20];
+                            let ahead = [&words[..n.min(100)], &words[..3]];
+                            let got = tiled_row_with::<u8, u32, 1>(
+                                kernel,
+                                &t,
+                                with_lower.then_some(&mut low[..]),
+                                &mut acc,
+                                tile,
+                                &mut bnd[..nb],
+                                &mut local[..nl],
+                                ahead,
+                            );
+                            let what = (kernel.name(), tile, n, pattern, with_lower);
+                            if !runs {
+                                assert_eq!(got, None, "{what:?}");
+                                assert_eq!(acc, acc0, "{what:?}");
+                                continue;
+                            }
+                            ran[k] += 1;
+                            let mut want_acc = acc0.clone();
+                            let mut want_low = low0.clone();
+                            let (want_b, want_l) = tiled_reference(
+                                &t,
+                                with_lower.then_some(&mut want_low[..]),
+                                &mut want_acc,
+                                tile,
+                            );
+                            assert_eq!(got, Some((nb, nl)), "{what:?}");
+                            assert_eq!(acc, want_acc, "{what:?}");
+                            assert_eq!(
+                                low,
+                                if with_lower { want_low } else { low0.clone() },
+                                "{what:?}"
+                            );
+                            assert_eq!(bnd[..nb], want_b[..], "{what:?}");
+                            assert_eq!(local[..nl], want_l[..], "{what:?}");
+                            assert!(bnd[nb..].iter().all(|&v| v == 7), "{what:?}: past bnd");
+                            assert!(local[nl..].iter().all(|&v| v == 9), "{what:?}: past local");
+                        }
                     }
                 }
             }
         }
+        // Every vector kernel this CPU has ran (under Miri: those the build enables).
+        assert_eq!(ran[1] > 0, Kernel::Avx2.available());
+        assert_eq!(ran[2] > 0, Kernel::Avx512Vnni.available());
         // Declined: a tile width the kernel has no table for, another type, short slices.
         let (mut acc, mut b, mut l) = ([1u32; 40], [0u32; 40], [0u32; 40]);
         let t = [3u8; 32];
