@@ -12,8 +12,10 @@
 //!
 //! Covered: `u8` texels into `u32` entries, one channel, the unchecked build (after the width
 //! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
-//! and the modular and tiled builders' rows. Everything else (and [`crate::Sat::build_checked`])
-//! takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
+//! and the modular builder's rows; the tiled builder's row step ([`tiled_row`]: the row's sums,
+//! the fold of the level below and the split into local sums and tile boundaries in one pass,
+//! with AVX-512 VNNI for tiles of 2 to 16 texels or AVX2 for tiles of 8). Everything else (and
+//! [`crate::Sat::build_checked`]) takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
 //! 11 to 32 bits into 32-bit words that the modular and tiled builders do per row (the portable
 //! packer, width-specialized scalar code, costs about a cycle per field). The kernel is the widest this CPU runs, detected once at run time from CPUID
 //! and XGETBV (no `std` needed), as OpenCV and the standard library's
@@ -40,6 +42,12 @@
 //! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
 //!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
 //!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
+//!    [`tiled_row`] checks its slices' lengths against the row (`acc`, `lower`: `n`; `bnd`:
+//!    `n / tile`; `local`: `n - n / tile`) before its kernel touches block `b` (16 texels) of
+//!    `t`, `acc` and `lower` for `b < n / 16` only; the boundary and local-sum stores stay inside
+//!    the values the whole row writes (a 16- or 8-lane store whose last lanes the next block
+//!    overwrites, a masked store or a copy of the exact count for the last block; see the
+//!    kernels); the prefetches of `ahead` access no memory.
 //!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
