@@ -2118,8 +2118,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             None => None,
         };
         // The tile width b_1 (0 for an axis without levels: every position local), and the
-        // first row split: the boundaries after acc[0] = 0 ((n / t + 1) C values), then the
-        // local sums (the rest: (n - n / t) C, as many as there are).
+        // first scratch row split: the boundaries after acc[0] = 0 ((n / t + 1) C values), then
+        // the local sums (the rest: (n - n / t) C, as many as there are).
         #[allow(
             clippy::as_conversions,
             reason = "u32 -> usize is lossless (MAX_DIMENSION)"
@@ -2149,7 +2149,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 }
             }
         }
-        // acc_q += acc_{q-1} + the row's prefix sums, split. Wrapping additions: without a
+        // acc_q += acc_{q-1} + the row's sums (row_fields: in the accumulators' form), split.
+        // Wrapping additions: without a
         // modulus every sum is at most the texture's total, which `E` holds
         // (`check_value_type`); with one, only the low k bits are stored, and those of a sum
         // depend only on the low k bits of its terms.
