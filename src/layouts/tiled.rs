@@ -2150,10 +2150,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             }
         }
         // acc_q += acc_{q-1} + the row's sums (row_fields: in the accumulators' form), split.
-        // Wrapping additions: without a
-        // modulus every sum is at most the texture's total, which `E` holds
-        // (`check_value_type`); with one, only the low k bits are stored, and those of a sum
-        // depend only on the low k bits of its terms.
+        // Wrapping additions: without a modulus every sum is at most the texture's total, which
+        // `E` holds (`check_value_type`); with one, only the low k bits are stored, and those
+        // of a sum depend only on the low k bits of its terms.
         let (kb, kl) = row_fields::<T, E, C>(
             texels,
             lower,
