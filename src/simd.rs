@@ -12,8 +12,10 @@
 //!
 //! Covered: `u8` texels into `u32` entries, one channel, the unchecked build (after the width
 //! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
-//! and the modular and tiled builders' rows. Everything else (and [`crate::Sat::build_checked`])
-//! takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
+//! and the modular builder's rows; the tiled builder's row step ([`tiled_row`]: the row's sums,
+//! the fold of the level below and the split into local sums and tile boundaries in one pass,
+//! with AVX-512 VNNI for tiles of 2 to 16 texels or AVX2 for tiles of 8). Everything else (and
+//! [`crate::Sat::build_checked`]) takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
 //! 11 to 32 bits into 32-bit words that the modular and tiled builders do per row (the portable
 //! packer, width-specialized scalar code, costs about a cycle per field). The kernel is the widest this CPU runs, detected once at run time from CPUID
 //! and XGETBV (no `std` needed), as OpenCV and the standard library's
@@ -40,6 +42,12 @@
 //! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
 //!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
 //!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
+//!    [`tiled_row`] checks its slices' lengths against the row (`acc`, `lower`: `n`; `bnd`:
+//!    `n / tile`; `local`: `n - n / tile`) before its kernel touches block `b` (16 texels) of
+//!    `t`, `acc` and `lower` for `b < n / 16` only; the boundary and local-sum stores stay inside
+//!    the values the whole row writes (a 16- or 8-lane store whose last lanes the next block
+//!    overwrites, a masked store or a copy of the exact count for the last block; see the
+//!    kernels); the prefetches of `ahead` access no memory.
 //!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
@@ -689,6 +697,405 @@ mod pack512 {
     }
 }
 
+/// The tiled builder's row step (`layouts::tiled`'s `row_fields`, the same values) with
+/// AVX-512 VNNI, one pass over the row: for `u8` texels, `u32` entries, one channel and tiles
+/// of `tile` in {2, 4, 8, 16} texels along x (a tile never straddles a 16-lane block).
+///
+/// Position `x = 1..=n` is at index `x - 1` of `acc` and `lower`. Per `x`, with `r(x)` the
+/// row's prefix sum `t_0 + ... + t_{x-1}` at a boundary (`x` a multiple of `tile`) and the sum
+/// `t_{trunc(x)} + ... + t_{x-1}` inside its tile elsewhere (`trunc(x)`: `x` rounded down to
+/// a multiple of `tile`): `acc[x] += lower[x] + r(x)` (wrapping; `lower` optional and cleared
+/// as it is read), then the boundaries' `acc[x]` into `bnd` and the others into `local`, in
+/// order of `x`. Returns the values written to `bnd` and `local`; `None` (nothing written) for
+/// other types, tile widths or CPUs, or slices shorter than the row needs (`acc`, `lower`: `n`;
+/// `bnd`: `n / tile`; `local`: `n - n / tile`).
+///
+/// Per block of 16 texels: four `vpdpbusd` with weights that give each lane its `r(x)` (the
+/// build kernel's triangle, cut at the tile starts for the local lanes), the running sum added
+/// to the boundary lanes (a masked add), the rows added and stored, and two `vpermd` with
+/// stores compacting the lanes into the two streams (the lane pattern is the same in every
+/// block: constant tables per tile width, [`TILE_TABLES`]). While it computes, it prefetches
+/// the words of `ahead` (where the caller will pack the fields), spread over the blocks.
+pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    lower: Option<&mut [E]>,
+    acc: &mut [E],
+    tile: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+    ahead: [&[u32]; 2],
+) -> Option<(usize, usize)> {
+    tiled_row_with::<T, E, C>(Kernel::best(), texels, lower, acc, tile, bnd, local, ahead)
+}
+
+/// [`tiled_row`] with `kernel` (which must be [`Kernel::available`]): AVX-512 VNNI for tiles of
+/// 2, 4, 8 and 16 texels; AVX2 for tiles of 8 (each 128-bit half of its 16 texels is one tile,
+/// see `tiled256`); `None` otherwise.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the row step's slices, as tiled_row's, plus the kernel"
+)]
+fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
+    kernel: Kernel,
+    texels: &[T],
+    lower: Option<&mut [E]>,
+    acc: &mut [E],
+    tile: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+    ahead: [&[u32]; 2],
+) -> Option<(usize, usize)> {
+    let t = as_u8(texels)?;
+    let acc = as_u32_mut::<E, C>(acc)?;
+    let mut lower = match lower {
+        None => None,
+        Some(l) => Some(as_u32_mut::<E, C>(l)?),
+    };
+    let bnd = as_u32_mut::<E, C>(bnd)?;
+    let local = as_u32_mut::<E, C>(local)?;
+    let wide = kernel == Kernel::Avx512Vnni && matches!(tile, 2 | 4 | 8 | 16);
+    if !(wide || kernel == Kernel::Avx2 && tile == 8) {
+        return None;
+    }
+    let n = t.len();
+    let nb = n / tile;
+    if acc.len() < n
+        || lower.as_ref().is_some_and(|l| l.len() < n)
+        || bnd.len() < nb
+        || local.len() < n - nb
+    {
+        return None;
+    }
+    let blocks = n / BLOCK;
+    let lp = match &mut lower {
+        Some(l) => l.as_mut_ptr(),
+        None => core::ptr::null_mut(),
+    };
+    let (tp, ap, bp, op) = (
+        t.as_ptr(),
+        acc.as_mut_ptr(),
+        bnd.as_mut_ptr(),
+        local.as_mut_ptr(),
+    );
+    macro_rules! run {
+        ($($tile:literal)*) => {
+            match (tile, lp.is_null()) {
+                $(
+                    ($tile, true) => tiled512::kernel::<false, $tile>(tp, lp, ap, bp, op, blocks, ahead),
+                    ($tile, false) => tiled512::kernel::<true, $tile>(tp, lp, ap, bp, op, blocks, ahead),
+                )*
+                _ => return None,
+            }
+        };
+    }
+    // SAFETY: the kernel's features are available (`kernel` is, argument 1: AVX-512F and VNNI
+    // for `wide`, else AVX2); the kernel reads `t[..16 blocks]`, reads and writes `acc` and (if
+    // not null) `lower` there, and writes `bnd[..16 blocks / tile]` and `local[..16 blocks -
+    // 16 blocks / tile]`, all inside the slices (checked above; 16 blocks <= n); the five
+    // slices are distinct borrows.
+    let mut run = unsafe {
+        if wide {
+            run!(2 4 8 16)
+        } else if lp.is_null() {
+            tiled256::kernel::<false>(tp, lp, ap, bp, op, blocks, ahead)
+        } else {
+            tiled256::kernel::<true>(tp, lp, ap, bp, op, blocks, ahead)
+        }
+    };
+    // The tail after the last full block, portable: the same values (it starts at a tile
+    // boundary: 16 blocks is a multiple of the tile).
+    let i0 = blocks * BLOCK;
+    let (mut kb, mut kl) = (i0 / tile, i0 - i0 / tile);
+    let mut inner = 0u32;
+    for i in i0..n {
+        run = run.wrapping_add(u32::from(t[i]));
+        inner = inner.wrapping_add(u32::from(t[i]));
+        let boundary = (i + 1) % tile == 0;
+        let mut v = acc[i].wrapping_add(if boundary { run } else { inner });
+        if let Some(l) = &mut lower {
+            v = v.wrapping_add(l[i]);
+            l[i] = 0;
+        }
+        acc[i] = v;
+        if boundary {
+            bnd[kb] = v;
+            kb += 1;
+            inner = 0;
+        } else {
+            local[kl] = v;
+            kl += 1;
+        }
+    }
+    Some((kb, kl))
+}
+
+/// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds position `x =
+/// 16 b + l + 1`, texel `j` of the block (`16 b + j`) counts in every `x > 16 b + j`. With `r =
+/// (l + 1) mod tile`, lane `l` is a tile boundary if `r = 0`: it takes the block's prefix sum
+/// (texels `j <= l`; plus the running sum before the block); else a local sum, which takes the
+/// texels of its tile before it, `l + 1 - r <= j <= l`.
+struct TileTable {
+    /// `vpdpbusd` weights, as the build kernel's (`avx512vnni::W`): byte `j` of lane `l` of
+    /// group `g` is 1 when texel `4 g + j` counts in lane `l`.
+    w: [[i32; 16]; 4],
+    /// The boundary lanes (bit `l`).
+    bmask: u16,
+    /// The local lanes in order, then zeros (`vpermd` indices).
+    local: [i32; 16],
+    /// The boundary lanes in order, then zeros.
+    bnd: [i32; 16],
+}
+
+const fn tile_table(tile: usize) -> TileTable {
+    let mut tab = TileTable {
+        w: [[0; 16]; 4],
+        bmask: 0,
+        local: [0; 16],
+        bnd: [0; 16],
+    };
+    let (mut nl, mut nb) = (0, 0);
+    let mut l = 0;
+    while l < 16 {
+        let r = (l + 1) % tile;
+        // The first texel lane l takes: 0 at a boundary, its tile's first otherwise.
+        let first = if r == 0 { 0 } else { l + 1 - r };
+        if r == 0 {
+            tab.bmask |= 1 << l;
+            tab.bnd[nb] = l as i32;
+            nb += 1;
+        } else {
+            tab.local[nl] = l as i32;
+            nl += 1;
+        }
+        let mut j = first;
+        while j <= l {
+            tab.w[j / 4][l] |= 1 << (8 * (j % 4));
+            j += 1;
+        }
+        l += 1;
+    }
+    tab
+}
+
+/// Tile widths 2, 4, 8, 16 (index `log2 tile - 1`).
+static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8), tile_table(16)];
+
+mod tiled512 {
+    use super::*;
+
+    /// The kernel of [`tiled_row`] over `blocks` blocks of 16 texels, tiles of `TILE` texels
+    /// (2, 4, 8 or 16); returns the running sum after them.
+    ///
+    /// Stores: `acc` (and `lower`) whole; per block the `nb = 16 / TILE` boundaries by one
+    /// store of exactly `nb` lanes (4 to 32 bytes); the `nl = 16 - nb` local sums by a
+    /// 16-lane store whose last `nb` lanes the next block's store overwrites (`nl >= 8`, so it
+    /// ends inside the `blocks nl` values written in all), a masked store for the last block.
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F and AVX-512 VNNI; `t` is valid for reads and `acc` (and, if
+    /// `LOWER`, `lower`) for reads and writes of `16 blocks` values; `bnd` for writes of
+    /// `16 blocks / TILE` and `local` of `16 blocks - 16 blocks / TILE` values; no two of them
+    /// overlap; `TILE` is 2, 4, 8 or 16.
+    #[target_feature(enable = "avx512f,avx512vnni")]
+    pub(super) unsafe fn kernel<const LOWER: bool, const TILE: usize>(
+        t: *const u8,
+        lower: *mut u32,
+        acc: *mut u32,
+        bnd: *mut u32,
+        local: *mut u32,
+        blocks: usize,
+        ahead: [&[u32]; 2],
+    ) -> u32 {
+        // Prefetching: the 64-byte lines of each `ahead` slice, spread over the first half of
+        // the blocks, asked for a group of blocks at a time (the bookkeeping once per group).
+        const GROUP: usize = 8;
+        let lines = ahead.map(|a| a.len().div_ceil(16));
+        let mut asked = [0usize; 2];
+        let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
+        let w = table.w.map(|g| {
+            let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
+            _mm512_setr_epi32(
+                a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
+            )
+        });
+        // SAFETY: each table row is 16 i32: one 64-byte unaligned load.
+        let (local_ix, bnd_ix) = unsafe {
+            (
+                _mm512_loadu_si512(table.local.as_ptr().cast()),
+                _mm512_loadu_si512(table.bnd.as_ptr().cast()),
+            )
+        };
+        let bmask = table.bmask;
+        let nb = BLOCK / TILE;
+        let nl = BLOCK - nb;
+        let ml = ((1u32 << nl) - 1) as u16;
+        let last = _mm512_set1_epi32(15);
+        let zero = _mm512_setzero_si512();
+        let mut carry = zero;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
+            for r in 0..2 {
+                // The lines due by the end of the group: all of them by the middle of the row
+                // (2 lines end / blocks, rounded up: the last lines are packed soon after the
+                // row step, so they need the lead; asking for all of them at once measured
+                // slower at 4096^2). A slice holds fewer than 2^32 words and blocks < 2^28: no
+                // overflow.
+                let due = (lines[r] * 2 * end).div_ceil(blocks).min(lines[r]);
+                while asked[r] < due {
+                    // A hint (reads and writes nothing, never faults); 16 asked < len: inside
+                    // the slice.
+                    _mm_prefetch::<_MM_HINT_T0>(
+                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
+                    );
+                    asked[r] += 1;
+                }
+            }
+            for b in from..end {
+                let i = BLOCK * b;
+                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+                // contract). The boundary store writes nb lanes at bnd[b nb..], inside
+                // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
+                // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
+                // last block.
+                unsafe {
+                    let tp = t.add(i);
+                    let g =
+                        |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
+                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                    // The running sum before the block into the boundary lanes only (lane 15, a
+                    // boundary, holds the block's total).
+                    let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
+                    carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                    if LOWER {
+                        v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
+                        _mm512_storeu_si512(lower.add(i).cast(), zero);
+                    }
+                    v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
+                    _mm512_storeu_si512(acc.add(i).cast(), v);
+                    let loc = _mm512_permutexvar_epi32(local_ix, v);
+                    let lo = local.add(b * nl);
+                    if b + 1 < blocks {
+                        _mm512_storeu_si512(lo.cast(), loc);
+                    } else {
+                        _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
+                    }
+                    let bv = _mm512_permutexvar_epi32(bnd_ix, v);
+                    let bo = bnd.add(b * nb);
+                    match nb {
+                        1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
+                        2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
+                        4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
+                        _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
+                    }
+                }
+            }
+            from = end;
+        }
+        _mm512_cvtsi512_si32(carry) as u32
+    }
+}
+
+mod tiled256 {
+    use super::*;
+
+    /// [`tiled_row`]'s kernel for AVX2 and tiles of 8 texels, over `blocks` blocks of 16;
+    /// returns the running sum after them. Per block: the texels widened to 16-bit lanes, the
+    /// prefix inside each 128-bit half by three shift-and-adds (`vpslldq` shifts inside each
+    /// half: a half is a tile, so these are the sums since the tile start; at most 8 x 255, no
+    /// wrap), widened to 32 bits (lanes 0..8 `lo`, 8..16 `hi`); the boundary lanes (7 of each)
+    /// get the running sum, and `hi`'s also the first tile's total; the rows added and stored;
+    /// the local sums stored as two 8-lane stores 7 apart (each one's lane 7, a boundary, is
+    /// overwritten by the next store: through a copy for the last block's `hi`), the two
+    /// boundaries extracted.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; the pointers as for `tiled512::kernel` with `TILE = 8`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn kernel<const LOWER: bool>(
+        t: *const u8,
+        lower: *mut u32,
+        acc: *mut u32,
+        bnd: *mut u32,
+        local: *mut u32,
+        blocks: usize,
+        ahead: [&[u32]; 2],
+    ) -> u32 {
+        const GROUP: usize = 8;
+        let lines = ahead.map(|a| a.len().div_ceil(16));
+        let mut asked = [0usize; 2];
+        let seven = _mm256_set1_epi32(7);
+        let zero = _mm256_setzero_si256();
+        let mut carry = zero;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
+            for r in 0..2 {
+                // As in tiled512::kernel: the lines due by the end of the group.
+                let due = (lines[r] * 2 * end).div_ceil(blocks).min(lines[r]);
+                while asked[r] < due {
+                    // A hint (reads and writes nothing, never faults); inside the slice.
+                    _mm_prefetch::<_MM_HINT_T0>(
+                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
+                    );
+                    asked[r] += 1;
+                }
+            }
+            for b in from..end {
+                let i = BLOCK * b;
+                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+                // contract); the boundaries go to bnd[2 b], bnd[2 b + 1] < 2 blocks; the local
+                // stores write local[14 b .. 14 b + 15] for b + 1 < blocks (inside
+                // local[..14 blocks]), local[14 b .. 14 b + 14] for the last block.
+                unsafe {
+                    let mut p = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+                    p = _mm256_add_epi16(p, _mm256_slli_si256(p, 2));
+                    p = _mm256_add_epi16(p, _mm256_slli_si256(p, 4));
+                    p = _mm256_add_epi16(p, _mm256_slli_si256(p, 8));
+                    let lo = _mm256_cvtepu16_epi32(_mm256_castsi256_si128(p));
+                    let hi = _mm256_cvtepu16_epi32(_mm256_extracti128_si256(p, 1));
+                    // The tiles' totals in every lane.
+                    let t0 = _mm256_permutevar8x32_epi32(lo, seven);
+                    let t1 = _mm256_permutevar8x32_epi32(hi, seven);
+                    let mut a = _mm256_blend_epi32(lo, _mm256_add_epi32(lo, carry), 0x80);
+                    let mut h = _mm256_blend_epi32(
+                        hi,
+                        _mm256_add_epi32(hi, _mm256_add_epi32(carry, t0)),
+                        0x80,
+                    );
+                    carry = _mm256_add_epi32(carry, _mm256_add_epi32(t0, t1));
+                    if LOWER {
+                        a = _mm256_add_epi32(a, _mm256_loadu_si256(lower.add(i).cast()));
+                        h = _mm256_add_epi32(h, _mm256_loadu_si256(lower.add(i + 8).cast()));
+                        _mm256_storeu_si256(lower.add(i).cast(), zero);
+                        _mm256_storeu_si256(lower.add(i + 8).cast(), zero);
+                    }
+                    a = _mm256_add_epi32(a, _mm256_loadu_si256(acc.add(i).cast()));
+                    h = _mm256_add_epi32(h, _mm256_loadu_si256(acc.add(i + 8).cast()));
+                    _mm256_storeu_si256(acc.add(i).cast(), a);
+                    _mm256_storeu_si256(acc.add(i + 8).cast(), h);
+                    let lo_out = local.add(14 * b);
+                    _mm256_storeu_si256(lo_out.cast(), a);
+                    if b + 1 < blocks {
+                        _mm256_storeu_si256(lo_out.add(7).cast(), h);
+                    } else {
+                        let mut last = [0u32; 8];
+                        _mm256_storeu_si256(last.as_mut_ptr().cast(), h);
+                        core::ptr::copy_nonoverlapping(last.as_ptr(), lo_out.add(7), 7);
+                    }
+                    bnd.add(2 * b)
+                        .write_unaligned(_mm256_extract_epi32::<7>(a) as u32);
+                    bnd.add(2 * b + 1)
+                        .write_unaligned(_mm256_extract_epi32::<7>(h) as u32);
+                }
+            }
+            from = end;
+        }
+        _mm256_cvtsi256_si32(carry) as u32
+    }
+}
+
 #[cfg(test)]
 #[allow(
     clippy::unwrap_used,
@@ -696,6 +1103,7 @@ mod pack512 {
     reason = "tests: a panic is a failed test"
 )]
 mod tests {
+    extern crate std;
     use super::*;
 
     /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
@@ -746,6 +1154,174 @@ mod tests {
         assert_eq!(pack_u32(&mut w, &[1u32; 64], MIN_PACK_BITS - 1), 0);
         assert_eq!(pack_u32(&mut w, &[1u32; 64], 33), 0);
         assert_eq!(w, [0; 64]);
+    }
+
+    /// The reference of `tiled_row`, written independently: per position `x = 1..=n`, the sum
+    /// of the row's texels since the last multiple of `tile` (all of them up to `x` at a
+    /// multiple) added to `acc` with `lower`, summed texel by texel; then every value at a
+    /// multiple of `tile` into `bnd` and every other one into `local`.
+    fn tiled_reference(
+        t: &[u8],
+        lower: Option<&mut [u32]>,
+        acc: &mut [u32],
+        tile: usize,
+    ) -> (std::vec::Vec<u32>, std::vec::Vec<u32>) {
+        let (mut bnd, mut local) = (std::vec::Vec::new(), std::vec::Vec::new());
+        let mut lower = lower;
+        for x in 1..=t.len() {
+            let from = if x % tile == 0 { 0 } else { x - x % tile };
+            let r = t[from..x]
+                .iter()
+                .fold(0u32, |s, &v| s.wrapping_add(u32::from(v)));
+            let l = lower.as_mut().map_or(0, |l| core::mem::take(&mut l[x - 1]));
+            acc[x - 1] = acc[x - 1].wrapping_add(l).wrapping_add(r);
+            if x % tile == 0 {
+                bnd.push(acc[x - 1]);
+            } else {
+                local.push(acc[x - 1]);
+            }
+        }
+        (bnd, local)
+    }
+
+    /// `tiled_row_with` every kernel this CPU runs (under Miri: those the build enables; AVX-512
+    /// VNNI for every tile width, AVX2 for tiles of 8; otherwise it must decline) equals the
+    /// reference for every tile width 2, 4, 8 and 16, every row width up to 6 blocks and a
+    /// tail, with and without the level below, texels all 0, all 255, a ramp and random,
+    /// accumulators near `u32::MAX` (wrapping): the accumulators, the cleared level below, the
+    /// boundaries and the local sums, their counts, and nothing written past them (the slices
+    /// are exactly as long as the row needs, then sentinels). Also: other types, tile widths
+    /// and short slices decline, writing nothing.
+    #[test]
+    fn tiled_row_equals_the_reference() {
+        extern crate std;
+        use std::vec::Vec;
+        const MAX: usize = 6 * BLOCK + 7;
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let widths: Vec<usize> = if cfg!(miri) {
+            std::vec![0, 15, 16, 17, 33, 48, 50]
+        } else {
+            (0..=MAX).collect()
+        };
+        let words = [0u32; 100];
+        let mut ran = [0usize; 3];
+        for (k, kernel) in Kernel::ALL
+            .into_iter()
+            .enumerate()
+            .filter(|(_, k)| k.available())
+        {
+            for tile in [2usize, 4, 8, 16] {
+                let runs = kernel == Kernel::Avx512Vnni || kernel == Kernel::Avx2 && tile == 8;
+                for &n in &widths {
+                    for pattern in 0..4 {
+                        if cfg!(miri) && pattern != 3 {
+                            continue;
+                        }
+                        let t: Vec<u8> = (0..n)
+                            .map(|i| match pattern {
+                                0 => 0,
+                                1 => 255,
+                                2 => (i % 256) as u8,
+                                _ => rng(&mut seed),
+                            })
+                            .collect();
+                        let acc0: Vec<u32> = (0..n)
+                            .map(|i| (u32::MAX - 1000).wrapping_add(37 * i as u32))
+                            .collect();
+                        let low0: Vec<u32> = (0..n)
+                            .map(|i| 3 * i as u32 + u32::from(rng(&mut seed)))
+                            .collect();
+                        for with_lower in [false, true] {
+                            let (nb, nl) = (n / tile, n - n / tile);
+                            let mut acc = acc0.clone();
+                            let mut low = low0.clone();
+                            let mut bnd = std::vec![7u32; nb + 20];
+                            let mut local = std::vec![9u32; nl + 20];
+                            let ahead = [&words[..n.min(100)], &words[..3]];
+                            let got = tiled_row_with::<u8, u32, 1>(
+                                kernel,
+                                &t,
+                                with_lower.then_some(&mut low[..]),
+                                &mut acc,
+                                tile,
+                                &mut bnd[..nb],
+                                &mut local[..nl],
+                                ahead,
+                            );
+                            let what = (kernel.name(), tile, n, pattern, with_lower);
+                            if !runs {
+                                assert_eq!(got, None, "{what:?}");
+                                assert_eq!(acc, acc0, "{what:?}");
+                                continue;
+                            }
+                            ran[k] += 1;
+                            let mut want_acc = acc0.clone();
+                            let mut want_low = low0.clone();
+                            let (want_b, want_l) = tiled_reference(
+                                &t,
+                                with_lower.then_some(&mut want_low[..]),
+                                &mut want_acc,
+                                tile,
+                            );
+                            assert_eq!(got, Some((nb, nl)), "{what:?}");
+                            assert_eq!(acc, want_acc, "{what:?}");
+                            assert_eq!(
+                                low,
+                                if with_lower { want_low } else { low0.clone() },
+                                "{what:?}"
+                            );
+                            assert_eq!(bnd[..nb], want_b[..], "{what:?}");
+                            assert_eq!(local[..nl], want_l[..], "{what:?}");
+                            assert!(bnd[nb..].iter().all(|&v| v == 7), "{what:?}: past bnd");
+                            assert!(local[nl..].iter().all(|&v| v == 9), "{what:?}: past local");
+                        }
+                    }
+                }
+            }
+        }
+        // Every vector kernel this CPU has ran (under Miri: those the build enables).
+        assert_eq!(ran[1] > 0, Kernel::Avx2.available());
+        assert_eq!(ran[2] > 0, Kernel::Avx512Vnni.available());
+        // Declined: a tile width the kernel has no table for, another type, short slices.
+        let (mut acc, mut b, mut l) = ([1u32; 40], [0u32; 40], [0u32; 40]);
+        let t = [3u8; 32];
+        let none: [&[u32]; 2] = [&[], &[]];
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 3, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 32, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc[..31], 8, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b[..3], &mut l, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b, &mut l[..27], none),
+            None
+        );
+        let mut low = [5u32; 31];
+        assert_eq!(
+            tiled_row::<u8, u32, 1>(&t, Some(&mut low), &mut acc, 8, &mut b, &mut l, none),
+            None
+        );
+        let mut acc16 = [1u16; 40];
+        let (mut b16, mut l16) = ([0u16; 40], [0u16; 40]);
+        assert_eq!(
+            tiled_row::<u8, u16, 1>(&t, None, &mut acc16, 8, &mut b16, &mut l16, none),
+            None
+        );
+        assert_eq!(
+            tiled_row::<u8, u32, 2>(&[3u8; 64], None, &mut [1u32; 80], 8, &mut b, &mut l, none),
+            None
+        );
+        assert_eq!((acc, b, l, low), ([1; 40], [0; 40], [0; 40], [5; 31]));
     }
 
     /// The portable row (the reference): running sum plus the entry above.

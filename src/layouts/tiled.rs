@@ -1508,8 +1508,11 @@ fn component_fields<E: Entry, const C: usize>(
     out: &mut [E],
 ) -> Option<usize> {
     let at = |x: usize| x.checked_mul(C);
-    // The local sums of the common power-of-two tiles: whole tiles by code specialized for the
-    // width; the last, partial tile below.
+    // The differences inside blocks of the common powers of two (the builder calls this over
+    // the tile boundaries, for hierarchical tiles): whole blocks by code specialized for the
+    // width; the last, partial block below. Not on 32-bit targets (flash: the general loop
+    // does the same, and the local sums themselves are `split_fields`'s).
+    #[cfg(target_pointer_width = "64")]
     let (mut k, mut base) = match (b, big) {
         (1, 2) => local_fields::<E, C, 2>(acc, n, out)?,
         (1, 4) => local_fields::<E, C, 4>(acc, n, out)?,
@@ -1518,6 +1521,8 @@ fn component_fields<E: Entry, const C: usize>(
         (1, 32) => local_fields::<E, C, 32>(acc, n, out)?,
         _ => (0, 0),
     };
+    #[cfg(not(target_pointer_width = "64"))]
+    let (mut k, mut base) = (0usize, 0usize);
     if big != 0 && base >= n {
         return Some(k);
     }
@@ -1587,6 +1592,7 @@ fn component_fields<E: Entry, const C: usize>(
 /// of the row (those whose `B - 1` positions are all at most `n`): per block, `acc[base + d] -
 /// acc[base]` for `d = 1..B`, loops of constant length that LLVM unrolls and vectorizes.
 /// Returns the values written and the first block not done.
+#[cfg(target_pointer_width = "64")]
 fn local_fields<E: Entry, const C: usize, const B: usize>(
     acc: &[E],
     n: usize,
@@ -1605,9 +1611,13 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
         let (tiles, _) = acc.as_chunks::<B>();
         let step = B.checked_sub(1)?;
         let mut at = 0usize;
-        for a in tiles.iter().take(blocks) {
+        for (t, a) in tiles.iter().take(blocks).enumerate() {
             let lo = a.first().copied().unwrap_or(E::ZERO);
-            let d = out.get_mut(at..)?.first_chunk_mut::<B>()?;
+            // No room for the array (a row of few blocks over the tile boundaries): the
+            // blocks from here on go through the caller's general loop.
+            let Some(d) = out.get_mut(at..).and_then(|o| o.first_chunk_mut::<B>()) else {
+                return Some((at, t.checked_mul(B)?));
+            };
             for (j, d) in d.iter_mut().enumerate() {
                 *d = a
                     .get(j.wrapping_add(1))
@@ -1633,15 +1643,347 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     Some((dst.len(), blocks.checked_mul(B)?))
 }
 
+/// The row step of [`TiledBuilder::push_row`] on one accumulator row `acc` (position `x =
+/// 1..=n` at `(x - 1) C`, `C` values each) and, when the row ends a block of a level above 0,
+/// the level below, `lower` (same form; added into `acc` and cleared).
+///
+/// The accumulators are kept in the form the fields are read from. With the tile width `t =
+/// b_1` (0 for an axis without levels: no boundary), a *boundary* `x` (a multiple of `t`) holds
+/// the sum `A(x)` of the rows' prefix sums `t_0 + ... + t_{x-1}`; every other `x` holds the
+/// local sum `A(x) - A(trunc_1(x))`, the sum of the texels of `[trunc_1(x), x)` over the rows
+/// (`A(0) = 0`; for `t = 0`, `A(x)` itself). Per row: `acc[x] += lower[x] + r(x)` with `r(x)` the
+/// row's prefix sum at a boundary (the running sum) and its sum from `trunc_1(x)` elsewhere
+/// (the running sum inside the tile), per channel, wrapping; then the boundaries are copied
+/// into `bnd` and the local sums into `local`, in order of `x`: the fields of the first two x
+/// components, without a subtraction. Returns the values written to each; `None` if a slice
+/// is too short (never, for the builder's rows). With `simd`, one vectorized pass where it
+/// applies ([`crate::simd::tiled_row`], the same values).
+fn row_fields<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    lower: Option<&mut [E]>,
+    acc: &mut [E],
+    t: usize,
+    bnd: &mut [E],
+    local: &mut [E],
+    ahead: [&[u32]; 2],
+) -> Option<(usize, usize)> {
+    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+    let _ = ahead;
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    let lower = match lower {
+        // The kernel needs its own borrow of `lower`: try it, then fall through.
+        Some(l) => {
+            if let Some(done) =
+                crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local, ahead)
+            {
+                return Some(done);
+            }
+            Some(l)
+        }
+        None => {
+            if let Some(done) =
+                crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local, ahead)
+            {
+                return Some(done);
+            }
+            None
+        }
+    };
+    if let Some(l) = lower {
+        for (h, b) in acc.iter_mut().zip(l.iter_mut()) {
+            *h = h.wrapping_add(*b);
+            *b = E::ZERO;
+        }
+    }
+    // Tiles of common power-of-two widths by code specialized for the width; on 32-bit
+    // targets (flash) only 8, the width of the plans' tiles.
+    if C == 1 {
+        #[cfg(target_pointer_width = "64")]
+        match t {
+            2 => return row_tiles::<T, E, 2>(texels, acc, bnd, local),
+            4 => return row_tiles::<T, E, 4>(texels, acc, bnd, local),
+            8 => return row_tiles::<T, E, 8>(texels, acc, bnd, local),
+            16 => return row_tiles::<T, E, 16>(texels, acc, bnd, local),
+            _ => {}
+        }
+        #[cfg(not(target_pointer_width = "64"))]
+        if t == 8 {
+            return row_tiles::<T, E, 8>(texels, acc, bnd, local);
+        }
+    }
+    let (mut kb, mut kl) = (0usize, 0usize);
+    let (mut run, mut inner) = ([E::ZERO; C], [E::ZERO; C]);
+    let mut d = 0usize;
+    for (a, tx) in acc.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
+        // d counts the positions since the last boundary (t = 0: never one, and the running
+        // sum inside the "tile" is the running sum).
+        d = d.wrapping_add(1);
+        let boundary = d == t;
+        for (((a, tx), r), i) in a.iter_mut().zip(tx).zip(&mut run).zip(&mut inner) {
+            let v = E::from(tx.to_u16());
+            *r = r.wrapping_add(v);
+            *i = i.wrapping_add(v);
+            *a = a.wrapping_add(if boundary { *r } else { *i });
+        }
+        if boundary {
+            let end = kb.checked_add(C)?;
+            bnd.get_mut(kb..end)?.copy_from_slice(a);
+            kb = end;
+            inner = [E::ZERO; C];
+            d = 0;
+        } else {
+            let end = kl.checked_add(C)?;
+            local.get_mut(kl..end)?.copy_from_slice(a);
+            kl = end;
+        }
+    }
+    Some((kb, kl))
+}
+
+/// [`row_fields`] for one channel and tiles of `T` texels: per whole tile, the running sum
+/// inside the tile (a chain of `T` additions, independent from tile to tile) added into the
+/// `T - 1` local sums, and the tile's total into the running sum (one addition per tile on
+/// the chain from tile to tile) added into the boundary; the local sums copied out as an array
+/// of `T` (the last overwritten by the next tile's first: constant lengths); the partial tile
+/// at the end, value by value.
+fn row_tiles<T: Texel, E: Entry, const TW: usize>(
+    texels: &[T],
+    acc: &mut [E],
+    bnd: &mut [E],
+    local: &mut [E],
+) -> Option<(usize, usize)> {
+    let step = TW.checked_sub(1)?;
+    let (tiles, rest) = acc.as_chunks_mut::<TW>();
+    let (tx, tx_rest) = texels.as_chunks::<TW>();
+    let (mut kb, mut kl) = (0usize, 0usize);
+    let mut run = E::ZERO;
+    for (a, tx) in tiles.iter_mut().zip(tx) {
+        // Each value written to the accumulator and to the field row from a register (a
+        // reload of the accumulator as a vector would wait on the scalar stores).
+        let mut inner = E::ZERO;
+        match local.get_mut(kl..).and_then(|s| s.first_chunk_mut::<TW>()) {
+            Some(d) => {
+                for (j, ((a, t), d)) in a.iter_mut().zip(tx).zip(d.iter_mut()).enumerate() {
+                    inner = inner.wrapping_add(E::from(t.to_u16()));
+                    if j < step {
+                        *a = a.wrapping_add(inner);
+                    } else {
+                        run = run.wrapping_add(inner);
+                        *a = a.wrapping_add(run);
+                    }
+                    *d = *a;
+                }
+            }
+            None => {
+                // The last tile of a row that ends at a tile boundary: no room for the array.
+                let end = kl.checked_add(step)?;
+                let mut d = local.get_mut(kl..end)?.iter_mut();
+                for (j, (a, t)) in a.iter_mut().zip(tx).enumerate() {
+                    inner = inner.wrapping_add(E::from(t.to_u16()));
+                    if j < step {
+                        *a = a.wrapping_add(inner);
+                    } else {
+                        run = run.wrapping_add(inner);
+                        *a = a.wrapping_add(run);
+                    }
+                    if let Some(d) = d.next() {
+                        *d = *a;
+                    }
+                }
+            }
+        }
+        *bnd.get_mut(kb)? = a.last().copied().unwrap_or(E::ZERO);
+        kb = kb.checked_add(1)?;
+        kl = kl.checked_add(step)?;
+    }
+    let end = kl.checked_add(rest.len())?;
+    let mut inner = E::ZERO;
+    for ((d, a), t) in local.get_mut(kl..end)?.iter_mut().zip(rest).zip(tx_rest) {
+        inner = inner.wrapping_add(E::from(t.to_u16()));
+        *a = a.wrapping_add(inner);
+        *d = *a;
+    }
+    Some((kb, end))
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    clippy::unwrap_used,
+    clippy::needless_range_loop,
+    reason = "tests: a panic is a failed test; the reference indexes by position on purpose"
+)]
+mod row_step_tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// `row_fields` (with `simd`, the kernel where it applies, else the portable loops: `u8`
+    /// into `u32` and `u64`, one and two channels) equals a value-by-value reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
+    /// positions, with and without the level below: accumulators, the cleared level below,
+    /// boundaries, local sums and their counts.
+    #[test]
+    fn row_fields_equal_the_reference() {
+        fn check<E: Entry + core::fmt::Debug, const C: usize>(to: fn(u64) -> E) {
+            let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+            let mut next = move || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed
+            };
+            for t in [0usize, 2, 3, 4, 5, 8, 16] {
+                // Under Miri (slow): no level, a non-power of two and 8; short rows and a few
+                // long ones.
+                if cfg!(miri) && ![0, 3, 8].contains(&t) {
+                    continue;
+                }
+                for n in 0..=70usize {
+                    if cfg!(miri) && n > 17 && ![33, 64, 70].contains(&n) {
+                        continue;
+                    }
+                    for with_lower in [false, true] {
+                        let texels: Vec<u8> = (0..n * C).map(|_| next() as u8).collect();
+                        let acc0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
+                        let low0: Vec<E> = (0..n * C).map(|_| to(next() >> 8)).collect();
+                        // Reference, value by value: the texels since the last boundary
+                        // (all of them at a boundary; t = 0: all), summed afresh per x.
+                        let (mut want_acc, mut want_b, mut want_l) =
+                            (acc0.clone(), Vec::new(), Vec::new());
+                        for x in 1..=n {
+                            let boundary = t != 0 && x % t == 0;
+                            let from = if boundary || t == 0 { 0 } else { x - x % t };
+                            for c in 0..C {
+                                let i = (x - 1) * C + c;
+                                let r = (from..x).fold(E::ZERO, |s, j| {
+                                    s.wrapping_add(E::from(u16::from(texels[j * C + c])))
+                                });
+                                let l = if with_lower { low0[i] } else { E::ZERO };
+                                want_acc[i] = acc0[i].wrapping_add(l).wrapping_add(r);
+                            }
+                            let v = &want_acc[(x - 1) * C..x * C];
+                            if boundary {
+                                want_b.extend_from_slice(v);
+                            } else {
+                                want_l.extend_from_slice(v);
+                            }
+                        }
+                        let mut acc = acc0.clone();
+                        let mut low = low0.clone();
+                        let mut bnd = std::vec![to(7); want_b.len()];
+                        let mut local = std::vec![to(9); want_l.len()];
+                        let got = row_fields::<u8, E, C>(
+                            &texels,
+                            with_lower.then_some(&mut low[..]),
+                            &mut acc,
+                            t,
+                            &mut bnd,
+                            &mut local,
+                            [&[], &[]],
+                        );
+                        let what = (t, n, with_lower, C);
+                        assert_eq!(got, Some((want_b.len(), want_l.len())), "{what:?}");
+                        assert_eq!(acc, want_acc, "{what:?}");
+                        if with_lower {
+                            assert!(low.iter().all(|&v| v == E::ZERO), "{what:?}");
+                        }
+                        assert_eq!(bnd, want_b, "{what:?}");
+                        assert_eq!(local, want_l, "{what:?}");
+                    }
+                }
+            }
+        }
+        check::<u32, 1>(|v| v as u32);
+        if !cfg!(miri) {
+            check::<u64, 1>(|v| v);
+        }
+        check::<u32, 2>(|v| v as u32);
+    }
+
+    /// Rows of about a thousand positions (the other layout tests' textures are narrow):
+    /// every corner of the layout equals the summed-area table computed directly, for one
+    /// level of 8, 3 and 16 texels, the packed flat layout (no level), 2 in 4 and 2 in 6 in 12
+    /// (the components above 0 from the boundaries), one and two channels, a width that ends
+    /// inside a tile: many kernel blocks and whole groups of packed fields per row.
+    #[test]
+    fn wide_rows_every_corner() {
+        use crate::NoCount;
+        fn check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
+            let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
+            let texels: Vec<u8> = (0..w * h * C)
+                .map(|_| {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    (seed >> 32) as u8
+                })
+                .collect();
+            let tex = Texture::<u8, C>::new(&texels, w, h).unwrap();
+            let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
+            let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+            let t = Tiled::<u32, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
+            // S(x, y) row by row.
+            let mut s = std::vec![[0u32; C]; (w + 1) * (h + 1)];
+            for y in 1..=h {
+                for x in 1..=w {
+                    for c in 0..C {
+                        s[y * (w + 1) + x][c] = s[(y - 1) * (w + 1) + x][c]
+                            .wrapping_add(s[y * (w + 1) + x - 1][c])
+                            .wrapping_sub(s[(y - 1) * (w + 1) + x - 1][c])
+                            .wrapping_add(u32::from(texels[((y - 1) * w + x - 1) * C + c]));
+                    }
+                }
+            }
+            let step = if cfg!(miri) { 37 } else { 1 };
+            for y in 0..=h {
+                for x in (0..=w).step_by(step).chain([w]) {
+                    assert_eq!(
+                        t.corner(x, y, &mut NoCount),
+                        s[y * (w + 1) + x],
+                        "{spec:?} {w}x{h} C {C} at ({x}, {y})"
+                    );
+                }
+            }
+        }
+        // Under Miri (slow): one row pair, the 8 x 8 tiles and the flat layout.
+        let (w, h) = if cfg!(miri) { (1030, 2) } else { (1100, 17) };
+        for spec in [
+            TiledSpec::tiles(8, 8).unwrap(),
+            TiledSpec::tiles(3, 5).unwrap(),
+            TiledSpec::tiles(16, 2).unwrap(),
+            TiledSpec::FLAT_PACKED,
+            TiledSpec::square(&[2, 4]).unwrap(),
+            TiledSpec::square(&[2, 6, 12]).unwrap(),
+        ]
+        .into_iter()
+        .filter(|s| {
+            !cfg!(miri) || [TiledSpec::tiles(8, 8).unwrap(), TiledSpec::FLAT_PACKED].contains(s)
+        }) {
+            check::<1>(w, h, spec);
+            if !cfg!(miri) {
+                check::<1>(w - 5, h, spec);
+            }
+            if !cfg!(miri) {
+                check::<2>(w, h, spec);
+            }
+        }
+    }
+}
+
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
 /// component (two for one level of tiles) plus one row of fields.
 ///
-/// Per row `y`: the row's prefix sums are added to the accumulator of level 0 (the flat build's
-/// row step, the vectorized kernel with `simd`); when `y` ends a block of level `q >= 1` the
-/// accumulators below are folded into level `q` (one pass over a row, once per tile row); then
-/// for each x level `p` the row's fields `C_pq(X, y) = acc_q[X] - acc_q[trunc_{p+1}(X)]` are
-/// formed into the field row and packed, 32 at a time, as row `iy` of component `(p, q)`: each
-/// output word written once, in order (see the module's "Storage order").
+/// Per row `y`, ending a block of y level `q` (`q = 0` for 7 rows in 8 with 8 x 8 tiles): one
+/// pass over the row (`row_fields`; with `simd`, one AVX-512 kernel) adds the row's sums and the
+/// level below (`q >= 1`) into the accumulator of level `q`, which holds the sums in the form
+/// the fields are read in (inside a tile the local sum, at a tile boundary the total), and
+/// splits it into the row's local sums `C_0q(X, y)` and tile boundaries; the local sums are
+/// packed as row `iy` of component `(0, q)`, and the fields of the x levels above, `C_pq(X, y)
+/// = acc_q[X] - acc_q[trunc_{p+1}(X)]`, are formed over the boundaries and packed as row `iy`
+/// of component `(p, q)`: 32 fields at a time, each output word written once, in order (see
+/// the module's "Storage order").
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
@@ -1721,13 +2063,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             needed: row_len,
             got: scratch.len(),
         };
-        // The first scratch row holds one row of fields at a time; then one accumulator row per
-        // y component, acc_q[x] at x C.. for x = 0..=w (x = 0 always zero).
+        // The first scratch row holds the current row's tile boundaries and local sums (then
+        // the fields of the x components above 0); then one accumulator row per y component,
+        // acc_q[x] at x C.. for x = 0..=w (x = 0 always zero).
         let (buf, accs) = scratch.split_at_mut_checked(row_len).ok_or(short)?;
-        // acc_0 += the row's prefix sums. Wrapping additions: without a modulus every sum is at
-        // most the texture's total, which `E` holds (`check_value_type`); with one, only the
-        // low k bits are stored, and those of a sum depend only on the low k bits of its terms.
-        add_prefix_row::<T, E, C>(texels, accs.get_mut(C..row_len).ok_or(short)?);
         // Row y ends a block of exactly one y component: that of its lowest non-zero digit
         // (a multiple of b_q with d_q != 0).
         #[allow(
@@ -1748,13 +2087,14 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let iy = dy.index.get(q).copied().unwrap_or(0);
         // Invariant between rows: acc_j holds the rows in [trunc_{j+1}(y), trunc_j(y)) for
         // j >= 1 and acc_0 those in [trunc_1(y), y). Here y is a multiple of b_1, ..., b_q, so
-        // folding acc_{j-1} into acc_j for j = 1..=q (and clearing it) leaves in acc_q the rows
-        // of I_q(y) = [trunc_{q+1}(y), y), the sums C_pq(., y) need, and restores the
-        // invariant: one pass over a row when y ends a tile row (1 row in b_1), none otherwise.
-        for j in 1..=q {
+        // adding the row and acc_0, ..., acc_{q-1} into acc_q (and clearing them) leaves in
+        // acc_q the rows of I_q(y) = [trunc_{q+1}(y), y], the sums C_pq(., y) need, and restores
+        // the invariant. Levels 1..q-1 first (a pass over a row, 1 row in b_2); acc_{q-1} goes
+        // with the row, in the row step's own pass.
+        for j in 1..q {
             #[allow(
                 clippy::arithmetic_side_effects,
-                reason = "j <= q <= Ly < MAX_LEVELS + 1 and (Ly + 2) row_len fits usize \
+                reason = "j < q <= Ly < MAX_LEVELS + 1 and (Ly + 2) row_len fits usize \
                           (scratch_needed): no overflow"
             )]
             let (lower, upper) = accs.split_at_mut_checked(j * row_len).ok_or(short)?;
@@ -1767,11 +2107,67 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             }
         }
         let from = q.checked_mul(row_len).ok_or(short)?;
-        let acc = accs
-            .get(from..from.checked_add(row_len).ok_or(short)?)
+        let (below, at_q) = accs.split_at_mut_checked(from).ok_or(short)?;
+        let acc = at_q.get_mut(C..row_len).ok_or(short)?;
+        let lower = match from.checked_sub(row_len) {
+            Some(f) => Some(
+                below
+                    .get_mut(f.checked_add(C).ok_or(short)?..)
+                    .ok_or(short)?,
+            ),
+            None => None,
+        };
+        // The tile width b_1 (0 for an axis without levels: every position local), and the
+        // first scratch row split: the boundaries after acc[0] = 0 ((n / t + 1) C values), then
+        // the local sums (the rest: (n - n / t) C, as many as there are).
+        #[allow(
+            clippy::as_conversions,
+            reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+        )]
+        let t = if g.ax.levels >= 1 {
+            g.ax.block(1) as usize
+        } else {
+            0
+        };
+        let nb = n.checked_div(t).unwrap_or(0);
+        let split = nb
+            .checked_add(1)
+            .and_then(|b| b.checked_mul(C))
             .ok_or(short)?;
+        let (bnd, local) = buf.split_at_mut_checked(split).ok_or(short)?;
+        bnd.get_mut(..C).ok_or(short)?.fill(E::ZERO);
+        // The words this row's fields go to in the first two x components (with `simd`, the
+        // row step asks for them while it computes: a table being built is usually not in
+        // cache, and the packing would wait on each line).
+        let mut ahead: [&[u32]; 2] = [&[], &[]];
+        for (p, a) in ahead.iter_mut().enumerate() {
+            if let Some(c) = g.component(p, q) {
+                let from = usize::try_from(c.offset(0, iy) / 32);
+                let to = usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
+                if let (Ok(from), Ok(to)) = (from, to) {
+                    *a = words.get(from..to).unwrap_or(&[]);
+                }
+            }
+        }
+        // acc_q += acc_{q-1} + the row's sums (row_fields: in the accumulators' form), split.
+        // Wrapping additions: without a modulus every sum is at most the texture's total, which
+        // `E` holds (`check_value_type`); with one, only the low k bits are stored, and those
+        // of a sum depend only on the low k bits of its terms.
+        let (kb, kl) = row_fields::<T, E, C>(
+            texels,
+            lower,
+            acc,
+            t,
+            bnd.get_mut(C..).ok_or(short)?,
+            local,
+            ahead,
+        )
+        .ok_or(short)?;
         // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
         // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
+        // p = 0: the local sums; p >= 1: the same differences over the tile boundaries (x a
+        // multiple of t: positions x / t, blocks b_p / t), the top one (one level) being the
+        // boundaries themselves.
         for p in 0..g.ax.components() {
             let comp = g.component(p, q).ok_or(short)?;
             let big = if p < g.ax.levels {
@@ -1784,11 +2180,24 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 reason = "u32 -> usize is lossless (MAX_DIMENSION)"
             )]
             let (b, big) = (g.ax.block(p) as usize, big as usize);
-            let count = component_fields::<E, C>(acc, n, b, big, buf).ok_or(short)?;
-            let fields = buf.get(..count).ok_or(short)?;
+            let fields: &[E] = if p == 0 {
+                local.get(..kl).ok_or(short)?
+            } else {
+                // p >= 1: t = b_1 >= 2 divides b_p and b_{p+1}.
+                let (b, big) = (
+                    b.checked_div(t).ok_or(short)?,
+                    big.checked_div(t).ok_or(short)?,
+                );
+                if b == 1 && big == 0 {
+                    bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?
+                } else {
+                    let count = component_fields::<E, C>(bnd, nb, b, big, local).ok_or(short)?;
+                    local.get(..count).ok_or(short)?
+                }
+            };
             // The stored positions, counted as Geometry::new counted them: a mismatch would
             // be a bug here, refused rather than written across the next row.
-            let bits = u64::try_from(count)
+            let bits = u64::try_from(fields.len())
                 .ok()
                 .and_then(|c| c.checked_mul(u64::from(comp.bits)));
             if bits != Some(comp.row_bits) {
