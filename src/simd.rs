@@ -880,6 +880,52 @@ const fn tile_table(tile: usize) -> TileTable {
 /// Tile widths 2, 4, 8, 16 (index `log2 tile - 1`).
 static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8), tile_table(16)];
 
+/// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`]):
+/// the 64-byte lines of each `ahead` slice (the words the row's fields go to), spread over the
+/// first half of the row's blocks, asked for a group of blocks at a time.
+struct Prefetch<'a> {
+    ahead: [&'a [u32]; 2],
+    lines: [usize; 2],
+    asked: [usize; 2],
+}
+
+impl<'a> Prefetch<'a> {
+    fn new(ahead: [&'a [u32]; 2]) -> Self {
+        Prefetch {
+            ahead,
+            lines: ahead.map(|a| a.len().div_ceil(16)),
+            asked: [0; 2],
+        }
+    }
+
+    /// Asks for the lines due by the end of the group ending at block `end` of `blocks`: all of
+    /// them by the middle of the row (2 lines end / blocks, rounded up: the last lines are
+    /// packed soon after the row step, so they need the lead; asking for all of them at once
+    /// measured slower at 4096^2). A slice holds fewer than 2^32 words and blocks < 2^28: no
+    /// overflow.
+    #[inline(always)]
+    fn ask(&mut self, end: usize, blocks: usize) {
+        for r in 0..2 {
+            let due = (self.lines[r] * 2 * end)
+                .div_ceil(blocks)
+                .min(self.lines[r]);
+            while self.asked[r] < due {
+                // A hint (reads and writes nothing, never faults); 16 asked < len: inside the
+                // slice. SAFETY: SSE is baseline on x86-64; the hint dereferences nothing.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(
+                        self.ahead[r]
+                            .as_ptr()
+                            .wrapping_add(16 * self.asked[r])
+                            .cast(),
+                    );
+                }
+                self.asked[r] += 1;
+            }
+        }
+    }
+}
+
 mod tiled512 {
     use super::*;
 
@@ -906,11 +952,9 @@ mod tiled512 {
         blocks: usize,
         ahead: [&[u32]; 2],
     ) -> u32 {
-        // Prefetching: the 64-byte lines of each `ahead` slice, spread over the first half of
-        // the blocks, asked for a group of blocks at a time (the bookkeeping once per group).
+        // Prefetching, a group of blocks at a time (the bookkeeping once per group).
         const GROUP: usize = 8;
-        let lines = ahead.map(|a| a.len().div_ceil(16));
-        let mut asked = [0usize; 2];
+        let mut prefetch = Prefetch::new(ahead);
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -935,22 +979,7 @@ mod tiled512 {
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
-            for r in 0..2 {
-                // The lines due by the end of the group: all of them by the middle of the row
-                // (2 lines end / blocks, rounded up: the last lines are packed soon after the
-                // row step, so they need the lead; asking for all of them at once measured
-                // slower at 4096^2). A slice holds fewer than 2^32 words and blocks < 2^28: no
-                // overflow.
-                let due = (lines[r] * 2 * end).div_ceil(blocks).min(lines[r]);
-                while asked[r] < due {
-                    // A hint (reads and writes nothing, never faults); 16 asked < len: inside
-                    // the slice.
-                    _mm_prefetch::<_MM_HINT_T0>(
-                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
-                    );
-                    asked[r] += 1;
-                }
-            }
+            prefetch.ask(end, blocks);
             for b in from..end {
                 let i = BLOCK * b;
                 // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
@@ -1023,25 +1052,14 @@ mod tiled256 {
         ahead: [&[u32]; 2],
     ) -> u32 {
         const GROUP: usize = 8;
-        let lines = ahead.map(|a| a.len().div_ceil(16));
-        let mut asked = [0usize; 2];
+        let mut prefetch = Prefetch::new(ahead);
         let seven = _mm256_set1_epi32(7);
         let zero = _mm256_setzero_si256();
         let mut carry = zero;
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
-            for r in 0..2 {
-                // As in tiled512::kernel: the lines due by the end of the group.
-                let due = (lines[r] * 2 * end).div_ceil(blocks).min(lines[r]);
-                while asked[r] < due {
-                    // A hint (reads and writes nothing, never faults); inside the slice.
-                    _mm_prefetch::<_MM_HINT_T0>(
-                        ahead[r].as_ptr().wrapping_add(16 * asked[r]).cast(),
-                    );
-                    asked[r] += 1;
-                }
-            }
+            prefetch.ask(end, blocks);
             for b in from..end {
                 let i = BLOCK * b;
                 // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
