@@ -559,30 +559,45 @@ fn periods(x: i64, p: i64) -> Option<(i64, i64)> {
     }
 }
 
-/// `(floor(x / p), x mod p)` for `p > 0` with one division, in 32 bits when `|x|` and `p` fit
-/// (a hardware `udiv` on the Cortex-M4, against a software 64-bit division of several hundred
-/// instructions), else one 64-bit division. `None` only for `p <= 0`.
+/// `(floor(x / p), x mod p)` for `p > 0` with at most one division, in 32 bits whenever `|x|`
+/// fits 32 bits (a hardware `udiv` on the Cortex-M4, against a software 64-bit division of
+/// several hundred instructions), else one 64-bit division. `None` only for `p <= 0`.
+///
+/// A period longer than `|x|` needs no division: `x` lies in `[0, p)` (`q = 0`) or in `[-p, 0)`
+/// (`q = -1`, `r = x + p`). Otherwise `p <= |x| < 2^32`, so the divisor fits 32 bits as well.
+/// The 64-bit division is reached only for `|x| >= 2^32`: a firmware whose corners are 32-bit
+/// raw values (`I24F8`, ...) never reaches it, and the compiler, seeing the corners
+/// sign-extended from 32 bits, leaves it (and [`crate::div::divrem_u64_small`]) out of the
+/// binary (Stable + `RepeatWithinPeriod` on the Cortex-M4: docs/firmware.md).
 #[inline(always)]
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "x + p only for -p <= x < 0 (in [0, p)); -q0 - 1 for q0 <= u32::MAX does not wrap; \
+              p - r0 for 0 < r0 < p"
+)]
 fn div_euclid_narrow(x: i64, p: i64) -> Option<(i64, i64)> {
     if p <= 0 {
         return None;
     }
-    if let (Ok(a), Ok(d)) = (u32::try_from(x.unsigned_abs()), u32::try_from(p)) {
-        let d = core::num::NonZeroU32::new(d)?;
-        let (q0, r0) = (i64::from(a / d), i64::from(a % d));
-        #[allow(
-            clippy::arithmetic_side_effects,
-            reason = "q0 <= u32::MAX, so -q0 - 1 does not wrap; 0 < r0 < p where p - r0 is formed"
-        )]
-        return Some(if x >= 0 {
-            (q0, r0)
-        } else if r0 == 0 {
-            (-q0, 0)
-        } else {
-            (-q0 - 1, p - r0)
-        });
+    let Ok(a) = u32::try_from(x.unsigned_abs()) else {
+        return crate::div::div_euclid_i64(x, p);
+    };
+    let Ok(d) = u32::try_from(p) else {
+        // p >= 2^32 > |x|.
+        return Some(if x >= 0 { (0, x) } else { (-1, x + p) });
+    };
+    if d > a {
+        return Some(if x >= 0 { (0, x) } else { (-1, x + p) });
     }
-    crate::div::div_euclid_i64(x, p)
+    let d = core::num::NonZeroU32::new(d)?;
+    let (q0, r0) = (i64::from(a / d), i64::from(a % d));
+    Some(if x >= 0 {
+        (q0, r0)
+    } else if r0 == 0 {
+        (-q0, 0)
+    } else {
+        (-q0 - 1, p - r0)
+    })
 }
 
 /// `(x / d, x % d)` in 32 bits when both fit (one hardware `udiv`), else in 64 by the
@@ -844,6 +859,12 @@ mod tests {
                 -p,
                 p + 1,
                 -p - 1,
+                p - 1,
+                1 - p,
+                2 * p,
+                -2 * p,
+                3 * p + 1,
+                -3 * p - 1,
                 u32::MAX as i64,
                 -(u32::MAX as i64),
                 u32::MAX as i64 + 1,
@@ -860,6 +881,17 @@ mod tests {
             }
         }
         assert_eq!(div_euclid_narrow(5, 0), None);
+        // Every small pair: the one-period shortcuts (|x| < p) and the division meet exactly.
+        let (pmax, xmax) = if cfg!(miri) { (8, 20) } else { (40, 200) };
+        for p in 1i64..=pmax {
+            for x in -xmax..=xmax {
+                assert_eq!(
+                    div_euclid_narrow(x, p),
+                    Some((x.div_euclid(p), x.rem_euclid(p))),
+                    "{x} {p}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -753,7 +753,10 @@ pub(crate) fn sum_raw_with<
     let py = place_axis(kind, r.y0, r.y1, layout.height(), f)?;
     match (px, py) {
         (AxisPlan::Empty, _) | (_, AxisPlan::Empty) => {}
-        (AxisPlan::InRange(x0, x1), AxisPlan::InRange(y0, y1)) => {
+        // RepeatWithinPeriod takes an in-range box through `split::sum_within` too (its one
+        // piece): one lookup call site, one copy of the checks (Stable + Repeat firmware on the
+        // Cortex-M4: docs/firmware.md).
+        (AxisPlan::InRange(x0, x1), AxisPlan::InRange(y0, y1)) if !M::WITHIN_PERIOD => {
             let b = RawBox { x0, y0, x1, y1 };
             let placed = Rect::new(x0, y0, x1, y1);
             check_modular(layout, &placed, f, form.modular_headroom_bits(f))?;
@@ -767,7 +770,7 @@ pub(crate) fn sum_raw_with<
         (px, py) => {
             if M::WITHIN_PERIOD {
                 // Only a box crossing the edge can be longer than a period (one placed in range
-                // never is): the in-period lookup carries no test.
+                // never is, so the test never refuses it).
                 refuse_longer_than_period(layout, out.width_raw, out.height_raw, f)?;
             }
             check_modular(layout, r, f, form.modular_headroom_bits(f))?;
