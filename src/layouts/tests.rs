@@ -907,3 +907,79 @@ fn tiled_channels_every_corner_and_cell() {
         }
     }
 }
+
+/// The tiled layout's `cells4_placed` (its four-cell fast path when every cell lies inside its
+/// tile, cell by cell otherwise) gives the values, counts and read order of four
+/// `cell_corners_placed` calls in its order, for every choice of two columns and two rows on
+/// small textures (cells inside tiles, on their edges, mixed), every spec kind.
+#[test]
+fn tiled_cells4_equals_four_cells() {
+    use crate::cost::{Counter, Region};
+    /// Everything a counter hears, in order.
+    #[derive(Default, PartialEq, Debug)]
+    struct Trace(Vec<(u8, u64, u32)>);
+    impl Counter for Trace {
+        fn reads(&mut self, n: u32, bits: u32) {
+            self.0.push((0, u64::from(n), bits));
+        }
+        fn muls(&mut self, n: u32) {
+            self.0.push((1, u64::from(n), 0));
+        }
+        fn divs(&mut self, n: u32) {
+            self.0.push((2, u64::from(n), 0));
+        }
+        fn adds(&mut self, n: u32) {
+            self.0.push((3, u64::from(n), 0));
+        }
+        fn words(&mut self, n: u32) {
+            self.0.push((4, u64::from(n), 0));
+        }
+        fn read_at(&mut self, _: Region, offset: u64, bits: u32) {
+            self.0.push((5, offset, bits));
+        }
+    }
+    fn check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
+        let texels: Vec<u8> = texture(w * C, h, (w * 31 + h + C) as u32)[..w * h * C].to_vec();
+        let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
+        let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+        let mut b = TiledBuilder::<u32, C>::new(spec, w, h, 8, &mut words, &mut scratch).unwrap();
+        for row in texels.chunks_exact(w * C) {
+            b.push_row(row).unwrap();
+        }
+        let l = b.finish().unwrap();
+        // Under Miri every other column and row.
+        let step = if cfg!(miri) { 3 } else { 1 };
+        for i0 in (0..w).step_by(step) {
+            for i1 in (0..w).step_by(step) {
+                for j0 in (0..h).step_by(step) {
+                    for j1 in (0..h).step_by(step) {
+                        let (mut a, mut b) = (Trace::default(), Trace::default());
+                        let got = l.cells4_placed([i0, i1], [j0, j1], &mut a);
+                        let want = [
+                            l.cell_corners_placed(i1, j1, &mut b),
+                            l.cell_corners_placed(i1, j0, &mut b),
+                            l.cell_corners_placed(i0, j1, &mut b),
+                            l.cell_corners_placed(i0, j0, &mut b),
+                        ];
+                        let what = (C, w, h, spec, i0, i1, j0, j1);
+                        assert_eq!(got, want, "{what:?}");
+                        assert_eq!(a, b, "{what:?}");
+                    }
+                }
+            }
+        }
+    }
+    let specs = [
+        TiledSpec::tiles(4, 4).unwrap(),
+        TiledSpec::tiles(8, 2).unwrap(),
+        TiledSpec::tiles(3, 5).unwrap(),
+        TiledSpec::square(&[2, 4]).unwrap(),
+        TiledSpec::tiles(4, 4).unwrap().with_modulus(12),
+    ];
+    for spec in specs {
+        check::<1>(11, 9, spec);
+        if !cfg!(miri) {
+            check::<2>(9, 7, spec);
+        }
+    }
+}
