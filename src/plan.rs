@@ -685,8 +685,10 @@ impl Plan {
     }
 }
 
-/// Which of a plan's facts a box breaks ([`Error::OutsidePlan`]).
+/// Which of a plan's facts a box breaks ([`Error::OutsidePlan`]). Non-exhaustive, as
+/// [`Error`] is: a later plan fact adds a limit without breaking a firmware's `match`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum PlanLimit {
     /// A side is below the smallest box's.
