@@ -147,14 +147,7 @@ pub trait Layout<const C: usize> {
         j: [usize; 2],
         k: &mut K,
     ) -> [[[Self::Value; C]; 4]; 4] {
-        let [i0, i1] = i;
-        let [j0, j1] = j;
-        [
-            self.cell_corners_placed(i1, j1, k),
-            self.cell_corners_placed(i1, j0, k),
-            self.cell_corners_placed(i0, j1, k),
-            self.cell_corners_placed(i0, j0, k),
-        ]
+        cells4_by_cell(self, i, j, k)
     }
     /// Bits per texel and channel: `storage_bits / (w h C)`.
     #[allow(
@@ -165,6 +158,23 @@ pub trait Layout<const C: usize> {
     fn bits_per_entry(&self) -> f64 {
         self.storage_bits() as f64 / (self.width() as f64 * self.height() as f64 * C as f64)
     }
+}
+
+/// The four cells of a 16-read lookup read one by one, in [`Layout::cells4_placed`]'s order
+/// (the default, and a layout's fallback when it cannot share work between them).
+#[inline(always)]
+pub(crate) fn cells4_by_cell<L: Layout<C> + ?Sized, K: Counter, const C: usize>(
+    l: &L,
+    [i0, i1]: [usize; 2],
+    [j0, j1]: [usize; 2],
+    k: &mut K,
+) -> [[[L::Value; C]; 4]; 4] {
+    [
+        l.cell_corners_placed(i1, j1, k),
+        l.cell_corners_placed(i1, j0, k),
+        l.cell_corners_placed(i0, j1, k),
+        l.cell_corners_placed(i0, j0, k),
+    ]
 }
 
 impl<E: Entry, const C: usize> Layout<C> for Sat<'_, E, C> {

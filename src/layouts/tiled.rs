@@ -1480,12 +1480,11 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     #[inline(always)]
     fn cells4_placed<K: Counter>(
         &self,
-        i: [usize; 2],
-        j: [usize; 2],
+        [i0, i1]: [usize; 2],
+        [j0, j1]: [usize; 2],
         k: &mut K,
     ) -> [[[E; C]; 4]; 4] {
         let g = &self.geo;
-        let ([i0, i1], [j0, j1]) = (i, j);
         if let Some(o) = &g.one_level {
             if i0.max(i1) < g.width && j0.max(j1) < g.height {
                 #[allow(
@@ -1498,12 +1497,7 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
                 }
             }
         }
-        [
-            self.cell_corners_placed(i1, j1, k),
-            self.cell_corners_placed(i1, j0, k),
-            self.cell_corners_placed(i0, j1, k),
-            self.cell_corners_placed(i0, j0, k),
-        ]
+        super::cells4_by_cell(self, [i0, i1], [j0, j1], k)
     }
     /// Under one level of power-of-two tiles (8 x 8 and the like), each field of the four corners
     /// read once (9 instead of 16 for a 16-read corner inside a tile); else four
