@@ -496,6 +496,14 @@ pub fn rng(seed: u64) -> TestRng {
 
 pub use rand::{Rng, RngExt};
 
+/// `n` bytes from [`rng`]`(seed)`: uniform 8-bit texels for the tests and benches that take
+/// a plain texel buffer.
+pub fn random_bytes(n: usize, seed: u64) -> Vec<u8> {
+    let mut bytes = vec![0u8; n];
+    rng(seed).fill_bytes(&mut bytes);
+    bytes
+}
+
 /// A texel type the references can produce from `u32` (texsat's `u8` and `u16`).
 pub trait RefTexel: Texel + Copy {
     /// The value as this type; panics if it does not fit.

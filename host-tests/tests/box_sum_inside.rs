@@ -7,17 +7,9 @@
 
 use texsat::{Entry, Error, Rect, Sat, Texture};
 
-/// Deterministic texels (xorshift), full 8-bit range.
+/// Deterministic texels, full 8-bit range.
 fn texels(n: usize, seed: u32) -> Vec<u8> {
-    let mut s = seed | 1;
-    (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            (s >> 24) as u8
-        })
-        .collect()
+    texsat_host_tests::random_bytes(n, u64::from(seed))
 }
 
 /// Every box `[x0, x1) x [y0, y1)` with corners in `0..=w + 1`, `0..=h + 1`.

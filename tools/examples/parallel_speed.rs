@@ -18,17 +18,9 @@ use texsat_tools::parallel::build_parallel;
 
 const METHODS: [&str; 4] = ["build", "parallel", "strips_seq", "two_builds"];
 
-/// Deterministic texels (xorshift), full 8-bit range.
+/// Deterministic texels, full 8-bit range.
 fn texels(n: usize) -> Vec<u8> {
-    let mut s = 0x2545_F491u32;
-    (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            (s >> 24) as u8
-        })
-        .collect()
+    texsat_host_tests::random_bytes(n, 0x2545_F491)
 }
 
 /// One timed run of `method`, in seconds per table.

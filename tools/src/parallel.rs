@@ -58,15 +58,7 @@ mod tests {
     use super::*;
 
     fn texels(n: usize, seed: u64) -> Vec<u8> {
-        let mut s = seed | 1;
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 24) as u8
-            })
-            .collect()
+        texsat_host_tests::random_bytes(n, seed)
     }
 
     /// Equal to `Sat::build` for sizes around the parallel threshold and strip counts from 1 to
