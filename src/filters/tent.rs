@@ -547,9 +547,6 @@ pub struct TentTable<'a, E: TentEntry, const C: usize = 1> {
     width: usize,
     height: usize,
     texel_bits: u32,
-    /// [`tent_entry_bits`] of the texture: every entry is below `2^entry_bits` (the width
-    /// proofs of the `u32` lookups start from it).
-    entry_bits: u32,
 }
 
 impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
@@ -655,7 +652,6 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             width: w,
             height: h,
             texel_bits: T::BITS,
-            entry_bits: bits,
         })
     }
 
@@ -740,11 +736,14 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         Ok(out)
     }
 
-    /// The largest entry any texture of this table's size and texel width can give,
-    /// `2^E - 1` with `E` = [`tent_entry_bits`] (`u64::MAX` from 64 bits on, where no lookup
-    /// proves first): the bound the width proofs start from.
-    fn entry_max(&self) -> u64 {
-        max_texel_u64(self.entry_bits)
+    /// What the width proofs start from: the largest texel and the table's sides
+    /// ([`Worst`]).
+    fn worst(&self) -> Worst {
+        Worst {
+            m: max_texel_u64(self.texel_bits),
+            w: self.width,
+            h: self.height,
+        }
     }
 
     /// The triangle filter with integer centre `(cx, cy)` and integer half-widths `a`, `b`
@@ -795,7 +794,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
             int_axes(kind, cx, a, self.width)?,
             int_axes(kind, cy, b, self.height)?,
         );
-        prove::<A>(|| paper_bound(&ax, &ay, 1, self.entry_max()))?;
+        prove::<A>(|| paper_bound(&ax, &ay, 1, self.worst()))?;
         let n = self.paper_numerator(&ax, &ay, A::ONE, k)?;
         // value = N / (4 a^2 b^2); output = round(N 2^(16 - 2) / (a^2 b^2)).
         finish(&n, d, OUT_FRAC_BITS - 2, k)
@@ -842,7 +841,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         let Some(fp) = self.footprint::<A>(r, frac_bits, mode.kind())? else {
             return Ok(Sample { values: [0; C] });
         };
-        prove::<A>(|| paper_bound(&fp.ax, &fp.ay, fp.s.abs_u64()?, self.entry_max()))?;
+        prove::<A>(|| paper_bound(&fp.ax, &fp.ay, fp.s.abs_u64()?, self.worst()))?;
         let n = self.paper_numerator(&fp.ax, &fp.ay, fp.s, k)?;
         // value = N 2^2G / (4 a^2 b^2) (N scaled by s^2, a and b in units 2^-G).
         #[allow(
@@ -939,7 +938,7 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
         for (((pa, pb), &x), &y) in pa.iter_mut().zip(&mut pb).zip(&fp.px).zip(&fp.py) {
             (*pa, *pb) = (frac_product(x)?, frac_product(y)?);
         }
-        prove::<A>(|| exact_bound(&fp, &pa, &pb, self.entry_max(), max_texel_u64(T::BITS)))?;
+        prove::<A>(|| exact_bound(&fp, &pa, &pb, self.worst(), max_texel_u64(T::BITS)))?;
         let paper = self.paper_numerator(&fp.ax, &fp.ay, s, k)?;
         k.muls(6);
         let cols: [Option<usize>; 3] = ix.map(|i| texel_at(kind, i, self.width));
@@ -1689,29 +1688,51 @@ fn prove<A: TentAcc>(bound: impl FnOnce() -> Option<u64>) -> Result<(), Error> {
     Ok(())
 }
 
+/// What the width proofs know of a table before reading it: its largest texel `m` and its
+/// sides. Per axis `sum_{i < min(X, n)} (2X - 2i - 1) = k (2X - k)` with `k = min(X, n)`
+/// ([`line_max`]), so every stored value is bounded where it is read: `Q(X, Y) <= m
+/// line_max(w, X) line_max(h, Y)`, a column's `2 S2` at `Y` by `m line_max(h, Y)`, a row's at
+/// `X` by `m line_max(w, X)`. Reached by the all-`m` texture.
+#[derive(Debug, Clone, Copy)]
+struct Worst {
+    m: u64,
+    w: usize,
+    h: usize,
+}
+
+/// `k (2X - k)`, `k = min(X, n)`: the largest `2 S2(X)` of a line of `n` texels of value 1
+/// (`X <= n + 1 < 2^31 + 1`, so exact; saturating past that, which no index reaches).
+fn line_max(n: usize, x: usize) -> u64 {
+    let (n, x) = (u64_from_usize(n), u64_from_usize(x));
+    let k = x.min(n);
+    k.saturating_mul(x.saturating_mul(2).saturating_sub(k))
+}
+
 /// `(M, nonneg)`: every intermediate of [`eval1`] over `ax` and its result are at most `M V` in
-/// magnitude for inputs of magnitude at most `V`, and the result is non-negative if `nonneg`
-/// (given non-negative inputs if `nonneg_in`). Crow's lerp `v0 s + (v1 - v0) a` with
-/// `0 <= a <= s` on non-negative inputs: `M = s`, non-negative; otherwise `M = s + 2 |a|`
-/// (`|v1 - v0| <= 2 V`). Terms: `M = sum |w|`, non-negative when every weight is and the
-/// inputs are. `None`: past `u64`.
-fn axis_mass<A: TentAcc>(ax: &Axis<A>, s: u64, nonneg_in: bool) -> Option<(u64, bool)> {
+/// magnitude for inputs `|f(i)| <= V line_max(n, i)`, and the result is non-negative if
+/// `nonneg` (given non-negative inputs if `nonneg_in`). With `b_i = line_max(n, i)`: Crow's
+/// lerp `v0 s + (v1 - v0) a` with `0 <= a <= s` on non-negative inputs, `M = s max(b_i,
+/// b_(i+1))`, non-negative; otherwise `M = b_i s + (b_i + b_(i+1)) |a|`. Terms: `M = sum |w|
+/// b_idx`, non-negative when every weight is and the inputs are. `None`: past `u64`.
+fn axis_mass<A: TentAcc>(ax: &Axis<A>, s: u64, nonneg_in: bool, n: usize) -> Option<(u64, bool)> {
     match ax {
         Axis::Zero => Some((0, true)),
-        &Axis::Crow { a, .. } => {
+        &Axis::Crow { i, a } => {
             let au = a.abs_u64()?;
+            let (b0, b1) = (line_max(n, i), line_max(n, i.saturating_add(1)));
             if nonneg_in && a >= A::ZERO && au <= s {
-                Some((s, true))
+                Some((s.checked_mul(b0.max(b1))?, true))
             } else {
-                Some((s.checked_add(au.checked_mul(2)?)?, false))
+                let d = b0.checked_add(b1)?.checked_mul(au)?;
+                Some((b0.checked_mul(s)?.checked_add(d)?, false))
             }
         }
         Axis::Terms(t) => {
             let mut m = 0u64;
             let mut nonneg = nonneg_in;
-            for &(_, w) in &t.t {
+            for &(idx, w) in &t.t {
                 nonneg &= w >= A::ZERO;
-                m = m.checked_add(w.abs_u64()?)?;
+                m = m.checked_add(w.abs_u64()?.checked_mul(line_max(n, idx))?)?;
             }
             Some((m, nonneg))
         }
@@ -1731,21 +1752,22 @@ fn comb(v: [u64; 3], nonneg: bool) -> Option<u64> {
 }
 
 /// The worst case over textures of every intermediate of [`TentTable::paper_numerator`] for
-/// the placed axes, with table entries at most `q`: per point `V(p, q) = q M_x(p) M_y(q)`
-/// ([`axis_mass`]), per row `R(q) = comb(V(., q))`, in all `comb(R)` ([`comb`]). Inside the
-/// table (Crow's lerps, `a < s`) that is `8 q s^2`.
-fn paper_bound<A: TentAcc>(ax: &[Axis<A>; 3], ay: &[Axis<A>; 3], s: u64, q: u64) -> Option<u64> {
+/// the placed axes: per point `V(p, q) = m M_x(p) M_y(q)` ([`axis_mass`] over the table's
+/// columns, then its rows), per row `R(q) = comb(V(., q))`, in all `comb(R)` ([`comb`]). At
+/// most `8 s^2 Q_max` inside the table (Crow's lerps, `a < s`; `Q_max = m w (w + 2) h (h + 2)`,
+/// [`tent_entry_bits`]).
+fn paper_bound<A: TentAcc>(ax: &[Axis<A>; 3], ay: &[Axis<A>; 3], s: u64, t: Worst) -> Option<u64> {
     let mut mx = [(0u64, true); 3];
     for (m, axp) in mx.iter_mut().zip(ax) {
-        *m = axis_mass(axp, s, true)?;
+        *m = axis_mass(axp, s, true, t.w)?;
     }
     let mut rows = [0u64; 3];
     for (row, ayq) in rows.iter_mut().zip(ay) {
         let mut v = [0u64; 3];
         let mut nonneg = true;
         for (vp, &(m, nonneg_p)) in v.iter_mut().zip(&mx) {
-            let (my, nonneg_q) = axis_mass(ayq, s, nonneg_p)?;
-            *vp = q.checked_mul(m)?.checked_mul(my)?;
+            let (my, nonneg_q) = axis_mass(ayq, s, nonneg_p, t.h)?;
+            *vp = t.m.checked_mul(m)?.checked_mul(my)?;
             nonneg &= nonneg_q;
         }
         *row = comb(v, nonneg)?;
@@ -1755,24 +1777,24 @@ fn paper_bound<A: TentAcc>(ax: &[Axis<A>; 3], ay: &[Axis<A>; 3], s: u64, q: u64)
 
 /// The worst case over textures of every intermediate of [`TentTable::sample_exact_raw`]:
 /// `hi + mid + st` plus the small line and texel sums, with `hi = P s^2` (`P` the
-/// [`paper_bound`]), `mid = (X sa + Y sb) s` (`X`, `Y` the second differences of the line
-/// tables, entries at most `q`; `sa = sum |w_p| α_p(1-α_p)`, `sb` likewise), `st = m sb sa`
-/// (`m` the largest texel). Inside the table between `8 q s^4` and `12 q s^4 + m s^4`.
+/// [`paper_bound`]), `mid = (X sa + Y sb) s` (`X`, `Y` the bounds of the line tables' second
+/// differences; `sa = sum |w_p| α_p(1-α_p)`, `sb` likewise), `st = m_t sb sa` (`m_t` the
+/// texture's largest texel). At most `12 s^4 Q_max + m_t s^4` and a little inside the table.
 fn exact_bound<A: TentAcc>(
     fp: &Footprint<A>,
     pa: &[A; 3],
     pb: &[A; 3],
-    q: u64,
-    m: u64,
+    t: Worst,
+    m_t: u64,
 ) -> Option<u64> {
     let s = fp.s.abs_u64()?;
-    let hi = paper_bound(&fp.ax, &fp.ay, s, q)?.checked_mul(s.checked_mul(s)?)?;
-    let line = |axes: &[Axis<A>; 3]| -> Option<u64> {
+    let hi = paper_bound(&fp.ax, &fp.ay, s, t)?.checked_mul(s.checked_mul(s)?)?;
+    let line = |axes: &[Axis<A>; 3], n: usize| -> Option<u64> {
         let mut v = [0u64; 3];
         let mut nonneg = true;
         for (vp, axp) in v.iter_mut().zip(axes) {
-            let (mass, nonneg_p) = axis_mass(axp, s, true)?;
-            *vp = q.checked_mul(mass)?;
+            let (mass, nonneg_p) = axis_mass(axp, s, true, n)?;
+            *vp = t.m.checked_mul(mass)?;
             nonneg &= nonneg_p;
         }
         comb(v, nonneg)
@@ -1782,13 +1804,13 @@ fn exact_bound<A: TentAcc>(
         f0?.checked_add(f1?.checked_mul(2)?)?.checked_add(f2?)
     };
     // Columns are second differences in y (the y axes), rows in x.
-    let (x, y) = (line(&fp.ay)?, line(&fp.ax)?);
+    let (x, y) = (line(&fp.ay, t.h)?, line(&fp.ax, t.w)?);
     let (sa, sb) = (weighted(pa)?, weighted(pb)?);
     let mid = x
         .checked_mul(sa)?
         .checked_add(y.checked_mul(sb)?)?
         .checked_mul(s)?;
-    let inner = m.checked_mul(sb)?;
+    let inner = m_t.checked_mul(sb)?;
     let st = inner.checked_mul(sa)?;
     hi.checked_add(mid)?
         .checked_add(st)?
@@ -1833,6 +1855,7 @@ mod tests {
     use crate::edge::{Border, ClampToEdge, MirroredRepeat, Repeat};
     use crate::{NoCount, Tally};
     use fixed::types::{I16F16, I24F8, I28F4};
+    use std::format;
     use std::vec;
     use std::vec::Vec;
 
@@ -2352,5 +2375,450 @@ mod tests {
             };
             let _ = res;
         }
+    }
+
+    // --- u32 tables: i64 lookups, the width proof and its refusals ----------------------------
+
+    std::thread_local! {
+        /// The largest magnitude (bits) a [`Track`] operation has produced on this thread.
+        static PEAK: core::cell::Cell<u32> = const { core::cell::Cell::new(0) };
+    }
+
+    /// An `i128` accumulator that records the bits of every checked result ([`PEAK`]): what a
+    /// lookup really needs, to compare with the width proof's bound.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+    struct Track(i128);
+
+    impl sealed::Sealed for Track {}
+
+    fn seen(v: Option<i128>) -> Option<Track> {
+        if let Some(x) = v {
+            PEAK.with(|p| p.set(p.get().max(bits_of(x.unsigned_abs()))));
+        }
+        v.map(Track)
+    }
+
+    impl TentAcc for Track {
+        const BITS_AVAILABLE: u32 = 127;
+        const PROVES_FIRST: bool = false;
+        const ZERO: Self = Track(0);
+        const ONE: Self = Track(1);
+        fn from_i64(v: i64) -> Self {
+            Track(i128::from(v))
+        }
+        fn from_u64(v: u64) -> Option<Self> {
+            Some(Track(i128::from(v)))
+        }
+        fn from_entry<L: TentEntry>(e: L) -> Option<Self> {
+            Some(Track(e.to_i128()))
+        }
+        fn checked_add(self, o: Self) -> Option<Self> {
+            seen(self.0.checked_add(o.0))
+        }
+        fn checked_sub(self, o: Self) -> Option<Self> {
+            seen(self.0.checked_sub(o.0))
+        }
+        fn checked_mul(self, o: Self) -> Option<Self> {
+            seen(self.0.checked_mul(o.0))
+        }
+        fn checked_div_euclid(self, o: Self) -> Option<Self> {
+            seen(self.0.checked_div_euclid(o.0))
+        }
+        fn checked_rem_euclid(self, o: Self) -> Option<Self> {
+            seen(self.0.checked_rem_euclid(o.0))
+        }
+        fn checked_shl(self, g: u32) -> Option<Self> {
+            seen(TentAcc::checked_shl(self.0, g))
+        }
+        fn floor_shr(self, g: u32) -> Self {
+            Track(self.0.floor_shr(g))
+        }
+        fn to_i64(self) -> Option<i64> {
+            TentAcc::to_i64(self.0)
+        }
+        fn abs_u64(self) -> Option<u64> {
+            self.0.abs_u64()
+        }
+        fn abs_is_power_of_two(self) -> bool {
+            self.0.abs_is_power_of_two()
+        }
+        fn normaliser(a: u64, b: u64) -> Result<Self, Error> {
+            <i128 as TentAcc>::normaliser(a, b).map(Track)
+        }
+        fn div_round_shift(num: Self, shift: u32, den: Self) -> Result<u64, Error> {
+            <i128 as TentAcc>::div_round_shift(num.0, shift, den.0)
+        }
+    }
+
+    /// Runs a lookup and returns the bits it needed ([`Track`]): at least 128 if it was
+    /// refused.
+    fn peak<R>(f: impl FnOnce() -> Result<R, Error>) -> ((), u32) {
+        PEAK.with(|p| p.set(0));
+        let r = f();
+        let bits = PEAK.with(|p| p.get());
+        ((), if r.is_err() { bits.max(128) } else { bits })
+    }
+
+    /// What a lookup on both tables gave: `(answers, refusals)` so far.
+    #[derive(Default, Debug)]
+    struct Outcomes {
+        answered: usize,
+        refused: usize,
+        both_refused: usize,
+        interior_refused: usize,
+        /// On the all-maximum texture, the largest `bound - need` in bits of a refusal by the
+        /// proof: paper form inside the table, anywhere; exact form inside, anywhere; integer.
+        slack: [u32; 5],
+    }
+
+    /// Compares a `u32` table's answer with the `u64` table's: equal where it answers; where it
+    /// refuses, the `u64` table answers and the refusal is the width proof's (`bits_needed` =
+    /// the bound's bits, above 63; or 64 for a weight past `i64`, which the lookup really
+    /// needs) or the normaliser's (`a^2 b^2 >= 2^63`). The bound (`None`: the normaliser or a
+    /// weight refused before it) is never below what the lookup needs on this texture (`need`,
+    /// from [`Track`]).
+    fn compare(
+        got32: Result<Sample<1>, Error>,
+        got64: Result<Sample<1>, Error>,
+        bound_bits: Option<u32>,
+        need: u32,
+        ab: (u64, u64),
+        what: &str,
+        out: &mut Outcomes,
+    ) {
+        // (A bound of 0: a zero sample with no reads, whose centres only were computed; 65: at
+        // least 2^64, a lower bound.)
+        if let Some(b) = bound_bits.filter(|&b| b > 0 && b < 65) {
+            assert!(need <= b, "{what}: needs {need} bits, bound {b}");
+            if what.contains(" worst") && b > 63 {
+                let form = if what.contains(" int ") {
+                    4
+                } else {
+                    2 * usize::from(what.starts_with("exact"))
+                        + usize::from(!what.contains(" inside"))
+                };
+                out.slack[form] = out.slack[form].max(b - need);
+            }
+        }
+        let norm_bits = bits_of(u128::from(ab.0).pow(2) * u128::from(ab.1).pow(2));
+        match (got32, got64) {
+            (Ok(a), Ok(b)) => {
+                assert_eq!(a, b, "{what}");
+                // (A Border footprint entirely outside is 0 before its normaliser is formed.)
+                let zero = bound_bits == Some(0);
+                assert!(bound_bits.is_some_and(|b| b <= 63), "{what}");
+                assert!(norm_bits <= 63 || zero, "{what}");
+                out.answered += 1;
+            }
+            (
+                Err(Error::TooWide {
+                    what: q,
+                    bits_needed,
+                    bits_available: 63,
+                }),
+                got64,
+            ) => {
+                // The u64 table answers, or refuses too (its i128 past 127 bits: the exact
+                // form's 2^4G scale at large F).
+                match got64 {
+                    Ok(_) => out.refused += 1,
+                    Err(Error::TooWide { .. }) => out.both_refused += 1,
+                    Err(e) => panic!("{what}: u64 {e:?}"),
+                }
+                if q == Quantity::MeanNumerator {
+                    assert!(
+                        norm_bits > 63,
+                        "{what}: refused a^2 b^2 of {norm_bits} bits"
+                    );
+                    let (a, b) = (bits_of_u64(ab.0), bits_of_u64(ab.1));
+                    assert_eq!(bits_needed, 2 * a + 2 * b, "{what}");
+                } else {
+                    assert_eq!(q, Quantity::LookupAccumulator, "{what}");
+                    assert!(norm_bits <= 63, "{what}");
+                    match bound_bits {
+                        Some(b) => assert_eq!(bits_needed, b, "{what}"),
+                        None => assert!(bits_needed == 64 && need > 63, "{what}: {need}"),
+                    }
+                    assert!(bits_needed > 63, "{what}");
+                }
+            }
+            (a, b) => panic!("{what}: u32 {a:?}, u64 {b:?}"),
+        }
+    }
+
+    /// Every lookup of a `u32` table against the `u64` table of the same texture, for every `F`
+    /// (under Miri three), every mode and random footprints inside and around the texture
+    /// (module docs, "How wide the lookups compute").
+    fn u32_against_u64<T: Texel>(t: &[T], w: usize, h: usize, seed: u64, out: &mut Outcomes) {
+        let texture = Texture::<T>::new(t, w, h).unwrap();
+        let mut s32 = vec![0u32; TentTable::<u32>::storage_needed(w, h).unwrap()];
+        let t32 = TentTable::build(&texture, &mut s32).unwrap();
+        let mut s64 = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+        let t64 = TentTable::build(&texture, &mut s64).unwrap();
+        let mut ls = vec![0u32; TentLines::<u32>::storage_needed(w, h).unwrap()];
+        let lines = TentLines::build(&texture, &mut ls).unwrap();
+        let e = tent_entry_bits(T::BITS, w, h);
+        assert!(e <= 32);
+        let all_max = t
+            .iter()
+            .all(|v| u64::from(v.to_u16()) == max_texel_u64(T::BITS));
+        let worst = if all_max { " worst" } else { "" };
+        let (q, m) = (t32.worst(), max_texel_u64(T::BITS));
+        let qmax = max_texel_u64(T::BITS) * (w * (w + 2) * h * (h + 2)) as u64;
+        let mut seed = seed;
+        let n = w.max(h) as i64;
+        let fs: Vec<u32> = if cfg!(miri) {
+            vec![0, 9, 24]
+        } else {
+            (0..=24).collect()
+        };
+        let per = if cfg!(miri) { 1 } else { 12 };
+        for f in fs {
+            let fb = FracBits::new(f).unwrap();
+            let g = f + 1;
+            let unit = 1i64 << f;
+            for kind in EdgeKind::ALL {
+                for i in 0..per {
+                    // Half the footprints inside the table (0 <= x0 < x1 <= w), the others
+                    // anywhere from 2n + 3 texels left of it to 3n + 3 right, up to 3n + 2 wide.
+                    let inside = i % 2 == 0;
+                    let mut corner = |len: usize| -> (i64, i64) {
+                        if inside {
+                            let len = len as i64 * unit;
+                            let x0 = lcg(&mut seed) as i64 % len;
+                            (x0, x0 + 1 + lcg(&mut seed) as i64 % (len - x0))
+                        } else {
+                            let x0 =
+                                lcg(&mut seed) as i64 % ((5 * n + 6) * unit) - (2 * n + 3) * unit;
+                            (x0, x0 + 1 + lcg(&mut seed) as i64 % ((3 * n + 2) * unit))
+                        }
+                    };
+                    let ((x0, x1), (y0, y1)) = (corner(w), corner(h));
+                    let r = Rect::new(x0, y0, x1, y1);
+                    let ab = ((x1 - x0) as u64, (y1 - y0) as u64);
+                    let what = format!(
+                        "{w}x{h} {}-bit F={f} {} {r:?}{worst}{}",
+                        T::BITS,
+                        kind.name(),
+                        if inside { " inside" } else { "" }
+                    );
+                    let fp = t32.footprint::<i64>(&r, fb, kind);
+                    let bits = |b: Option<u64>| b.map_or(65, bits_of_u64);
+                    // Paper form.
+                    let bound = match &fp {
+                        Ok(None) => Some(0),
+                        Ok(Some(fp)) => Some(bits(paper_bound(&fp.ax, &fp.ay, fp.s as u64, q))),
+                        Err(_) => None,
+                    };
+                    let (_, need) =
+                        peak(|| t64.sample_raw_in::<Track, _, _>(&r, fb, kind, &mut NoCount));
+                    let (got32, got64) = (
+                        t32.sample_raw(&r, fb, kind, &mut NoCount),
+                        t64.sample_raw(&r, fb, kind, &mut NoCount),
+                    );
+                    // The closed form inside the table: 8 q s^2, E + 2G + 3 bits (where the
+                    // normaliser is not refused first).
+                    if let (true, Ok(Some(fp))) = (inside, &fp) {
+                        let b = paper_bound(&fp.ax, &fp.ay, fp.s as u64, q);
+                        let at_most = u128::from(qmax) << (2 * g + 3);
+                        let ok = b.map_or(at_most >> 64 != 0, |b| u128::from(b) <= at_most);
+                        assert!(ok, "{what}");
+                        assert!(bound.unwrap() <= e + 2 * g + 3, "{what}");
+                        out.interior_refused += usize::from(got32.is_err());
+                    }
+                    compare(got32, got64, bound, need, ab, &what, out);
+                    // Exact form.
+                    let bound = match &fp {
+                        Ok(None) => Some(0),
+                        Ok(Some(fp)) => {
+                            let frac = |x: i64| (x & (fp.s - 1)) * (fp.s - (x & (fp.s - 1)));
+                            let (pa, pb) = (fp.px.map(frac), fp.py.map(frac));
+                            Some(bits(exact_bound(fp, &pa, &pb, q, m)))
+                        }
+                        Err(_) => None,
+                    };
+                    let (_, need) = peak(|| {
+                        t64.sample_exact_raw_in::<Track, _, _, _, _>(
+                            &lines,
+                            &texture,
+                            &r,
+                            fb,
+                            kind,
+                            &mut NoCount,
+                        )
+                    });
+                    let (got32, got64) = (
+                        t32.sample_exact_raw(&lines, &texture, &r, fb, kind, &mut NoCount),
+                        t64.sample_exact_raw(&lines, &texture, &r, fb, kind, &mut NoCount),
+                    );
+                    if let (true, Ok(Some(_))) = (inside, &fp) {
+                        // Inside the table: at most 12 s^4 Q_max + m s^4 and the line and texel
+                        // sums, E + 4G + 4 bits.
+                        assert!(bound.unwrap() <= e + 4 * g + 4, "{what}");
+                        out.interior_refused += usize::from(got32.is_err());
+                    }
+                    compare(got32, got64, bound, need, ab, &format!("exact {what}"), out);
+                }
+                // The integer form at every F's worth of footprints: centres around the
+                // texture, half-widths up to 3n + 2 and a few huge ones (the normaliser).
+                let cx = (lcg(&mut seed) as i64 % (5 * n + 6) - 2 * n - 3) as i32;
+                let cy = (lcg(&mut seed) as i64 % (5 * n + 6) - 2 * n - 3) as i32;
+                let huge = [1u32 << 15, 1 << 16, 1 << 20, u32::MAX];
+                let a = if f % 5 == 4 {
+                    huge[(f / 5) as usize % 4]
+                } else {
+                    1 + (lcg(&mut seed) % (3 * n as u64 + 2)) as u32
+                };
+                let b = 1 + (lcg(&mut seed) % (3 * n as u64 + 2)) as u32;
+                let what = format!(
+                    "{w}x{h} {}-bit int {} ({cx},{cy}) {a} {b}{worst}",
+                    T::BITS,
+                    kind.name()
+                );
+                // As sample_int_in: centres, normaliser, weights, then the proof.
+                let bound = (|| {
+                    let (ca, cb) = (i64::from(a), i64::from(b));
+                    let Some(cxx) = canonical_centre(kind, i64::from(cx), ca, w, 0).ok()? else {
+                        return Some(0);
+                    };
+                    let Some(cyy) = canonical_centre(kind, i64::from(cy), cb, h, 0).ok()? else {
+                        return Some(0);
+                    };
+                    <i64 as TentAcc>::normaliser(u64::from(a), u64::from(b)).ok()?;
+                    let ax = int_axes(kind, cxx, ca, w).ok()?;
+                    let ay = int_axes(kind, cyy, cb, h).ok()?;
+                    Some(paper_bound(&ax, &ay, 1, q).map_or(65, bits_of_u64))
+                })();
+                let (_, need) =
+                    peak(|| t64.sample_int_in::<Track, _, _>(cx, cy, a, b, kind, &mut NoCount));
+                compare(
+                    t32.sample_int(cx, cy, a, b, kind, &mut NoCount),
+                    t64.sample_int(cx, cy, a, b, kind, &mut NoCount),
+                    bound,
+                    need,
+                    (u64::from(a), u64::from(b)),
+                    &what,
+                    out,
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn u32_tables_answer_as_u64_or_refuse_by_the_proof() {
+        // Entry widths 12 (1 x 1), 18 (5 x 4), 25 (16 x 16) bits of 8-bit texels; 23 (3 x 2)
+        // and 32 (13 x 13, the widest a u32 table holds) of 16-bit ones. Random texels, then
+        // the all-maximum texture (the worst case the proof bounds).
+        let mut out = Outcomes::default();
+        let sizes8: &[(usize, usize)] = if cfg!(miri) {
+            &[(1, 1)]
+        } else {
+            &[(1, 1), (5, 4), (16, 16)]
+        };
+        let sizes16: &[(usize, usize)] = if cfg!(miri) {
+            &[(13, 13)]
+        } else {
+            &[(3, 2), (13, 13)]
+        };
+        for &(w, h) in sizes8 {
+            u32_against_u64(&tex(w, h, 5), w, h, 1, &mut out);
+            u32_against_u64(&vec![255u8; w * h], w, h, 2, &mut out);
+        }
+        for &(w, h) in sizes16 {
+            let mut s = 9u64;
+            let t: Vec<u16> = (0..w * h).map(|_| lcg(&mut s) as u16).collect();
+            u32_against_u64(&t, w, h, 3, &mut out);
+            u32_against_u64(&vec![u16::MAX; w * h], w, h, 4, &mut out);
+        }
+        assert_eq!(tent_entry_bits(16, 13, 13), 32);
+        // Inside the table the bound of the Crow form is within 3 bits of what the worst-case
+        // texture needs where it refuses (module docs; the exact form's is looser).
+        assert!(out.slack[0] <= 3, "{out:?}");
+        // Both outcomes happen, inside the table too.
+        assert!(
+            out.answered > 0 && out.refused > 0 && out.interior_refused > 0,
+            "{out:?}"
+        );
+    }
+
+    #[test]
+    fn u32_proof_is_near_the_need_on_the_whole_texture() {
+        // The whole all-maximum texture (16-bit 13 x 13: 32-bit entries), every F and mode
+        // until the normaliser a^2 b^2 passes 63 bits: the width proof's bound is never below
+        // what the lookup computes (Track on the u64 table, same values) and at most 2 bits
+        // above it in the Crow form (the outer second difference of rows that could be as
+        // large as 2 V, which a texture's rows are not), 6 in the exact form; a u32 table
+        // answers exactly where the bound fits 63 bits.
+        let (w, h) = (13usize, 13usize);
+        let t = vec![u16::MAX; w * h];
+        let texture = Texture::<u16>::new(&t, w, h).unwrap();
+        let mut s64 = vec![0u64; TentTable::<u64>::storage_needed(w, h).unwrap()];
+        let t64 = TentTable::build(&texture, &mut s64).unwrap();
+        let mut s32 = vec![0u32; TentTable::<u32>::storage_needed(w, h).unwrap()];
+        let t32 = TentTable::build(&texture, &mut s32).unwrap();
+        let mut ls = vec![0u32; TentLines::<u32>::storage_needed(w, h).unwrap()];
+        let lines = TentLines::build(&texture, &mut ls).unwrap();
+        let e = tent_entry_bits(16, w, h);
+        let (mut answered, mut refused) = (0, 0);
+        let fs: Vec<u32> = if cfg!(miri) {
+            vec![0, 7]
+        } else {
+            (0..=24).collect()
+        };
+        for f in fs {
+            let g = f + 1;
+            let r = Rect::new(0, 0, (w as i64) << f, (h as i64) << f);
+            let fb = FracBits::new(f).unwrap();
+            for kind in EdgeKind::ALL {
+                let fp = match t32.footprint::<i64>(&r, fb, kind) {
+                    Ok(fp) => fp.unwrap(),
+                    Err(Error::TooWide {
+                        what: Quantity::MeanNumerator,
+                        ..
+                    }) => {
+                        assert!(4 * bits_of_u64((w as u64) << f) > 63, "F={f}");
+                        continue;
+                    }
+                    Err(e) => panic!("F={f}: {e:?}"),
+                };
+                let bound = paper_bound(&fp.ax, &fp.ay, fp.s as u64, t32.worst());
+                let bound = bound.map_or(65, bits_of_u64);
+                let (_, need) =
+                    peak(|| t64.sample_raw_in::<Track, _, _>(&r, fb, kind, &mut NoCount));
+                assert!(bound <= e + 2 * g + 3, "F={f}");
+                assert!(
+                    need <= bound && bound <= need + 2,
+                    "F={f}: need {need}, bound {bound}"
+                );
+                let got = t32.sample_raw(&r, fb, kind, &mut NoCount);
+                assert_eq!(got.is_ok(), bound <= 63, "F={f}");
+                let frac = |x: i64| (x & (fp.s - 1)) * (fp.s - (x & (fp.s - 1)));
+                let (pa, pb) = (fp.px.map(frac), fp.py.map(frac));
+                let bound = exact_bound(&fp, &pa, &pb, t32.worst(), 65535).map_or(65, bits_of_u64);
+                let (_, need) = peak(|| {
+                    t64.sample_exact_raw_in::<Track, _, _, _, _>(
+                        &lines,
+                        &texture,
+                        &r,
+                        fb,
+                        kind,
+                        &mut NoCount,
+                    )
+                });
+                assert!(bound <= e + 4 * g + 4, "F={f}");
+                assert!(
+                    (need <= bound && bound <= need + 6) || (bound == 65 && need > 63),
+                    "exact F={f}: need {need}, bound {bound}"
+                );
+                let got = t32.sample_exact_raw(&lines, &texture, &r, fb, kind, &mut NoCount);
+                assert_eq!(got.is_ok(), bound <= 63, "exact F={f}");
+                if got.is_ok() {
+                    answered += 1;
+                } else {
+                    refused += 1;
+                }
+            }
+        }
+        assert!(answered > 0 && refused > 0);
     }
 }
