@@ -75,33 +75,96 @@
 //! footprints entirely outside return 0 with no reads; clamp footprints entirely left of 0
 //! (right of `n`) move to touch the edge (`S2_ext` is one quadratic there); repeat and mirror
 //! centres move into the first period (`S2_ext(x + P) - S2_ext(x)` is linear in `x`, which the
-//! second difference annihilates). Points outside the table then cost more reads and multiplies
+//! second difference annihilates; the corners are moved first, in `i64`, so that no sum of two
+//! corners is formed before). Points outside the table then cost more reads and multiplies
 //! than the survey's interior figures (counted as performed: one multiply per weight that is not
-//! a power of two). All lookup arithmetic is checked `i128`; a footprint too large for it is
-//! [`Error::TooWide`] (`LookupAccumulator`, or `MeanNumerator` for `a^2 b^2 >= 2^127`), never a
-//! wrapped value.
+//! a power of two). All lookup arithmetic is checked in the entry type's accumulator (next
+//! section); a footprint too large for it is [`Error::TooWide`] (`LookupAccumulator`, or
+//! `MeanNumerator` for `a^2 b^2` past the accumulator), never a wrapped value.
 //!
 //! The mode's behaviour comes from the crate's one mapping, [`EdgeMode::kind`]: the lookups take
 //! any `M: EdgeMode` and the extension formulas above match on the [`EdgeKind`] (the texel a
 //! position shows is [`EdgeKind::texel_index`]).
 //!
-//! ## Why the lookups are 128-bit
+//! ## How wide the lookups compute
 //!
-//! This is the one filter whose arithmetic stays `i128`, on purpose: its tables are order-2
-//! integrals, `u64` (or `u128`) entries for any texture worth filtering (8-bit 256 x 256 already
-//! needs 41 bits), and a lookup scales them further: by `s^2 = 2^(2G)` (`G = F + 1`) in the paper
-//! form and by `s^4 = 2^(4G)` in the exact form, times second-difference and extension weights.
-//! At `F = 8` a 41-bit entry times `2^36` is 77 bits before any weight, so 64-bit words cannot hold
-//! even one term; every product is checked in `i128` instead. (For the `u32` entries of tiny
-//! tables the same code runs; the width proof does not change with the entry type.)
+//! The accumulator follows the entry type at compile time: [`TentEntry::Acc`] is `i64` for
+//! `u32` entries and `i128` for `u64` and `u128` ones. The lookups are one generic
+//! implementation over [`TentAcc`] (the checked operations they use, sealed), so the lookups of
+//! a `u32` table, monomorphised, hold no 128-bit operation at all (the firmware link gate
+//! proves it on its `u32` tent gates, `examples/firmware/link-gate.sh`), and its rounded
+//! division is a 64-bit restoring division. The crate's rule (docs/wide-arithmetic.md): `u32`
+//! tables compute in 64 bits, and only `u64`/`u128`-entry tables keep 128-bit arithmetic.
+//!
+//! Those need it: order-2 integrals take `u64` entries for any texture worth filtering (8-bit
+//! 256 x 256 already needs 41 bits), and a lookup scales them further: by `s^2 = 2^(2G)`
+//! (`G = F + 1`) in the paper form and by `s^4 = 2^(4G)` in the exact form, times
+//! second-difference and extension weights. At `F = 8` a 41-bit entry times `2^36` is 77 bits
+//! before any weight. An `i128` lookup checks every product and refuses (`LookupAccumulator`,
+//! 128 bits needed) only where one overflows.
+//!
+//! **The width proof of `u32` tables.** An `i64` lookup proves its width *before it reads*:
+//! once the footprint is placed (centres, extension weights) it bounds every intermediate it
+//! is about to form, over every texture of the table's size and texel width, and refuses where
+//! that bound passes 63 bits with [`Error::TooWide`] `{ what: LookupAccumulator, bits_needed,
+//! bits_available: 63 }` (`bits_needed` the bound's bits; 65 where the bound itself passes 64
+//! bits, a lower bound). So a `u32` table answers a footprint for every texture or for none,
+//! never depending on the texels, and its answers equal the `u64` table's (tests). The bound:
+//!
+//! * each stored value is bounded where it is read: per axis `sum_{i < min(X, n)} (2X - 2i - 1)
+//!   = L_n(X) = k (2X - k)`, `k = min(X, n)`, so `Q(X, Y) <= m L_w(X) L_h(Y)` and a line
+//!   table's `2 S2` at `X` is at most `m L_n(X)` (`m = 2^b - 1`; reached by the all-`m`
+//!   texture);
+//! * each axis of a point multiplies that by its mass: Crow's lerp `v0 s + (v1 - v0) α s` on
+//!   non-negative values by `s max(L(i), L(i + 1))`, on signed ones by
+//!   `s L(i) + α s (L(i) + L(i + 1))`; extension terms by `sum |w| L(index)`;
+//! * the second difference `(1, -2, 1)` of non-negative values `V_p` by
+//!   `max(2 V_1, V_0 + V_2)`, of signed ones `V_0 + 2 V_1 + V_2`: at most 8 in all;
+//! * the exact form adds `P s^2` (`P` that bound of the paper numerator) to the line tables'
+//!   and texels' corrections, `(X sa + Y sb) s + m sa sb` (`sa = sum |w_p| α_p(1 - α_p) s^2`).
+//!
+//! Before it, the normaliser `a^2 b^2` (half-widths in units `2^-G`) must be below `2^63`
+//! (else `MeanNumerator`, `bits_needed = 2 bits(a) + 2 bits(b)`), and an extension weight
+//! past `i64` (footprints reaching far outside under ClampToEdge, say) is `LookupAccumulator`
+//! with 64 bits needed (a lower bound). Every `i64` operation stays checked as a safety net
+//! (which a table, line table and texture of the same texture never reach).
+//!
+//! Which `(E, F)` a `u32` table answers, `E` = [`tent_entry_bits`], `Q_max < 2^E`, for
+//! footprints inside the table (`0 <= x0 < x1 <= w`, likewise in y):
+//!
+//! | lookup | bound inside the table | answers every footprint inside if | e.g. `E = 32` (16-bit 13 x 13) | `E = 25` (8-bit 16 x 16) |
+//! |---|---|---|---|---|
+//! | [`TentTable::sample_int`] (`G = 0`) | `8 Q_max` | always (`E + 3 <= 35`) | always | always |
+//! | [`TentTable::sample`], [`TentTable::sample_raw`] | `8 s^2 Q_max`: `E + 2G + 3` bits | `E + 2F <= 58` | `F <= 13` | `F <= 16` |
+//! | [`TentTable::sample_exact`], [`TentTable::sample_exact_raw`] | `12 s^4 Q_max + m s^4 + ...`: `E + 4G + 4` bits | `E + 4F <= 55` | `F <= 5` | `F <= 7` |
+//!
+//! Every lookup also needs its normaliser below `2^63`: half-widths of `A x B` texels need
+//! `(A B)^2 2^(4G) < 2^63` (at `F = 8`, `A B < 2^13.5`; the whole 63 x 63 texture, the largest
+//! 8-bit one a `u32` table holds, up to `F = 9`).
+//!
+//! Past those a footprint is answered if its own bound fits (a footprint far from the table's
+//! last row and column reads smaller values) and refused otherwise; one reaching outside the
+//! table adds its extension weights and is refused earlier. Before this proof a `u32` table
+//! computed in `i128` and answered all of these, so the refusals past the table are new: **take
+//! `u64` entries for them** (the same lookups in `i128`, refused only where 127 bits overflow).
+//!
+//! How close the bound is to the need (tests, which measure every intermediate with a tracking
+//! accumulator on the `u64` table and check that the bound is never below it): on the whole
+//! all-maximum texture within 2 bits in the paper form and 6 in the exact form; for any refused
+//! footprint inside the table within 3 bits in the paper form. It is looser where the interval
+//! bound cannot see cancellations: the exact form of narrow footprints (up to 25 bits: the
+//! paper numerator, a second difference, is far below its bound `P` when `a` is a texel or less,
+//! which only the paper form's error analysis could show) and footprints outside the table
+//! (up to 12 bits in the paper form, 22 in the exact form: the extension terms cancel).
 //!
 //! ## Widths and memory
 //!
 //! The largest entry is `Q(w+1, h+1) = m w (w + 2) h (h + 2)` for the all-`m` texture (each
 //! axis: `sum_{i<w} (2w + 1 - 2i) = w (w + 2)`), so [`tent_entry_bits`] is exact. Entries are
-//! [`TentEntry`]: `u32`, `u64` or `u128` (at most 127 bits used, so any entry converts to the
-//! lookups' `i128`). 8-bit texels: `u64` holds up to 16 399 x 16 399 (16 400 is refused);
-//! 16-bit texels: 4 095 x 4 095. 256 x 256 at 8 bits needs 41 bits. Memory for 8-bit
+//! [`TentEntry`]: `u32`, `u64` or `u128` (at most 127 bits used, so any entry converts to its
+//! lookups' accumulator: `i64` for `u32`, `i128` for the others). 8-bit texels: `u32` holds up
+//! to 63 x 63, `u64` up to 16 399 x 16 399 (16 400 is refused); 16-bit texels: 15 x 15 and
+//! 4 095 x 4 095. 256 x 256 at 8 bits needs 41 bits. Memory for 8-bit
 //! 256 x 256 in `u64`: `257^2 * 64` bits over `256^2 * 8` = 8.06x the texture (5.2x at the exact
 //! 41 bits; the survey says 2-6x). The exact variant adds [`TentLines`] (`w (h+1) + (w+1) h`
 //! entries of [`tent_line_bits`] bits, its own entry type: 25 bits at 256 x 256, so `u32`,
@@ -2707,7 +2770,7 @@ mod tests {
     #[test]
     fn u32_tables_answer_as_u64_or_refuse_by_the_proof() {
         // Entry widths 12 (1 x 1), 18 (5 x 4), 25 (16 x 16) bits of 8-bit texels; 23 (3 x 2)
-        // and 32 (13 x 13, the widest a u32 table holds) of 16-bit ones. Random texels, then
+        // and 32 (13 x 13: the most a u32 table holds) of 16-bit ones. Random texels, then
         // the all-maximum texture (the worst case the proof bounds).
         let mut out = Outcomes::default();
         let sizes8: &[(usize, usize)] = if cfg!(miri) {
@@ -2731,6 +2794,9 @@ mod tests {
             u32_against_u64(&vec![u16::MAX; w * h], w, h, 4, &mut out);
         }
         assert_eq!(tent_entry_bits(16, 13, 13), 32);
+        // The largest square u32 tables (module docs): 8-bit 63 x 63, 16-bit 15 x 15.
+        let widths = [(8, 63), (8, 64), (16, 15), (16, 16)].map(|(b, n)| tent_entry_bits(b, n, n));
+        assert_eq!(widths, [32, 33, 32, 33]);
         // Inside the table the bound of the Crow form is within 3 bits of what the worst-case
         // texture needs where it refuses (module docs; the exact form's is looser).
         assert!(out.slack[0] <= 3, "{out:?}");
@@ -2820,5 +2886,52 @@ mod tests {
             }
         }
         assert!(answered > 0 && refused > 0);
+    }
+
+    #[test]
+    fn div_round_shift_u64_matches_the_u128_division() {
+        // The i64 accumulator's rounded division against the i128 one: exhaustive over small
+        // values (ties included), then the edges (den up to 2^63, shifts to 64, quotients past
+        // u64 refused alike). Under Miri a corner of the small values.
+        let (nums, shifts, dens) = if cfg!(miri) {
+            (12, 4, 6)
+        } else {
+            (160, 20, 40)
+        };
+        for num in 0..nums {
+            for shift in 0..=shifts {
+                for den in 0..=dens {
+                    assert_eq!(
+                        div_round_shift_u64(num, shift, den),
+                        div_round_shift(u128::from(num), shift, u128::from(den)),
+                        "{num} {shift} {den}"
+                    );
+                }
+            }
+        }
+        let edges = [
+            0,
+            1,
+            2,
+            3,
+            (1 << 31) - 1,
+            1 << 31,
+            (1 << 62) + 1,
+            (1 << 63) - 1,
+            1 << 63,
+        ];
+        for &num in &edges {
+            for shift in [0, 1, 13, 14, 31, 32, 50, 63, 64] {
+                for &den in &edges {
+                    assert_eq!(
+                        div_round_shift_u64(num, shift, den),
+                        div_round_shift(u128::from(num), shift, u128::from(den)),
+                        "{num} {shift} {den}"
+                    );
+                }
+            }
+        }
+        // Past 2^63 the i64 normaliser never gives a divisor: refused, not wrapped.
+        assert!(div_round_shift_u64(5, 1, (1 << 63) + 1).is_err());
     }
 }
