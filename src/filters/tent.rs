@@ -313,7 +313,12 @@ pub trait TentAcc: Copy + Ord + Default + core::fmt::Debug + 'static + sealed::S
 }
 
 macro_rules! impl_tent_acc {
-    ($t:ty, $bits:expr, $proves:expr, $e:ident => $from_entry:expr, $a:ident, $b:ident => $norm:expr, $n:ident, $s:ident, $d:ident => $div:expr) => {
+    (
+        $t:ty, $bits:expr, $proves:expr,
+        $e:ident => $from_entry:expr,
+        $a:ident, $b:ident => $norm:expr,
+        $n:ident, $s:ident, $d:ident => $div:expr
+    ) => {
         impl TentAcc for $t {
             const BITS_AVAILABLE: u32 = $bits;
             const PROVES_FIRST: bool = $proves;
