@@ -145,8 +145,8 @@
 //! Past those a footprint is answered if its own bound fits (a footprint far from the table's
 //! last row and column reads smaller values) and refused otherwise; one reaching outside the
 //! table adds its extension weights and is refused earlier. Before this proof a `u32` table
-//! computed in `i128` and answered all of these, so the refusals past the table are new: **take
-//! `u64` entries for them** (the same lookups in `i128`, refused only where 127 bits overflow).
+//! computed in `i128` and answered all of these, so these refusals are new: **take `u64`
+//! entries for them** (the same lookups in `i128`, refused only where 127 bits overflow).
 //!
 //! How close the bound is to the need (tests, which measure every intermediate with a tracking
 //! accumulator on the `u64` table and check that the bound is never below it): on the whole
@@ -875,8 +875,9 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     /// [`TentTable::sample_exact`]; negative results are clamped to 0.
     ///
     /// Inverted rectangles are [`Error::InvertedBox`], zero-width or zero-height ones
-    /// [`Error::ZeroArea`]. On a `u32` table a footprint whose worst case could pass 63 bits
-    /// (inside the table: `E + 2F > 58`, module docs) is [`Error::TooWide`] before any read.
+    /// [`Error::ZeroArea`]. On a `u32` table a footprint whose worst case could pass 63 bits is
+    /// [`Error::TooWide`] before any read (every footprint inside the table is answered if
+    /// `E + 2F <= 58` and its `a^2 b^2 < 2^63`; module docs).
     pub fn sample<X: Coord, M: EdgeMode, K: Counter>(
         &self,
         r: &Rect<X>,
@@ -930,10 +931,10 @@ impl<'a, E: TentEntry, const C: usize> TentTable<'a, E, C> {
     /// The intermediates are scaled by `2^4G` (`G = F + 1`). With `u64` entries they fit
     /// `i128` for `F <= 8` and tables up to the `u64` limit; larger combinations may be refused
     /// with [`Error::TooWide`]. With `u32` entries they are `i64`, and a footprint whose worst
-    /// case could pass 63 bits is refused before any read (inside the table: always for
-    /// `E + 4F >= 57`, never for `E + 4F <= 55`; module docs). A `lines` or `texture` of other
-    /// dimensions than the table is [`Error::RowLength`] (expected the table's `width * C`, or
-    /// `height` for heights).
+    /// case could pass 63 bits is refused before any read (every footprint inside the table is
+    /// answered if `E + 4F <= 55` and its `a^2 b^2 < 2^63`; module docs). A `lines` or
+    /// `texture` of other dimensions than the table is [`Error::RowLength`] (expected the
+    /// table's `width * C`, or `height` for heights).
     pub fn sample_exact<T: Texel, L: TentEntry, X: Coord, M: EdgeMode, K: Counter>(
         &self,
         lines: &TentLines<'_, L, C>,
