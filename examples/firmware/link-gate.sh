@@ -132,19 +132,21 @@ echo "ok: a panic-free firmware links; one with [0u8; 4][black_box(9)] fails wit
 
 # --- IR check: no 128-bit integer operation on the paths of u16/u32 tables ---------------------
 # The gate's tables are u32 and u16 (flat, tiled, modular; u16: flat and modular, gate_u16_*;
-# and its filters' u8/u16 texels), so the optimized, fat-LTO IR of a linking firmware must hold
-# no i128 anywhere except in the helpers whose *signature* is 128-bit (gate_width_u128:
-# width::bits_of(u128) and friends, host/compile-time analysis), the fixed crate's float
-# conversion behind Rect::from_f64/from_f32 (host conveniences), and the tent filter's lookups,
-# whose order-2 quantities are wider than 64 bits by design (scaled by 2^2G, 77 bits at F = 8;
-# see src/filters/tent.rs and docs/wide-arithmetic.md): its functions and its sample/queries
-# gates, but not its builds (TentTable::build, TentLines::build, their gates and their width
-# proofs build_entry_bits/build_line_bits: 64-bit and limb arithmetic). main is not allowed: it
-# holds no 128-bit value (gate_width_u128 forms its u128 from two u64 halves). Then the call
-# graph (ir-reach.awk): only gate_width_u128, gate_rect_from_f64 and the tent sample/queries
-# gates may reach a function that holds i128, so no other gate (nor main, outside those gates)
-# gets one through an allowed callee either. (On 32-bit ARM a 128-bit division is inlined, so symbol names cannot show it:
-# the IR is the proof.)
+# and its filters' u8/u16 texels; the tent filter's order-2 tables are u32 too, tent_gates::Te),
+# so the optimized, fat-LTO IR of a linking firmware must hold no i128 anywhere except in the
+# helpers whose *signature* is 128-bit (gate_width_u128: width::bits_of(u128) and friends,
+# host/compile-time analysis; gate_tent_width_u128: the tent filter's tent_entry_bits,
+# tent_line_bits with their saturating u128 fallbacks and paper_error_bound) and the fixed
+# crate's float conversion behind Rect::from_f64/from_f32 (host conveniences). The tent lookups
+# on u32 tables compute in i64 (TentEntry::Acc; src/filters/tent.rs, docs/wide-arithmetic.md),
+# so none of their functions is allowed: only u64/u128 tent tables, which no gate builds, keep
+# i128. The deny list keeps the tent builds and their width proofs (build_entry_bits,
+# build_line_bits: 64-bit and limb arithmetic) out even of the allowed names. main is not
+# allowed: it holds no 128-bit value (gate_width_u128 forms its u128 from two u64 halves). Then
+# the call graph (ir-reach.awk): only gate_width_u128, gate_tent_width_u128 and
+# gate_rect_from_f64 may reach a function that holds i128, so no other gate (nor main, outside
+# those gates) gets one through an allowed callee either. (On 32-bit ARM a 128-bit division is
+# inlined, so symbol names cannot show it: the IR is the proof.)
 ir_check() {
   local features=$1 name=$2 ll
   rm -f "$TARGET_DIR/$TARGET/release/deps/"*.ll
@@ -158,7 +160,7 @@ ir_check() {
   awk '/^define/{fn=$0; seen=0} /^}/{fn=""} fn != "" && !/^define/ && /^[^;!#]/ && !/#dbg/ && /[ (<{\[]i128[ ,)>}\]*]/ {if(!seen){print fn; seen=1}}' "$ll" \
     | grep -oE '@[^(]+' | sed 's/^@//' >"$OUT/$name/i128-functions.txt"
   local bad
-  local allow='gate_width_u128|6texsat4rect.*from_f(64|32)|7filters4tent|10tent_gates[0-9]+gate_tent_(sample|queries)'
+  local allow='gate_width_u128|6texsat4rect.*from_f(64|32)|10tent_gates[0-9]+gate_tent_width_u128|7filters4tent[0-9]+(tent_entry_bits|tent_line_bits|entry_bits_u128|line_bits_u128|side_product|paper_error_bound)'
   local deny='7filters4tent.*(5build|build_entry_bits|build_line_bits|limb_bits)'
   bad=$({ grep -vE "$allow" "$OUT/$name/i128-functions.txt"; grep -E "$deny" "$OUT/$name/i128-functions.txt"; } || true)
   local allowed
@@ -170,7 +172,7 @@ ir_check() {
   fi
   # The same through calls: no other gate may reach a function that holds i128 (an allowed one
   # included), through any chain of calls the IR shows (ir-reach.awk).
-  local allow_gates='gate_width_u128|gate_rect_from_f64|10tent_gates[0-9]+gate_tent_(sample|queries)'
+  local allow_gates='gate_width_u128|gate_rect_from_f64|10tent_gates[0-9]+gate_tent_width_u128'
   awk -v allow_gates="$allow_gates" -f "$HERE/ir-reach.awk" "$ll" >"$OUT/$name/i128-reach.txt"
   if [ -s "$OUT/$name/i128-reach.txt" ]; then
     echo "!!! IR CHECK FAILED for '$name': gates that reach a function holding i128 (gate -> function):"

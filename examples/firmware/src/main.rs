@@ -907,7 +907,9 @@ mod tent_gates {
     use super::*;
     use texsat::filters::tent::{TentLines, TentTable};
 
-    /// Entry type of the order-2 tables (8-bit 16 x 16 textures need 27 bits).
+    /// Entry type of the order-2 tables (8-bit 16 x 16 textures need 27 bits): `u32`, so the
+    /// lookups below compute in `i64` (`TentEntry::Acc`), and the IR check proves that no
+    /// 128-bit operation is left on their paths.
     pub type Te = u32;
 
     #[inline(never)]
@@ -928,12 +930,22 @@ mod tent_gates {
         black_box(TentLines::build(t, storage)).ok()
     }
 
+    /// The tent filter's width analysis, whose public `const fn`s answer for any texel width
+    /// and side (a saturating `u128` product past 64-bit texels or `2^64 - 3` sides) and its
+    /// `f64` error bound (`max_texel` as `u128`): host and compile-time helpers (category (c)
+    /// of docs/wide-arithmetic.md), kept out of the `u32` lookups' gates so that the IR check
+    /// (link-gate.sh) can allow 128-bit operations here and in no tent lookup.
     #[inline(never)]
-    pub fn gate_tent_queries(q: &TentTable<'_, Te>, l: &TentLines<'_, Te>, x: usize, y: usize) {
+    pub fn gate_tent_width_u128(x: usize, y: usize) {
         use texsat::filters::tent::{paper_error_bound, tent_entry_bits, tent_line_bits};
         let b = black_box(8);
         keep((tent_entry_bits(b, x, y), tent_line_bits(b, x)));
         keep(paper_error_bound(b, x as f64, y as f64));
+    }
+
+    #[inline(never)]
+    pub fn gate_tent_queries(q: &TentTable<'_, Te>, l: &TentLines<'_, Te>, x: usize, y: usize) {
+        gate_tent_width_u128(x, y);
         keep((q.width(), q.height(), q.texel_bits()));
         keep((
             q.corner(x, y),
