@@ -419,40 +419,65 @@ fn div_round_long_u128(num: u128, g: u32, den: u128) -> Result<u128, Error> {
     Ok(q)
 }
 
-/// `round(num * 2^shift / den)`, ties up, for `0 < den < 2^127`, by restoring division (no
-/// intermediate wider than `2 den`); a quotient above `u64` is [`Error::TooWide`], a zero `den`
-/// [`Error::ZeroArea`]. The one 128-bit rounded division of the crate, for the quantities that
-/// are 128-bit by nature (the tent filter's order-2 sums, the variance of `u64` tables).
-#[allow(dead_code)] // used only by some filter features
-#[allow(
-    clippy::arithmetic_side_effects,
-    reason = "restoring division: r < den < 2^127 throughout, so r << 1 loses nothing, r -= den only \
-              when r >= den, and den - r >= 1; q += 1 in the loop follows q * 2 (even, at most \
-              u128::MAX - 1); the final q + 1: q = floor(num 2^s / den) = 2^128 - 1 needs \
-              den <= 2^s (num < 2^128), while rounding up needs den 2^128 - num 2^s, a positive \
-              multiple of 2^s, to be at most den / 2, so den >= 2^(s+1): both cannot hold"
-)]
-pub(crate) fn div_round_shift_u128(num: u128, shift: u32, den: u128) -> Result<u64, Error> {
-    let wide = || too_wide(65, 64);
-    let Some(den) = core::num::NonZeroU128::new(den) else {
-        return Err(Error::ZeroArea);
-    };
-    let mut q = num / den;
-    let mut r = num % den;
-    let den = den.get();
-    for _ in 0..shift {
-        q = q.checked_mul(2).ok_or_else(wide)?;
-        r <<= 1;
-        if r >= den {
-            r -= den;
-            q += 1;
+/// One rounded division `round(num 2^shift / den)`, ties up, per word width: restoring
+/// division in the word itself (no intermediate wider than `2 den`).
+macro_rules! div_round_shift_word {
+    ($(#[$doc:meta])* $name:ident, $t:ty, $nz:ty) => {
+        $(#[$doc])*
+        #[allow(dead_code)] // used only by some filter features
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "restoring division: r < den <= 2^(BITS - 1) throughout (checked first), so \
+                      r << 1 loses nothing, r -= den only when r >= den, and den - r >= 1; q += 1 \
+                      in the loop follows q * 2 (even, so below the word's maximum)"
+        )]
+        pub(crate) fn $name(num: $t, shift: u32, den: $t) -> Result<u64, Error> {
+            let wide = || too_wide(65, 64);
+            let Some(den) = <$nz>::new(den) else {
+                return Err(Error::ZeroArea);
+            };
+            if den.get() > 1 << (<$t>::BITS - 1) {
+                return Err(wide());
+            }
+            if num == 0 {
+                // Rounds to 0 at any shift (and the loop below would run `shift` times).
+                return Ok(0);
+            }
+            let mut q = num / den;
+            let mut r = num % den;
+            let den = den.get();
+            for _ in 0..shift {
+                q = q.checked_mul(2).ok_or_else(wide)?;
+                r <<= 1;
+                if r >= den {
+                    r -= den;
+                    q += 1;
+                }
+            }
+            if r >= den - r {
+                q = q.checked_add(1).ok_or_else(wide)?;
+            }
+            u64::try_from(q).map_err(|_| wide())
         }
-    }
-    if r >= den - r {
-        q += 1;
-    }
-    u64::try_from(q).map_err(|_| wide())
+    };
 }
+
+div_round_shift_word!(
+    /// `round(num * 2^shift / den)`, ties up, for `0 < den <= 2^127`; a quotient above `u64`
+    /// or a larger `den` is [`Error::TooWide`], a zero `den` [`Error::ZeroArea`]. The 128-bit
+    /// rounded division, for the quantities that are 128-bit by nature (the tent filter's
+    /// order-2 sums on `u64` tables, the variance of `u64` tables).
+    div_round_shift_u128,
+    u128,
+    core::num::NonZeroU128
+);
+div_round_shift_word!(
+    /// [`div_round_shift_u128`] for `0 < den <= 2^63` in `u64` (the tent filter's `i64`
+    /// lookups on `u32` tables): the same quotient, or the same refusal.
+    div_round_shift_u64,
+    u64,
+    core::num::NonZeroU64
+);
 
 #[cfg(test)]
 #[allow(

@@ -907,7 +907,7 @@ mod tent_gates {
     use super::*;
     use texsat::filters::tent::{TentLines, TentTable};
 
-    /// Entry type of the order-2 tables (8-bit 16 x 16 textures need 27 bits): `u32`, so the
+    /// Entry type of the order-2 tables (8-bit 16 x 16 textures need 25 bits): `u32`, so the
     /// lookups below compute in `i64` (`TentEntry::Acc`), and the IR check proves that no
     /// 128-bit operation is left on their paths.
     pub type Te = u32;
@@ -945,7 +945,6 @@ mod tent_gates {
 
     #[inline(never)]
     pub fn gate_tent_queries(q: &TentTable<'_, Te>, l: &TentLines<'_, Te>, x: usize, y: usize) {
-        gate_tent_width_u128(x, y);
         keep((q.width(), q.height(), q.texel_bits()));
         keep((
             q.corner(x, y),
@@ -1392,6 +1391,7 @@ fn main() -> ! {
         let lines = gate_tent_lines_build(&tex, black_box(&mut lines[..]));
         if let (Some(q), Some(l)) = black_box((table, lines)) {
             gate_tent_queries(&q, &l, x, y);
+            gate_tent_width_u128(x, y);
             gate_tent_sample_int(&q, black_box([3, 2]), black_box([2, 3]));
             gate_tent_sample(&q, &rect_fix);
             gate_tent_sample_exact(&q, &l, &tex, &rect_fix);
