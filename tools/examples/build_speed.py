@@ -226,13 +226,14 @@ def main():
         q = statistics.quantiles(r, n=4) if len(r) >= 2 else [r[0]] * 3
         return q[0], statistics.median(r), q[2]
 
-    print("\npaired ratios, median over rounds [quartiles]; per side: / floor, / cv2.integral")
+    print("\npaired ratios, median over rounds [quartiles]; per side: / floor, / cv2.integral, "
+          "/ the same variant's build (Sat::build)")
     for v, m in rows:
         if v == "opencv":
             continue
         cells = []
         for n in sides:
-            for ref in [(v, "floor", n), ("opencv", "cv2.integral", n)]:
+            for ref in [(v, "floor", n), ("opencv", "cv2.integral", n), (v, "build", n)]:
                 pr = paired((v, m, n), ref)
                 cells.append(f"{pr[1]:.2f} [{pr[0]:.2f}, {pr[2]:.2f}]" if pr else "")
         print(f"| {v} | {m} | " + " | ".join(cells) + " |")
