@@ -2163,27 +2163,33 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         // The words this row's fields go to in the first two x components (with `simd`, the
         // row step asks for them while it computes: a table being built is usually not in
         // cache, and the packing would wait on each line).
-        let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
-        let mut rows = [(0usize, 0usize); 2];
-        for (p, (a, r)) in ahead.iter_mut().zip(&mut rows).enumerate() {
-            if let Some(c) = g.component(p, q) {
-                let from = usize::try_from(c.offset(0, iy) / 32);
-                let to = usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
-                if let (Ok(from), Ok(to)) = (from, to) {
-                    if let Some(w) = words.get(from..to) {
-                        *a = (w.as_ptr(), w.len());
-                        *r = (from, to);
+        // The local sums' component row, which the row step may pack into directly (with
+        // `simd`; the rest of its fields below). Not on other targets (flash).
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let (ahead, pack) = {
+            let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
+            let mut rows = [(0usize, 0usize); 2];
+            for (p, (a, r)) in ahead.iter_mut().zip(&mut rows).enumerate() {
+                if let Some(c) = g.component(p, q) {
+                    let from = usize::try_from(c.offset(0, iy) / 32);
+                    let to =
+                        usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
+                    if let (Ok(from), Ok(to)) = (from, to) {
+                        if let Some(w) = words.get(from..to) {
+                            *a = (w.as_ptr(), w.len());
+                            *r = (from, to);
+                        }
                     }
                 }
             }
-        }
-        // The local sums' component row, which the row step may pack into directly (with
-        // `simd`; the rest of its fields below).
-        let [row0, _] = rows;
-        let (bit0, k0) = g
-            .component(0, q)
-            .map_or((0, 0), |c| (c.offset(0, iy) % 32, c.bits));
-        let pack = words.get_mut(row0.0..row0.1).map(|w| (w, bit0, k0));
+            let [row0, _] = rows;
+            let (bit0, k0) = g
+                .component(0, q)
+                .map_or((0, 0), |c| (c.offset(0, iy) % 32, c.bits));
+            (ahead, words.get_mut(row0.0..row0.1).map(|w| (w, bit0, k0)))
+        };
+        #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+        let (ahead, pack): (Ahead, _) = ([(core::ptr::null(), 0); 2], None);
         // acc_q += acc_{q-1} + the row's sums (row_fields: in the accumulators' form), split.
         // Wrapping additions: without a modulus every sum is at most the texture's total, which
         // `E` holds (`check_value_type`); with one, only the low k bits are stored, and those
@@ -2199,6 +2205,12 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             pack,
         )
         .ok_or(short)?;
+        // (Without `simd` nothing is packed in the row step: a constant, the code below folds.)
+        let kp = if cfg!(all(feature = "simd", target_arch = "x86_64")) {
+            kp
+        } else {
+            0
+        };
         // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
         // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
         // p = 0: the local sums; p >= 1: the same differences over the tile boundaries (x a
