@@ -1242,7 +1242,14 @@ mod tiled512 {
                     let q =
                         _mm512_ternarylogic_epi64::<0xE4>(d, _mm512_srlv_epi64(d, shift), low2k);
                     let o = _mm512_permutexvar_epi8(bidx, q);
-                    _mm512_mask_storeu_epi8(out.add(bytes * pr).cast(), store, o);
+                    // All 64 bytes while they end inside the pairs' bytes: those past this
+                    // pair's are the next pairs', which their stores overwrite (in order);
+                    // then masked stores.
+                    if bytes * pr + 64 <= bytes * pairs {
+                        _mm512_storeu_si512(out.add(bytes * pr).cast(), o);
+                    } else {
+                        _mm512_mask_storeu_epi8(out.add(bytes * pr).cast(), store, o);
+                    }
                 }
             }
             from = end;
