@@ -751,6 +751,9 @@ pub(crate) struct PackTo<'w> {
     pub(crate) bit: u64,
     /// The field width.
     pub(crate) k: u32,
+    /// Whether every local sum is below `2^k` (the layout's width proof, without a modulus):
+    /// then not masked to `k` bits (wrong bits if it is not, never an access out of bounds).
+    pub(crate) exact: bool,
 }
 
 /// The tiled builder's row step (`layouts::tiled`'s `row_fields`, the same values) with
@@ -861,15 +864,19 @@ fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     // The packing kernel: its pairs of blocks' local sums, 7 k / 2 bytes per pair, must fit
     // `pack.words` from byte bit / 8.
     let packed = match pack {
-        Some(PackTo { words, bit, k })
-            if wide
-                && vbmi
-                && tile == 8
-                && blocks >= 2
-                && matches!(k, 8 | 10 | 12 | 14)
-                && bit % 8 == 0
-                && bit < 32
-                && (bit as usize / 8 + blocks / 2 * PAIR * k as usize / 8) <= 4 * words.len() =>
+        Some(PackTo {
+            words,
+            bit,
+            k,
+            exact,
+        }) if wide
+            && vbmi
+            && tile == 8
+            && blocks >= 2
+            && matches!(k, 8 | 10 | 12 | 14)
+            && bit % 8 == 0
+            && bit < 32
+            && (bit as usize / 8 + blocks / 2 * PAIR * k as usize / 8) <= 4 * words.len() =>
         {
             Some((
                 words
@@ -877,6 +884,7 @@ fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
                     .cast::<u8>()
                     .wrapping_add(bit as usize / 8),
                 k,
+                exact,
             ))
         }
         _ => None,
@@ -901,12 +909,21 @@ fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     // not `local[..28 pairs]`; the six slices are distinct borrows.
     let (mut run, kp) = unsafe {
         match packed {
-            Some((out, k)) if lp.is_null() => (
-                tiled512::kernel8_packed::<false>(tp, lp, ap, bp, op, blocks, out, k, ahead),
-                blocks / 2 * PAIR,
-            ),
-            Some((out, k)) => (
-                tiled512::kernel8_packed::<true>(tp, lp, ap, bp, op, blocks, out, k, ahead),
+            Some((out, k, exact)) => (
+                match (lp.is_null(), exact) {
+                    (true, true) => tiled512::kernel8_packed::<false, true>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                    (true, false) => tiled512::kernel8_packed::<false, false>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                    (false, true) => tiled512::kernel8_packed::<true, true>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                    (false, false) => tiled512::kernel8_packed::<true, false>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                },
                 blocks / 2 * PAIR,
             ),
             None if wide => (run!(2 4 8 16), 0),
@@ -1009,28 +1026,31 @@ struct Prefetch {
     ahead: Ahead,
     lines: [usize; 2],
     asked: [usize; 2],
+    /// Lines due per block, `2 lines / blocks` in 16.16 fixed point (one division per row, not
+    /// per group).
+    rate: [usize; 2],
 }
 
 impl Prefetch {
-    fn new(ahead: Ahead) -> Self {
+    fn new(ahead: Ahead, blocks: usize) -> Self {
+        let lines = ahead.map(|(_, len)| len.div_ceil(16));
         Prefetch {
             ahead,
-            lines: ahead.map(|(_, len)| len.div_ceil(16)),
+            lines,
             asked: [0; 2],
+            rate: lines.map(|l| (l << 17).div_ceil(blocks.max(1))),
         }
     }
 
-    /// Asks for the lines due by the end of the group ending at block `end` of `blocks`: all of
-    /// them by the middle of the row (2 lines end / blocks, rounded up: the last lines are
-    /// packed soon after the row step, so they need the lead; asking for all of them at once
-    /// measured slower at 4096^2). A slice holds fewer than 2^32 words and blocks < 2^28: no
-    /// overflow.
+    /// Asks for the lines due by the end of the group ending at block `end`: all of them by
+    /// the middle of the row (2 lines end / blocks, rounded up: the last lines are packed soon
+    /// after the row step, so they need the lead; asking for all of them at once measured
+    /// slower at 4096^2). The lines of a slice (fewer than 2^28) times 2^17, and `rate end <=
+    /// 2^17 lines + end`: no overflow on x86-64.
     #[inline(always)]
-    fn ask(&mut self, end: usize, blocks: usize) {
+    fn ask(&mut self, end: usize) {
         for r in 0..2 {
-            let due = (self.lines[r] * 2 * end)
-                .div_ceil(blocks)
-                .min(self.lines[r]);
+            let due = ((self.rate[r] * end + 0xffff) >> 16).min(self.lines[r]);
             while self.asked[r] < due {
                 // A hint (reads and writes nothing, never faults); 16 asked < len: inside the
                 // words. SAFETY: SSE is baseline on x86-64; the hint dereferences nothing.
@@ -1073,7 +1093,7 @@ mod tiled512 {
     ) -> u32 {
         // Prefetching, a group of blocks at a time (the bookkeeping once per group).
         const GROUP: usize = 8;
-        let mut prefetch = Prefetch::new(ahead);
+        let mut prefetch = Prefetch::new(ahead, blocks);
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -1098,7 +1118,7 @@ mod tiled512 {
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
-            prefetch.ask(end, blocks);
+            prefetch.ask(end);
             for b in from..end {
                 let i = BLOCK * b;
                 // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
@@ -1147,7 +1167,8 @@ mod tiled512 {
     /// [`kernel`] for tiles of 8 with the local sums packed: per pair of blocks, the 28 local
     /// sums (lanes 0..7 and 8..15 of each block's 16 but the boundaries 7 and 15) gathered
     /// into 16-bit lanes by one `vpermt2w` (their low halves: `k <= 14` bits), masked to `k`
-    /// bits; `vpmaddwd` with weights `(1, 2^k)` joins each pair into a 2k-bit value per 32-bit
+    /// bits (not with `EXACT`: the caller knows they are below `2^k`); `vpmaddwd` with weights
+    /// `(1, 2^k)` joins each pair into a 2k-bit value per 32-bit
     /// lane; a shift and a bit select (`vpsrlq`, `vpternlogq`) join each pair of those into a
     /// 4k-bit value at the bottom of each 64-bit lane (`4k / 8 = k / 2` whole bytes, `k` even);
     /// `vpermb` moves the 7 lanes' bytes together, one masked byte store writes the `7 k / 2`
@@ -1166,7 +1187,7 @@ mod tiled512 {
         reason = "kernel's pointers plus the packing target"
     )]
     #[target_feature(enable = "avx512f,avx512vnni,avx512bw,avx512vbmi")]
-    pub(super) unsafe fn kernel8_packed<const LOWER: bool>(
+    pub(super) unsafe fn kernel8_packed<const LOWER: bool, const EXACT: bool>(
         t: *const u8,
         lower: *mut u32,
         acc: *mut u32,
@@ -1179,7 +1200,7 @@ mod tiled512 {
     ) -> u32 {
         // Prefetching, a group of pairs at a time (the bookkeeping once per group).
         const GROUP: usize = 4;
-        let mut prefetch = Prefetch::new(ahead);
+        let mut prefetch = Prefetch::new(ahead, blocks);
         let table = &TILE_TABLES[2];
         let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -1228,7 +1249,7 @@ mod tiled512 {
         let mut from = 0;
         while from < pairs {
             let end = (from + GROUP).min(pairs);
-            prefetch.ask(2 * end, blocks);
+            prefetch.ask(2 * end);
             for pr in from..end {
                 let (va, vb) = (block(2 * pr), block(2 * pr + 1));
                 // SAFETY: the boundaries go to bnd[4 pr..4 pr + 4], inside bnd[..2 blocks];
@@ -1237,7 +1258,10 @@ mod tiled512 {
                 unsafe {
                     let bv = _mm512_permutex2var_epi32(va, bnd_ix, vb);
                     _mm_storeu_si128(bnd.add(4 * pr).cast(), _mm512_castsi512_si128(bv));
-                    let f = _mm512_and_si512(_mm512_permutex2var_epi16(va, widx, vb), fmask);
+                    let mut f = _mm512_permutex2var_epi16(va, widx, vb);
+                    if !EXACT {
+                        f = _mm512_and_si512(f, fmask);
+                    }
                     let d = _mm512_madd_epi16(f, weights);
                     let q =
                         _mm512_ternarylogic_epi64::<0xE4>(d, _mm512_srlv_epi64(d, shift), low2k);
@@ -1336,14 +1360,14 @@ mod tiled256 {
         ahead: Ahead,
     ) -> u32 {
         const GROUP: usize = 8;
-        let mut prefetch = Prefetch::new(ahead);
+        let mut prefetch = Prefetch::new(ahead, blocks);
         let seven = _mm256_set1_epi32(7);
         let zero = _mm256_setzero_si256();
         let mut carry = zero;
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
-            prefetch.ask(end, blocks);
+            prefetch.ask(end);
             for b in from..end {
                 let i = BLOCK * b;
                 // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
@@ -1665,10 +1689,13 @@ mod tests {
             for &n in &widths {
                 for k in [8u32, 10, 11, 12, 14, 16] {
                     for bit in [0u64, 3, 8, 16, 24] {
-                        for pattern in 0..4 {
+                        for (pattern, exact) in (0..4).flat_map(|p| [(p, false), (p, true)]) {
                             if cfg!(miri) && (pattern != 3 || k != 14 || bit > 8) {
                                 continue;
                             }
+                            // `exact`: the local sums below 2^k (texels at most t_max, the
+                            // rows below 4 each; 7 texels a tile).
+                            let t_max = if exact { ((1u32 << k) - 8) / 7 } else { 255 };
                             let t: Vec<u8> = (0..n)
                                 .map(|i| match pattern {
                                     0 => 0,
@@ -1676,12 +1703,25 @@ mod tests {
                                     2 => (i % 256) as u8,
                                     _ => rng(&mut seed),
                                 })
+                                .map(|v| (u32::from(v) % (t_max + 1)) as u8)
                                 .collect();
                             let acc0: Vec<u32> = (0..n)
-                                .map(|i| (u32::MAX - 1000).wrapping_add(37 * i as u32))
+                                .map(|i| {
+                                    if exact {
+                                        i as u32 % 4
+                                    } else {
+                                        (u32::MAX - 1000).wrapping_add(37 * i as u32)
+                                    }
+                                })
                                 .collect();
                             let low0: Vec<u32> = (0..n)
-                                .map(|i| 3 * i as u32 + u32::from(rng(&mut seed)))
+                                .map(|i| {
+                                    if exact {
+                                        u32::from(rng(&mut seed)) % 4
+                                    } else {
+                                        3 * i as u32 + u32::from(rng(&mut seed))
+                                    }
+                                })
                                 .collect();
                             for (with_lower, short) in
                                 [(false, false), (true, false), (false, true)]
@@ -1732,9 +1772,10 @@ mod tests {
                                         words: &mut words[..len],
                                         bit,
                                         k,
+                                        exact,
                                     }),
                                 );
-                                let what = (tile, n, k, bit, pattern, with_lower, short);
+                                let what = (tile, n, k, bit, pattern, exact, with_lower, short);
                                 if Kernel::best() != Kernel::Avx512Vnni
                                     && !(Kernel::best() == Kernel::Avx2 && tile == 8)
                                 {

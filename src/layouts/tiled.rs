@@ -1662,8 +1662,8 @@ type Ahead = [(*const u32, usize); 2];
 /// components, without a subtraction. Returns the values written to each; `None` if a slice
 /// is too short (never, for the builder's rows). With `simd`, one vectorized pass where it
 /// applies ([`crate::simd::tiled_row`], the same values), which may pack the first `kp` local
-/// sums straight into `pack` (`(words, bit, k)`: `k`-bit fields from bit `bit < 32` of
-/// `words`, the component row of the local sums) and not write `local[..kp]`; returns `(kb,
+/// sums straight into `pack` (`(words, bit, k, exact)`: `k`-bit fields from bit `bit < 32` of
+/// `words`, the component row of the local sums; `exact` if every local sum is below `2^k`) and not write `local[..kp]`; returns `(kb,
 /// kl, kp)` (`kp = 0` on the portable path). `ahead` (the first word and the word count of the
 /// rows the fields go to) is a prefetch hint for the kernel, never dereferenced.
 #[allow(
@@ -1678,13 +1678,18 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     bnd: &mut [E],
     local: &mut [E],
     ahead: Ahead,
-    pack: Option<(&mut [u32], u64, u32)>,
+    pack: Option<(&mut [u32], u64, u32, bool)>,
 ) -> Option<(usize, usize, usize)> {
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
     let _ = (ahead, pack);
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     let lower = {
-        let pack = pack.map(|(words, bit, k)| crate::simd::PackTo { words, bit, k });
+        let pack = pack.map(|(words, bit, k, exact)| crate::simd::PackTo {
+            words,
+            bit,
+            k,
+            exact,
+        });
         match lower {
             // The kernel needs its own borrow of `lower`: try it, then fall through.
             Some(l) => {
@@ -2186,7 +2191,12 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             let (bit0, k0) = g
                 .component(0, q)
                 .map_or((0, 0), |c| (c.offset(0, iy) % 32, c.bits));
-            (ahead, words.get_mut(row0.0..row0.1).map(|w| (w, bit0, k0)))
+            // Without a modulus every field is below 2^bits (the width proof): `exact`.
+            let exact = g.spec.modulus.is_none();
+            (
+                ahead,
+                words.get_mut(row0.0..row0.1).map(|w| (w, bit0, k0, exact)),
+            )
         };
         #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
         let (ahead, pack): (Ahead, _) = ([(core::ptr::null(), 0); 2], None);
