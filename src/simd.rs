@@ -1132,10 +1132,11 @@ mod tiled512 {
                         |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
                     let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
                     let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-                    // The running sum before the block into the boundary lanes only (lane 15, a
-                    // boundary, holds the block's total).
-                    let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
-                    carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                    // The running sum before the block, kept in the boundary lanes only (zero
+                    // in the others): one addition gives every lane its r(x); the block's
+                    // total (lane 15, a boundary) joins it by a zero-masked permute.
+                    let mut v = _mm512_add_epi32(p, carry);
+                    carry = _mm512_add_epi32(carry, _mm512_maskz_permutexvar_epi32(bmask, last, p));
                     if LOWER {
                         v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
                         _mm512_storeu_si512(lower.add(i).cast(), zero);
@@ -1161,7 +1162,8 @@ mod tiled512 {
             }
             from = end;
         }
-        _mm512_cvtsi512_si32(carry) as u32
+        // Lane 15, a boundary, holds the running sum.
+        _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
     }
 
     /// [`kernel`] for tiles of 8 with the local sums packed: per pair of blocks, the 28 local
@@ -1235,8 +1237,11 @@ mod tiled512 {
             let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
             let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
             let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-            let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
-            carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+            // The running sum before the block, kept in the boundary lanes only (zero in the
+            // others): one addition gives every lane its r(x); the block's total (lane 15)
+            // joins it by a zero-masked permute.
+            let mut v = _mm512_add_epi32(p, carry);
+            carry = _mm512_add_epi32(carry, _mm512_maskz_permutexvar_epi32(bmask, last, p));
             if LOWER {
                 v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
                 _mm512_storeu_si512(lower.add(i).cast(), zero);
@@ -1297,7 +1302,8 @@ mod tiled512 {
                 );
             }
         }
-        _mm512_cvtsi512_si32(carry) as u32
+        // Lane 15, a boundary, holds the running sum.
+        _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
     }
 }
 
