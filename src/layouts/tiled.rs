@@ -2181,7 +2181,17 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                         usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
                     if let (Ok(from), Ok(to)) = (from, to) {
                         if let Some(w) = words.get(from..to) {
-                            *a = (w.as_ptr(), w.len());
+                            // The local sums' row and up to 256 words after it (most often
+                            // the next row's first 16 lines: it then finds them in cache).
+                            let len = if p == 0 {
+                                words
+                                    .len()
+                                    .saturating_sub(from)
+                                    .min(w.len().saturating_add(256))
+                            } else {
+                                w.len()
+                            };
+                            *a = (w.as_ptr(), len);
                             *r = (from, to);
                         }
                     }
