@@ -587,7 +587,8 @@ mod avx512vnni {
 /// words: four `vpermt2d` gathering those fields from the group's two registers (indices past
 /// the group clamped to 31: their shift counts are at least 32, and AVX-512's variable shifts
 /// give 0 there, as for the terms a word does not need), one `vpsrlvd`, three `vpsllvd`, three
-/// ors, one (masked) store. The index and count tables depend on `k` only: built once per call.
+/// ors, one (masked) store; from 16 bits on, a word holds parts of at most three fields: three
+/// of each. The index and count tables depend on `k` only: built once per call.
 pub(crate) fn pack_u32<E: Entry>(words: &mut [u32], fields: &[E], k: u32) -> usize {
     let Some(f) = as_u32(fields) else {
         return 0;
@@ -714,16 +715,19 @@ mod pack512 {
                         continue;
                     }
                     let t = |i: usize| perm2(a, ix[i], b);
-                    let v = _mm512_or_si512(
+                    // The fourth term only below 16 bits: from 16 bits on its shift count,
+                    // 3k - s > 2k, is at least 32, so it contributes nothing (the three ORs
+                    // become one `vpternlogd`).
+                    let mut v = _mm512_or_si512(
                         _mm512_or_si512(
                             _mm512_srlv_epi32(t(0), c[0]),
                             _mm512_sllv_epi32(t(1), c[1]),
                         ),
-                        _mm512_or_si512(
-                            _mm512_sllv_epi32(t(2), c[2]),
-                            _mm512_sllv_epi32(t(3), c[3]),
-                        ),
+                        _mm512_sllv_epi32(t(2), c[2]),
                     );
+                    if k < 16 {
+                        v = _mm512_or_si512(v, _mm512_sllv_epi32(t(3), c[3]));
+                    }
                     let out = w.add(g * k + 16 * h);
                     if *n == 16 {
                         _mm512_storeu_si512(out.cast(), v);
