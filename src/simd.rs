@@ -656,7 +656,7 @@ mod pack512 {
     /// and a blend (slower, same lanes): Miri still checks every load and store of the kernel.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
+    pub(super) fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
         #[cfg(not(miri))]
         let v = _mm512_permutex2var_epi32(a, idx, b);
         #[cfg(miri)]
@@ -1170,6 +1170,31 @@ mod tiled512 {
         _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
     }
 
+    /// Under Miri, which emulates neither `vpermt2w`, `vpermw` nor `vpermb`: the 64 bytes
+    /// [`kernel8_packed`] stores for a pair of blocks, computed field by field (the low `k`
+    /// bits of the 28 local sums at bits `i k`), so that Miri checks the kernel's loads and
+    /// stores; the vector computation itself is tested natively.
+    #[cfg(miri)]
+    #[target_feature(enable = "avx512f")]
+    fn miri_pack(va: __m512i, vb: __m512i, k: u32) -> __m512i {
+        let mut lanes = [0u32; 32];
+        let mut bytes = [0u8; 64];
+        // SAFETY: 64-byte stores into 128 bytes of `lanes`, a 64-byte load of `bytes`.
+        unsafe {
+            _mm512_storeu_si512(lanes.as_mut_ptr().cast(), va);
+            _mm512_storeu_si512(lanes.as_mut_ptr().add(16).cast(), vb);
+        }
+        for (i, &ix) in PACK8_WORDS.iter().take(PAIR).enumerate() {
+            let v = lanes[usize::from(ix) / 2] & ((1 << k) - 1);
+            for bit in 0..k as usize {
+                let at = i * k as usize + bit;
+                bytes[at / 8] |= (((v >> bit) & 1) as u8) << (at % 8);
+            }
+        }
+        // SAFETY: as above.
+        unsafe { _mm512_loadu_si512(bytes.as_ptr().cast()) }
+    }
+
     /// [`kernel`] for tiles of 8 with the local sums packed: per pair of blocks, the 28 local
     /// sums (lanes 0..7 and 8..15 of each block's 16 but the boundaries 7 and 15) gathered
     /// into 16-bit lanes by one `vpermt2w` (their low halves: `k <= 14` bits), masked to `k`
@@ -1229,6 +1254,8 @@ mod tiled512 {
         let weights = _mm512_set1_epi32(((1u32 << k) << 16 | 1) as i32);
         let low2k = _mm512_set1_epi64(((1u64 << (2 * k)) - 1) as i64);
         let shift = _mm512_set1_epi64(i64::from(32 - 2 * k));
+        #[cfg(miri)]
+        let _ = (widx, bidx, fmask, weights, low2k, shift);
         let bytes = 7 * k as usize / 2;
         let store = (1u64 << bytes) - 1;
         let mut carry = zero;
@@ -1265,16 +1292,24 @@ mod tiled512 {
                 // the packed bytes to out[bytes pr..bytes (pr + 1)], inside the caller's
                 // `bytes pairs`.
                 unsafe {
-                    let bv = _mm512_permutex2var_epi32(va, bnd_ix, vb);
+                    let bv = super::pack512::perm2(va, bnd_ix, vb);
                     _mm_storeu_si128(bnd.add(4 * pr).cast(), _mm512_castsi512_si128(bv));
-                    let mut f = _mm512_permutex2var_epi16(va, widx, vb);
-                    if !EXACT {
-                        f = _mm512_and_si512(f, fmask);
-                    }
-                    let d = _mm512_madd_epi16(f, weights);
-                    let q =
-                        _mm512_ternarylogic_epi64::<0xE4>(d, _mm512_srlv_epi64(d, shift), low2k);
-                    let o = _mm512_permutexvar_epi8(bidx, q);
+                    #[cfg(not(miri))]
+                    let o = {
+                        let mut f = _mm512_permutex2var_epi16(va, widx, vb);
+                        if !EXACT {
+                            f = _mm512_and_si512(f, fmask);
+                        }
+                        let d = _mm512_madd_epi16(f, weights);
+                        let q = _mm512_ternarylogic_epi64::<0xE4>(
+                            d,
+                            _mm512_srlv_epi64(d, shift),
+                            low2k,
+                        );
+                        _mm512_permutexvar_epi8(bidx, q)
+                    };
+                    #[cfg(miri)]
+                    let o = miri_pack(va, vb, k);
                     // All 64 bytes while they end inside the pairs' bytes: those past this
                     // pair's are the next pairs', which their stores overwrite (in order);
                     // then masked stores.
