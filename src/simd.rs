@@ -37,9 +37,11 @@
 //! 1. *Target features.* Each kernel is a `#[target_feature]` function; it is called only as
 //!    [`Kernel::best`], the widest kernel whose features CPUID reports and whose registers the
 //!    operating system saves (XCR0), per the Intel SDM's detection procedure (SSE2 is part of
-//!    the x86-64 baseline). Under Miri, which cannot execute CPUID, the kernel is the one the
-//!    build's target features enable. Calling the kernels (and XGETBV, after CPUID reports
-//!    OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
+//!    the x86-64 baseline); the tiled packing kernel (AVX-512BW and VBMI as well) only when
+//!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
+//!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
+//!    features enable. Calling the kernels (and XGETBV, after CPUID reports OSXSAVE) is the
+//!    only reason for `unsafe` beyond the memory accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
 //!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
 //!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
