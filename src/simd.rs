@@ -1268,8 +1268,12 @@ mod tiled512 {
             let i = BLOCK * b;
             let tp = t.add(i);
             let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
-            let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
-            let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+            // Two chains of two dot products, added: half the latency of one chain of four
+            // (measured 4 to 8 % faster than the one chain, one instruction more).
+            let p = _mm512_add_epi32(
+                _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]),
+                _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(2), w[2]), g(3), w[3]),
+            );
             // The running sum before the block, kept in the boundary lanes only (zero in the
             // others): one addition gives every lane its r(x); the block's total (lane 15)
             // joins it by a zero-masked permute.
