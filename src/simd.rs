@@ -14,7 +14,8 @@
 //! proof) of [`crate::Sat::build`], [`crate::Sat::build_strips`], [`crate::RowStreamBuilder`]
 //! and the modular builder's rows; the tiled builder's row step ([`tiled_row`]: the row's sums,
 //! the fold of the level below and the split into local sums and tile boundaries in one pass,
-//! with AVX-512 VNNI for tiles of 2 to 16 texels or AVX2 for tiles of 8). Everything else (and
+//! with AVX-512 VNNI for tiles of 2 to 16 texels or AVX2 for tiles of 8; with AVX-512BW and
+//! VBMI as well, the local sums of tiles of 8 packed in the same pass). Everything else (and
 //! [`crate::Sat::build_checked`]) takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
 //! 11 to 32 bits into 32-bit words that the modular and tiled builders do per row (the portable
 //! packer, width-specialized scalar code, costs about a cycle per field). The kernel is the widest this CPU runs, detected once at run time from CPUID
@@ -36,9 +37,11 @@
 //! 1. *Target features.* Each kernel is a `#[target_feature]` function; it is called only as
 //!    [`Kernel::best`], the widest kernel whose features CPUID reports and whose registers the
 //!    operating system saves (XCR0), per the Intel SDM's detection procedure (SSE2 is part of
-//!    the x86-64 baseline). Under Miri, which cannot execute CPUID, the kernel is the one the
-//!    build's target features enable. Calling the kernels (and XGETBV, after CPUID reports
-//!    OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
+//!    the x86-64 baseline); the tiled packing kernel (AVX-512BW and VBMI as well) only when
+//!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
+//!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
+//!    features enable. Calling the kernels (and XGETBV, after CPUID reports OSXSAVE) is the
+//!    only reason for `unsafe` beyond the memory accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
 //!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
 //!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
@@ -47,7 +50,10 @@
 //!    `t`, `acc` and `lower` for `b < n / 16` only; the boundary and local-sum stores stay inside
 //!    the values the whole row writes (a 16- or 8-lane store whose last lanes the next block
 //!    overwrites, a masked store or a copy of the exact count for the last block; see the
-//!    kernels); the prefetches of `ahead` access no memory.
+//!    kernels); the prefetches of `ahead` access no memory. With a packing target
+//!    ([`PackTo`]), it checks that the bytes the pairs of blocks pack into (`7 k / 2` per pair,
+//!    from byte `bit / 8`) lie inside the target's words before `tiled512::kernel8_packed`
+//!    writes them by masked byte stores (the bytes past them masked off: not accessed).
 //!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
@@ -331,6 +337,41 @@ fn detect() -> Kernel {
     }
 }
 
+/// Whether the CPU also has AVX-512BW and AVX-512 VBMI (for `tiled512::kernel8_packed`), on
+/// top of [`Kernel::Avx512Vnni`]: CPUID leaf 7 EBX bit 30 and ECX bit 1 (the registers' state
+/// as for AVX-512F). Detected once, then cached as [`Kernel::best`] is.
+pub(crate) fn vbmi() -> bool {
+    match VBMI.load(Ordering::Relaxed) {
+        1 => false,
+        2 => true,
+        _ => {
+            let v = Kernel::best() == Kernel::Avx512Vnni && detect_vbmi();
+            VBMI.store(1 + u8::from(v), Ordering::Relaxed);
+            v
+        }
+    }
+}
+
+/// [`vbmi`]'s answer: 0 before the first detection, 1 no, 2 yes.
+static VBMI: AtomicU8 = AtomicU8::new(0);
+
+/// CPUID leaf 7: AVX-512BW (EBX bit 30), AVX-512 VBMI (ECX bit 1); called once the AVX-512
+/// kernel is detected (leaf 7 exists, XCR0 enables the ZMM state).
+#[cfg(not(miri))]
+fn detect_vbmi() -> bool {
+    let l7 = __cpuid_count(7, 0);
+    (l7.ebx >> 30) & 1 == 1 && (l7.ecx >> 1) & 1 == 1
+}
+
+/// Under Miri: the build's target features.
+#[cfg(miri)]
+fn detect_vbmi() -> bool {
+    cfg!(all(
+        target_feature = "avx512bw",
+        target_feature = "avx512vbmi"
+    ))
+}
+
 /// XCR0.
 ///
 /// # Safety
@@ -548,7 +589,8 @@ mod avx512vnni {
 /// words: four `vpermt2d` gathering those fields from the group's two registers (indices past
 /// the group clamped to 31: their shift counts are at least 32, and AVX-512's variable shifts
 /// give 0 there, as for the terms a word does not need), one `vpsrlvd`, three `vpsllvd`, three
-/// ors, one (masked) store. The index and count tables depend on `k` only: built once per call.
+/// ors, one (masked) store; from 16 bits on, a word holds parts of at most three fields: three
+/// of each. The index and count tables depend on `k` only: built once per call.
 pub(crate) fn pack_u32<E: Entry>(words: &mut [u32], fields: &[E], k: u32) -> usize {
     let Some(f) = as_u32(fields) else {
         return 0;
@@ -616,7 +658,7 @@ mod pack512 {
     /// and a blend (slower, same lanes): Miri still checks every load and store of the kernel.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
+    pub(super) fn perm2(a: __m512i, idx: __m512i, b: __m512i) -> __m512i {
         #[cfg(not(miri))]
         let v = _mm512_permutex2var_epi32(a, idx, b);
         #[cfg(miri)]
@@ -675,16 +717,19 @@ mod pack512 {
                         continue;
                     }
                     let t = |i: usize| perm2(a, ix[i], b);
-                    let v = _mm512_or_si512(
+                    // The fourth term only below 16 bits: from 16 bits on its shift count,
+                    // 3k - s > 2k, is at least 32, so it contributes nothing (the three ORs
+                    // become one `vpternlogd`).
+                    let mut v = _mm512_or_si512(
                         _mm512_or_si512(
                             _mm512_srlv_epi32(t(0), c[0]),
                             _mm512_sllv_epi32(t(1), c[1]),
                         ),
-                        _mm512_or_si512(
-                            _mm512_sllv_epi32(t(2), c[2]),
-                            _mm512_sllv_epi32(t(3), c[3]),
-                        ),
+                        _mm512_sllv_epi32(t(2), c[2]),
                     );
+                    if k < 16 {
+                        v = _mm512_or_si512(v, _mm512_sllv_epi32(t(3), c[3]));
+                    }
                     let out = w.add(g * k + 16 * h);
                     if *n == 16 {
                         _mm512_storeu_si512(out.cast(), v);
@@ -697,6 +742,26 @@ mod pack512 {
     }
 }
 
+/// Where the tiled builder will pack a row's fields, for the row kernels' prefetches: per
+/// component, the first word and the number of words (a hint only: never read or written
+/// through, so any pointer will do; the builder passes the table's words).
+pub(crate) type Ahead = [(*const u32, usize); 2];
+
+/// A component row the tiled row step may pack its local sums into directly (see
+/// [`tiled_row`]): `k`-bit fields from bit `bit` of `words` (field `i` at bit `bit + i k`,
+/// the layouts' order: `layouts::packed::pack_fields`), the bits around them kept.
+pub(crate) struct PackTo<'w> {
+    /// The words the row's fields go to (from the word holding its first bit).
+    pub(crate) words: &'w mut [u32],
+    /// The row's first bit in `words` (below 32).
+    pub(crate) bit: u64,
+    /// The field width.
+    pub(crate) k: u32,
+    /// Whether every local sum is below `2^k` (the layout's width proof, without a modulus):
+    /// then not masked to `k` bits (wrong bits if it is not, never an access out of bounds).
+    pub(crate) exact: bool,
+}
+
 /// The tiled builder's row step (`layouts::tiled`'s `row_fields`, the same values) with
 /// AVX-512 VNNI, one pass over the row: for `u8` texels, `u32` entries, one channel and tiles
 /// of `tile` in {2, 4, 8, 16} texels along x (a tile never straddles a 16-lane block).
@@ -706,9 +771,10 @@ mod pack512 {
 /// `t_{trunc(x)} + ... + t_{x-1}` inside its tile elsewhere (`trunc(x)`: `x` rounded down to
 /// a multiple of `tile`): `acc[x] += lower[x] + r(x)` (wrapping; `lower` optional and cleared
 /// as it is read), then the boundaries' `acc[x]` into `bnd` and the others into `local`, in
-/// order of `x`. Returns the values written to `bnd` and `local`; `None` (nothing written) for
-/// other types, tile widths or CPUs, or slices shorter than the row needs (`acc`, `lower`: `n`;
-/// `bnd`: `n / tile`; `local`: `n - n / tile`).
+/// order of `x`. Returns the values written to `bnd` and `local`, and how many of the local
+/// sums, from the first, went into `pack` instead of `local` (`local[..kp]` is then not
+/// written); `None` (nothing written) for other types, tile widths or CPUs, or slices shorter
+/// than the row needs (`acc`, `lower`: `n`; `bnd`: `n / tile`; `local`: `n - n / tile`).
 ///
 /// Per block of 16 texels: four `vpdpbusd` with weights that give each lane its `r(x)` (the
 /// build kernel's triangle, cut at the tile starts for the local lanes), the running sum added
@@ -716,6 +782,15 @@ mod pack512 {
 /// stores compacting the lanes into the two streams (the lane pattern is the same in every
 /// block: constant tables per tile width, [`TILE_TABLES`]). While it computes, it prefetches
 /// the words of `ahead` (where the caller will pack the fields), spread over the blocks.
+///
+/// With `pack` (tiles of 8, an even width `k` of 8 to 14 bits, a byte-aligned `bit`, a CPU with
+/// AVX-512BW and VBMI as well: `tiled512::kernel8_packed`), the local sums of each pair of
+/// blocks (28 values) are packed straight into `pack.words` instead (`kp` a multiple of 28),
+/// the odd last block and the tail into `local` as above.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the row step's slices, the prefetch hint and the packing target"
+)]
 pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     lower: Option<&mut [E]>,
@@ -723,28 +798,43 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     tile: usize,
     bnd: &mut [E],
     local: &mut [E],
-    ahead: [&[u32]; 2],
-) -> Option<(usize, usize)> {
-    tiled_row_with::<T, E, C>(Kernel::best(), texels, lower, acc, tile, bnd, local, ahead)
+    ahead: Ahead,
+    pack: Option<PackTo<'_>>,
+) -> Option<(usize, usize, usize)> {
+    tiled_row_with::<T, E, C>(
+        Kernel::best(),
+        vbmi(),
+        texels,
+        lower,
+        acc,
+        tile,
+        bnd,
+        local,
+        ahead,
+        pack,
+    )
 }
 
-/// [`tiled_row`] with `kernel` (which must be [`Kernel::available`]): AVX-512 VNNI for tiles of
-/// 2, 4, 8 and 16 texels; AVX2 for tiles of 8 (each 128-bit half of its 16 texels is one tile,
-/// see `tiled256`); `None` otherwise.
+/// [`tiled_row`] with `kernel` (which must be [`Kernel::available`]) and, if `vbmi` (which
+/// must be [`vbmi`]'s answer, or `false`), the packing kernel: AVX-512 VNNI for tiles of 2, 4, 8
+/// and 16 texels; AVX2 for tiles of 8 (each 128-bit half of its 16 texels is one tile, see
+/// `tiled256`); `None` otherwise.
 #[allow(
     clippy::too_many_arguments,
-    reason = "the row step's slices, as tiled_row's, plus the kernel"
+    reason = "the row step's slices, as tiled_row's, plus the kernels"
 )]
 fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     kernel: Kernel,
+    vbmi: bool,
     texels: &[T],
     lower: Option<&mut [E]>,
     acc: &mut [E],
     tile: usize,
     bnd: &mut [E],
     local: &mut [E],
-    ahead: [&[u32]; 2],
-) -> Option<(usize, usize)> {
+    ahead: Ahead,
+    pack: Option<PackTo<'_>>,
+) -> Option<(usize, usize, usize)> {
     let t = as_u8(texels)?;
     let acc = as_u32_mut::<E, C>(acc)?;
     let mut lower = match lower {
@@ -777,6 +867,34 @@ fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
         bnd.as_mut_ptr(),
         local.as_mut_ptr(),
     );
+    // The packing kernel: its pairs of blocks' local sums, 7 k / 2 bytes per pair, must fit
+    // `pack.words` from byte bit / 8.
+    let packed = match pack {
+        Some(PackTo {
+            words,
+            bit,
+            k,
+            exact,
+        }) if wide
+            && vbmi
+            && tile == 8
+            && blocks >= 2
+            && matches!(k, 8 | 10 | 12 | 14)
+            && bit % 8 == 0
+            && bit < 32
+            && (bit as usize / 8 + blocks / 2 * PAIR * k as usize / 8) <= 4 * words.len() =>
+        {
+            Some((
+                words
+                    .as_mut_ptr()
+                    .cast::<u8>()
+                    .wrapping_add(bit as usize / 8),
+                k,
+                exact,
+            ))
+        }
+        _ => None,
+    };
     macro_rules! run {
         ($($tile:literal)*) => {
             match (tile, lp.is_null()) {
@@ -789,17 +907,40 @@ fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
         };
     }
     // SAFETY: the kernel's features are available (`kernel` is, argument 1: AVX-512F and VNNI
-    // for `wide`, else AVX2); the kernel reads `t[..16 blocks]`, reads and writes `acc` and (if
-    // not null) `lower` there, and writes `bnd[..16 blocks / tile]` and `local[..16 blocks -
-    // 16 blocks / tile]`, all inside the slices (checked above; 16 blocks <= n); the five
-    // slices are distinct borrows.
-    let mut run = unsafe {
-        if wide {
-            run!(2 4 8 16)
-        } else if lp.is_null() {
-            tiled256::kernel::<false>(tp, lp, ap, bp, op, blocks, ahead)
-        } else {
-            tiled256::kernel::<true>(tp, lp, ap, bp, op, blocks, ahead)
+    // for `wide`, else AVX2; `packed` only with `vbmi`, argument 2: AVX-512BW and VBMI as
+    // well); the kernel reads `t[..16 blocks]`, reads and writes `acc` and (if not null)
+    // `lower` there, and writes `bnd[..16 blocks / tile]` and `local[..16 blocks - 16 blocks /
+    // tile]`, all inside the slices (checked above; 16 blocks <= n); the packing kernel writes
+    // `7 k / 2` bytes per pair of blocks from `out`, inside `pack.words` (checked above), and
+    // not `local[..28 pairs]`; the six slices are distinct borrows.
+    let (mut run, kp) = unsafe {
+        match packed {
+            Some((out, k, exact)) => (
+                match (lp.is_null(), exact) {
+                    (true, true) => tiled512::kernel8_packed::<false, true>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                    (true, false) => tiled512::kernel8_packed::<false, false>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                    (false, true) => tiled512::kernel8_packed::<true, true>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                    (false, false) => tiled512::kernel8_packed::<true, false>(
+                        tp, lp, ap, bp, op, blocks, out, k, ahead,
+                    ),
+                },
+                blocks / 2 * PAIR,
+            ),
+            None if wide => (run!(2 4 8 16), 0),
+            None if lp.is_null() => (
+                tiled256::kernel::<false>(tp, lp, ap, bp, op, blocks, ahead),
+                0,
+            ),
+            None => (
+                tiled256::kernel::<true>(tp, lp, ap, bp, op, blocks, ahead),
+                0,
+            ),
         }
     };
     // The tail after the last full block, portable: the same values (it starts at a tile
@@ -826,8 +967,12 @@ fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
             kl += 1;
         }
     }
-    Some((kb, kl))
+    Some((kb, kl, kp))
 }
+
+/// The local sums of a pair of blocks of tiles of 8 (2 x 14): what the packing kernel packs
+/// at a time (4 fields of `k` bits per 64-bit lane, `7 k / 2` bytes).
+const PAIR: usize = 28;
 
 /// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds position `x =
 /// 16 b + l + 1`, texel `j` of the block (`16 b + j`) counts in every `x > 16 b + j`. With `r =
@@ -883,41 +1028,41 @@ static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8
 /// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`]):
 /// the 64-byte lines of each `ahead` slice (the words the row's fields go to), spread over the
 /// first half of the row's blocks, asked for a group of blocks at a time.
-struct Prefetch<'a> {
-    ahead: [&'a [u32]; 2],
+struct Prefetch {
+    ahead: Ahead,
     lines: [usize; 2],
     asked: [usize; 2],
+    /// Lines due per block, `2 lines / blocks` in 16.16 fixed point (one division per row, not
+    /// per group).
+    rate: [usize; 2],
 }
 
-impl<'a> Prefetch<'a> {
-    fn new(ahead: [&'a [u32]; 2]) -> Self {
+impl Prefetch {
+    fn new(ahead: Ahead, blocks: usize) -> Self {
+        let lines = ahead.map(|(_, len)| len.div_ceil(16));
         Prefetch {
             ahead,
-            lines: ahead.map(|a| a.len().div_ceil(16)),
+            lines,
             asked: [0; 2],
+            rate: lines.map(|l| (l << 17).div_ceil(blocks.max(1))),
         }
     }
 
-    /// Asks for the lines due by the end of the group ending at block `end` of `blocks`: all of
-    /// them by the middle of the row (2 lines end / blocks, rounded up: the last lines are
-    /// packed soon after the row step, so they need the lead; asking for all of them at once
-    /// measured slower at 4096^2). A slice holds fewer than 2^32 words and blocks < 2^28: no
-    /// overflow.
+    /// Asks for the lines due by the end of the group ending at block `end`: all of them by
+    /// the middle of the row (2 lines end / blocks, rounded up: the last lines are packed soon
+    /// after the row step, so they need the lead; asking for all of them at once measured
+    /// slower at 4096^2). The lines of a slice (fewer than 2^28) times 2^17, and `rate end <=
+    /// 2^17 lines + end`: no overflow on x86-64.
     #[inline(always)]
-    fn ask(&mut self, end: usize, blocks: usize) {
+    fn ask(&mut self, end: usize) {
         for r in 0..2 {
-            let due = (self.lines[r] * 2 * end)
-                .div_ceil(blocks)
-                .min(self.lines[r]);
+            let due = ((self.rate[r] * end + 0xffff) >> 16).min(self.lines[r]);
             while self.asked[r] < due {
                 // A hint (reads and writes nothing, never faults); 16 asked < len: inside the
-                // slice. SAFETY: SSE is baseline on x86-64; the hint dereferences nothing.
+                // words. SAFETY: SSE is baseline on x86-64; the hint dereferences nothing.
                 unsafe {
                     _mm_prefetch::<_MM_HINT_T0>(
-                        self.ahead[r]
-                            .as_ptr()
-                            .wrapping_add(16 * self.asked[r])
-                            .cast(),
+                        self.ahead[r].0.wrapping_add(16 * self.asked[r]).cast(),
                     );
                 }
                 self.asked[r] += 1;
@@ -950,11 +1095,11 @@ mod tiled512 {
         bnd: *mut u32,
         local: *mut u32,
         blocks: usize,
-        ahead: [&[u32]; 2],
+        ahead: Ahead,
     ) -> u32 {
         // Prefetching, a group of blocks at a time (the bookkeeping once per group).
         const GROUP: usize = 8;
-        let mut prefetch = Prefetch::new(ahead);
+        let mut prefetch = Prefetch::new(ahead, blocks);
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = table.w.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -979,7 +1124,7 @@ mod tiled512 {
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
-            prefetch.ask(end, blocks);
+            prefetch.ask(end);
             for b in from..end {
                 let i = BLOCK * b;
                 // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
@@ -993,10 +1138,11 @@ mod tiled512 {
                         |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
                     let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
                     let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-                    // The running sum before the block into the boundary lanes only (lane 15, a
-                    // boundary, holds the block's total).
-                    let mut v = _mm512_mask_add_epi32(p, bmask, p, carry);
-                    carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
+                    // The running sum before the block, kept in the boundary lanes only (zero
+                    // in the others): one addition gives every lane its r(x); the block's
+                    // total (lane 15, a boundary) joins it by a zero-masked permute.
+                    let mut v = _mm512_add_epi32(p, carry);
+                    carry = _mm512_add_epi32(carry, _mm512_maskz_permutexvar_epi32(bmask, last, p));
                     if LOWER {
                         v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
                         _mm512_storeu_si512(lower.add(i).cast(), zero);
@@ -1022,9 +1168,222 @@ mod tiled512 {
             }
             from = end;
         }
-        _mm512_cvtsi512_si32(carry) as u32
+        // Lane 15, a boundary, holds the running sum.
+        _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
+    }
+
+    /// Under Miri, which emulates neither `vpermt2w`, `vpermw` nor `vpermb`: the 64 bytes
+    /// [`kernel8_packed`] stores for a pair of blocks, computed field by field (the low `k`
+    /// bits of the 28 local sums at bits `i k`), so that Miri checks the kernel's loads and
+    /// stores; the vector computation itself is tested natively.
+    #[cfg(miri)]
+    #[target_feature(enable = "avx512f")]
+    fn miri_pack(va: __m512i, vb: __m512i, k: u32) -> __m512i {
+        let mut lanes = [0u32; 32];
+        let mut bytes = [0u8; 64];
+        // SAFETY: 64-byte stores into 128 bytes of `lanes`, a 64-byte load of `bytes`.
+        unsafe {
+            _mm512_storeu_si512(lanes.as_mut_ptr().cast(), va);
+            _mm512_storeu_si512(lanes.as_mut_ptr().add(16).cast(), vb);
+        }
+        for (i, &ix) in PACK8_WORDS.iter().take(PAIR).enumerate() {
+            let v = lanes[usize::from(ix) / 2] & ((1 << k) - 1);
+            for bit in 0..k as usize {
+                let at = i * k as usize + bit;
+                bytes[at / 8] |= (((v >> bit) & 1) as u8) << (at % 8);
+            }
+        }
+        // SAFETY: as above.
+        unsafe { _mm512_loadu_si512(bytes.as_ptr().cast()) }
+    }
+
+    /// [`kernel`] for tiles of 8 with the local sums packed: per pair of blocks, the 28 local
+    /// sums (lanes 0..7 and 8..15 of each block's 16 but the boundaries 7 and 15) gathered
+    /// into 16-bit lanes by one `vpermt2w` (their low halves: `k <= 14` bits), masked to `k`
+    /// bits (not with `EXACT`: the caller knows they are below `2^k`); `vpmaddwd` with weights
+    /// `(1, 2^k)` joins each pair into a 2k-bit value per 32-bit
+    /// lane; a shift and a bit select (`vpsrlq`, `vpternlogq`) join each pair of those into a
+    /// 4k-bit value at the bottom of each 64-bit lane (`4k / 8 = k / 2` whole bytes, `k` even);
+    /// `vpermb` moves the 7 lanes' bytes together, one masked byte store writes the `7 k / 2`
+    /// bytes at `out + 7 k / 2 pair`. The bit stream is the layouts' (field `i` at bit `i k`,
+    /// little-endian words: byte `j` holds bits `8 j..8 j + 8`). The boundaries of the pair go
+    /// out by one `vpermt2d` and a 4-lane store. An odd last block goes as in [`kernel`] (its
+    /// local sums into `local[14 (blocks - 1)..]`, then 14 values, a masked store).
+    /// Returns the running sum after the blocks.
+    ///
+    /// # Safety
+    /// As [`kernel`] with `TILE = 8`, and: the CPU has AVX-512BW and AVX-512 VBMI; `k` is 8,
+    /// 10, 12 or 14; `out` is valid for writes of `7 k / 2 (blocks / 2)` bytes, not
+    /// overlapping the others. `local[..28 (blocks / 2)]` is not written.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "kernel's pointers plus the packing target"
+    )]
+    #[target_feature(enable = "avx512f,avx512vnni,avx512bw,avx512vbmi")]
+    pub(super) unsafe fn kernel8_packed<const LOWER: bool, const EXACT: bool>(
+        t: *const u8,
+        lower: *mut u32,
+        acc: *mut u32,
+        bnd: *mut u32,
+        local: *mut u32,
+        blocks: usize,
+        out: *mut u8,
+        k: u32,
+        ahead: Ahead,
+    ) -> u32 {
+        // Prefetching, a group of pairs at a time (the bookkeeping once per group).
+        const GROUP: usize = 4;
+        let mut prefetch = Prefetch::new(ahead, blocks);
+        let table = &TILE_TABLES[2];
+        let w = table.w.map(|g| {
+            let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
+            _mm512_setr_epi32(
+                a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
+            )
+        });
+        let bmask = table.bmask;
+        let last = _mm512_set1_epi32(15);
+        let zero = _mm512_setzero_si512();
+        // SAFETY: each table is 64 bytes: one unaligned load.
+        let (widx, bidx) = unsafe {
+            (
+                _mm512_loadu_si512(PACK8_WORDS.as_ptr().cast()),
+                _mm512_loadu_si512(PACK8_BYTES[(k as usize - 8) / 2].as_ptr().cast()),
+            )
+        };
+        let bnd_ix = _mm512_setr_epi32(7, 15, 23, 31, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
+        let fmask = _mm512_set1_epi16(((1u32 << k) - 1) as i16);
+        let weights = _mm512_set1_epi32(((1u32 << k) << 16 | 1) as i32);
+        let low2k = _mm512_set1_epi64(((1u64 << (2 * k)) - 1) as i64);
+        let shift = _mm512_set1_epi64(i64::from(32 - 2 * k));
+        #[cfg(miri)]
+        let _ = (widx, bidx, fmask, weights, low2k, shift);
+        let bytes = 7 * k as usize / 2;
+        let store = (1u64 << bytes) - 1;
+        let mut carry = zero;
+        // Block b's 16 accumulators after the row (stored to `acc`, `lower` cleared).
+        // SAFETY (of each call): b < blocks, so 16 b + 16 <= 16 blocks: inside `t`, `acc` and
+        // `lower` (the caller's contract).
+        let mut block = |b: usize| unsafe {
+            let i = BLOCK * b;
+            let tp = t.add(i);
+            let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+            // Two chains of two dot products, added: half the latency of one chain of four
+            // (measured 4 to 8 % faster than the one chain, one instruction more).
+            let p = _mm512_add_epi32(
+                _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]),
+                _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(2), w[2]), g(3), w[3]),
+            );
+            // The running sum before the block, kept in the boundary lanes only (zero in the
+            // others): one addition gives every lane its r(x); the block's total (lane 15)
+            // joins it by a zero-masked permute.
+            let mut v = _mm512_add_epi32(p, carry);
+            carry = _mm512_add_epi32(carry, _mm512_maskz_permutexvar_epi32(bmask, last, p));
+            if LOWER {
+                v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
+                _mm512_storeu_si512(lower.add(i).cast(), zero);
+            }
+            v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
+            _mm512_storeu_si512(acc.add(i).cast(), v);
+            v
+        };
+        let pairs = blocks / 2;
+        let mut from = 0;
+        while from < pairs {
+            let end = (from + GROUP).min(pairs);
+            prefetch.ask(2 * end);
+            for pr in from..end {
+                let (va, vb) = (block(2 * pr), block(2 * pr + 1));
+                // SAFETY: the boundaries go to bnd[4 pr..4 pr + 4], inside bnd[..2 blocks];
+                // the packed bytes to out[bytes pr..bytes (pr + 1)], inside the caller's
+                // `bytes pairs`.
+                unsafe {
+                    let bv = super::pack512::perm2(va, bnd_ix, vb);
+                    _mm_storeu_si128(bnd.add(4 * pr).cast(), _mm512_castsi512_si128(bv));
+                    #[cfg(not(miri))]
+                    let o = {
+                        let mut f = _mm512_permutex2var_epi16(va, widx, vb);
+                        if !EXACT {
+                            f = _mm512_and_si512(f, fmask);
+                        }
+                        let d = _mm512_madd_epi16(f, weights);
+                        let q = _mm512_ternarylogic_epi64::<0xE4>(
+                            d,
+                            _mm512_srlv_epi64(d, shift),
+                            low2k,
+                        );
+                        _mm512_permutexvar_epi8(bidx, q)
+                    };
+                    #[cfg(miri)]
+                    let o = miri_pack(va, vb, k);
+                    // All 64 bytes while they end inside the pairs' bytes: those past this
+                    // pair's are the next pairs', which their stores overwrite (in order);
+                    // then masked stores.
+                    if bytes * pr + 64 <= bytes * pairs {
+                        _mm512_storeu_si512(out.add(bytes * pr).cast(), o);
+                    } else {
+                        _mm512_mask_storeu_epi8(out.add(bytes * pr).cast(), store, o);
+                    }
+                }
+            }
+            from = end;
+        }
+        if blocks % 2 == 1 {
+            let b = blocks - 1;
+            let v = block(b);
+            // SAFETY: 14 local sums at local[14 b..14 b + 14], inside local[..14 blocks]; two
+            // boundaries at bnd[2 b..2 b + 2], inside bnd[..2 blocks].
+            unsafe {
+                let local_ix = _mm512_loadu_si512(table.local.as_ptr().cast());
+                let bnd_ix = _mm512_loadu_si512(table.bnd.as_ptr().cast());
+                _mm512_mask_storeu_epi32(
+                    local.add(14 * b).cast(),
+                    (1 << 14) - 1,
+                    _mm512_permutexvar_epi32(local_ix, v),
+                );
+                _mm_storel_epi64(
+                    bnd.add(2 * b).cast(),
+                    _mm512_castsi512_si128(_mm512_permutexvar_epi32(bnd_ix, v)),
+                );
+            }
+        }
+        // Lane 15, a boundary, holds the running sum.
+        _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
     }
 }
+
+/// [`tiled512::kernel8_packed`]'s `vpermt2w` indices: the 16-bit lanes (the low halves of the
+/// 32-bit lanes `l` of the pair's first block, `16 + l` of its second) of the 28 local sums in
+/// order (lanes `0..7` and `8..15` of each block, not the boundaries 7 and 15), then 4 unused.
+static PACK8_WORDS: [u16; 32] = {
+    let mut ix = [0u16; 32];
+    let mut f = 0;
+    while f < PAIR {
+        let (block, within) = (f / 14, f % 14);
+        let lane = if within < 7 { within } else { within + 1 };
+        ix[f] = (32 * block + 2 * lane) as u16;
+        f += 1;
+    }
+    ix
+};
+
+/// [`tiled512::kernel8_packed`]'s `vpermb` indices per width `k = 8, 10, 12, 14`: output byte
+/// `j` is byte `j mod (k / 2)` of 64-bit lane `j / (k / 2)` (which holds 4 fields, `k / 2`
+/// bytes); the bytes past the 7 lanes' are not stored.
+static PACK8_BYTES: [[u8; 64]; 4] = {
+    let mut out = [[0u8; 64]; 4];
+    let mut w = 0;
+    while w < 4 {
+        let per = 4 + w;
+        let mut j = 0;
+        while j < 7 * per {
+            out[w][j] = (8 * (j / per) + j % per) as u8;
+            j += 1;
+        }
+        w += 1;
+    }
+    out
+};
 
 mod tiled256 {
     use super::*;
@@ -1049,17 +1408,17 @@ mod tiled256 {
         bnd: *mut u32,
         local: *mut u32,
         blocks: usize,
-        ahead: [&[u32]; 2],
+        ahead: Ahead,
     ) -> u32 {
         const GROUP: usize = 8;
-        let mut prefetch = Prefetch::new(ahead);
+        let mut prefetch = Prefetch::new(ahead, blocks);
         let seven = _mm256_set1_epi32(7);
         let zero = _mm256_setzero_si256();
         let mut carry = zero;
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
-            prefetch.ask(end, blocks);
+            prefetch.ask(end);
             for b in from..end {
                 let i = BLOCK * b;
                 // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
@@ -1255,9 +1614,10 @@ mod tests {
                             let mut low = low0.clone();
                             let mut bnd = std::vec![7u32; nb + 20];
                             let mut local = std::vec![9u32; nl + 20];
-                            let ahead = [&words[..n.min(100)], &words[..3]];
+                            let ahead = [(words.as_ptr(), n.min(100)), (words.as_ptr(), 3)];
                             let got = tiled_row_with::<u8, u32, 1>(
                                 kernel,
+                                false,
                                 &t,
                                 with_lower.then_some(&mut low[..]),
                                 &mut acc,
@@ -1265,6 +1625,7 @@ mod tests {
                                 &mut bnd[..nb],
                                 &mut local[..nl],
                                 ahead,
+                                None,
                             );
                             let what = (kernel.name(), tile, n, pattern, with_lower);
                             if !runs {
@@ -1281,7 +1642,7 @@ mod tests {
                                 &mut want_acc,
                                 tile,
                             );
-                            assert_eq!(got, Some((nb, nl)), "{what:?}");
+                            assert_eq!(got, Some((nb, nl, 0)), "{what:?}");
                             assert_eq!(acc, want_acc, "{what:?}");
                             assert_eq!(
                                 low,
@@ -1303,43 +1664,211 @@ mod tests {
         // Declined: a tile width the kernel has no table for, another type, short slices.
         let (mut acc, mut b, mut l) = ([1u32; 40], [0u32; 40], [0u32; 40]);
         let t = [3u8; 32];
-        let none: [&[u32]; 2] = [&[], &[]];
+        let none: Ahead = [(core::ptr::null(), 0); 2];
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 3, &mut b, &mut l, none),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 3, &mut b, &mut l, none, None),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 32, &mut b, &mut l, none),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 32, &mut b, &mut l, none, None),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc[..31], 8, &mut b, &mut l, none),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc[..31], 8, &mut b, &mut l, none, None),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b[..3], &mut l, none),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b[..3], &mut l, none, None),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b, &mut l[..27], none),
+            tiled_row::<u8, u32, 1>(&t, None, &mut acc, 8, &mut b, &mut l[..27], none, None),
             None
         );
         let mut low = [5u32; 31];
         assert_eq!(
-            tiled_row::<u8, u32, 1>(&t, Some(&mut low), &mut acc, 8, &mut b, &mut l, none),
+            tiled_row::<u8, u32, 1>(&t, Some(&mut low), &mut acc, 8, &mut b, &mut l, none, None),
             None
         );
         let mut acc16 = [1u16; 40];
         let (mut b16, mut l16) = ([0u16; 40], [0u16; 40]);
         assert_eq!(
-            tiled_row::<u8, u16, 1>(&t, None, &mut acc16, 8, &mut b16, &mut l16, none),
+            tiled_row::<u8, u16, 1>(&t, None, &mut acc16, 8, &mut b16, &mut l16, none, None),
             None
         );
         assert_eq!(
-            tiled_row::<u8, u32, 2>(&[3u8; 64], None, &mut [1u32; 80], 8, &mut b, &mut l, none),
+            tiled_row::<u8, u32, 2>(
+                &[3u8; 64],
+                None,
+                &mut [1u32; 80],
+                8,
+                &mut b,
+                &mut l,
+                none,
+                None
+            ),
             None
         );
         assert_eq!((acc, b, l, low), ([1; 40], [0; 40], [0; 40], [5; 31]));
+    }
+
+    /// `tiled_row` with a packing target: on a CPU with AVX-512BW and VBMI (under Miri: never,
+    /// the CI's flags leave them out) and tiles of 8, for every even width `k` of 8 to 14 and
+    /// byte-aligned starts 0, 8, 16, 24, the local sums of each pair of blocks go into the
+    /// words exactly as the layouts' field-by-field write of their low `k` bits
+    /// (`layouts::packed::write_bits`), every other bit of the words (before, between rows,
+    /// after) unchanged, `local[..kp]` untouched and the rest of `local`, the boundaries and
+    /// the accumulators equal to the reference; every row width up to 6 blocks and a tail
+    /// (odd and even block counts), with and without the level below, four texel patterns,
+    /// accumulators near `u32::MAX` (local sums wider than `k`: masked). Not packed (`kp =
+    /// 0`, the words unchanged): odd widths, 16 bits, starts not on a byte, a slice one byte
+    /// short, other tile widths, or a CPU without the instructions.
+    #[test]
+    fn tiled_row_packs_like_write_bits() {
+        extern crate std;
+        use std::vec::Vec;
+        const MAX: usize = 6 * BLOCK + 7;
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let widths: Vec<usize> = if cfg!(miri) {
+            std::vec![32, 50]
+        } else {
+            (0..=MAX).collect()
+        };
+        let packs = Kernel::best() == Kernel::Avx512Vnni && vbmi();
+        let mut packed_rows = 0usize;
+        for tile in [8usize, 4] {
+            for &n in &widths {
+                for k in [8u32, 10, 11, 12, 14, 16] {
+                    for bit in [0u64, 3, 8, 16, 24] {
+                        for (pattern, exact) in (0..4).flat_map(|p| [(p, false), (p, true)]) {
+                            if cfg!(miri) && (pattern != 3 || k != 14 || bit > 8) {
+                                continue;
+                            }
+                            // `exact`: the local sums below 2^k (texels at most t_max, the
+                            // rows below 4 each; 7 texels a tile).
+                            let t_max = if exact { ((1u32 << k) - 8) / 7 } else { 255 };
+                            let t: Vec<u8> = (0..n)
+                                .map(|i| match pattern {
+                                    0 => 0,
+                                    1 => 255,
+                                    2 => (i % 256) as u8,
+                                    _ => rng(&mut seed),
+                                })
+                                .map(|v| (u32::from(v) % (t_max + 1)) as u8)
+                                .collect();
+                            let acc0: Vec<u32> = (0..n)
+                                .map(|i| {
+                                    if exact {
+                                        i as u32 % 4
+                                    } else {
+                                        (u32::MAX - 1000).wrapping_add(37 * i as u32)
+                                    }
+                                })
+                                .collect();
+                            let low0: Vec<u32> = (0..n)
+                                .map(|i| {
+                                    if exact {
+                                        u32::from(rng(&mut seed)) % 4
+                                    } else {
+                                        3 * i as u32 + u32::from(rng(&mut seed))
+                                    }
+                                })
+                                .collect();
+                            for (with_lower, short) in
+                                [(false, false), (true, false), (false, true)]
+                            {
+                                let (nb, nl) = (n / tile, n - n / tile);
+                                let blocks = n / BLOCK;
+                                let fused = packs
+                                    && tile == 8
+                                    && blocks >= 2
+                                    && k % 2 == 0
+                                    && k <= 14
+                                    && bit % 8 == 0
+                                    && !short;
+                                let kp = if fused { blocks / 2 * PAIR } else { 0 };
+                                // The row's words (exactly as many as its bits need; one byte
+                                // short of the packed pairs' bytes with `short`), then noise.
+                                let need = (bit as usize + nl * k as usize).div_ceil(32);
+                                let len = if short {
+                                    ((bit as usize / 8 + blocks / 2 * PAIR * k as usize / 8)
+                                        .saturating_sub(1)
+                                        / 4)
+                                    .min(need)
+                                } else {
+                                    need
+                                };
+                                let noise: Vec<u32> = (0..need + 4)
+                                    .map(|_| {
+                                        (u32::from(rng(&mut seed)) * 0x0101_0101)
+                                            ^ u32::from(rng(&mut seed))
+                                    })
+                                    .collect();
+                                let mut words = noise.clone();
+                                let mut acc = acc0.clone();
+                                let mut low = low0.clone();
+                                let mut bnd = std::vec![7u32; nb + 20];
+                                let mut local = std::vec![9u32; nl + 20];
+                                let got = tiled_row_with::<u8, u32, 1>(
+                                    Kernel::best(),
+                                    vbmi(),
+                                    &t,
+                                    with_lower.then_some(&mut low[..]),
+                                    &mut acc,
+                                    tile,
+                                    &mut bnd[..nb],
+                                    &mut local[..nl],
+                                    [(core::ptr::null(), 0); 2],
+                                    Some(PackTo {
+                                        words: &mut words[..len],
+                                        bit,
+                                        k,
+                                        exact,
+                                    }),
+                                );
+                                let what = (tile, n, k, bit, pattern, exact, with_lower, short);
+                                if Kernel::best() != Kernel::Avx512Vnni
+                                    && !(Kernel::best() == Kernel::Avx2 && tile == 8)
+                                {
+                                    assert_eq!(got, None, "{what:?}");
+                                    assert_eq!(words, noise, "{what:?}");
+                                    continue;
+                                }
+                                let mut want_acc = acc0.clone();
+                                let mut want_low = low0.clone();
+                                let (want_b, want_l) = tiled_reference(
+                                    &t,
+                                    with_lower.then_some(&mut want_low[..]),
+                                    &mut want_acc,
+                                    tile,
+                                );
+                                assert_eq!(got, Some((nb, nl, kp)), "{what:?}");
+                                packed_rows += usize::from(kp > 0);
+                                assert_eq!(acc, want_acc, "{what:?}");
+                                if with_lower {
+                                    assert_eq!(low, want_low, "{what:?}");
+                                }
+                                assert_eq!(bnd[..nb], want_b[..], "{what:?}");
+                                assert!(local[..kp].iter().all(|&v| v == 9), "{what:?}");
+                                assert_eq!(local[kp..nl], want_l[kp..], "{what:?}");
+                                assert!(local[nl..].iter().all(|&v| v == 9), "{what:?}");
+                                let mut want = noise.clone();
+                                for (i, &f) in want_l.iter().take(kp).enumerate() {
+                                    let at = bit + i as u64 * u64::from(k);
+                                    let v = u64::from(f & ((1 << k) - 1));
+                                    assert!(crate::layouts::packed::write_bits(
+                                        &mut want, at, k, v
+                                    ));
+                                }
+                                assert_eq!(words, want, "{what:?}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // The packing kernel ran wherever the CPU has it.
+        assert_eq!(packed_rows > 0, packs);
     }
 
     /// The portable row (the reference): running sum plus the entry above.

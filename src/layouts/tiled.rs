@@ -1722,6 +1722,10 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     Some((dst.len(), blocks.checked_mul(B)?))
 }
 
+/// The words of the component rows a row's fields go to (first word, word count), per x
+/// component 0 and 1: the row kernel's prefetch hint (never dereferenced).
+type Ahead = [(*const u32, usize); 2];
+
 /// The row step of [`TiledBuilder::push_row`] on one accumulator row `acc` (position `x =
 /// 1..=n` at `(x - 1) C`, `C` values each) and, when the row ends a block of a level above 0,
 /// the level below, `lower` (same form; added into `acc` and cleared).
@@ -1736,7 +1740,15 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
 /// into `bnd` and the local sums into `local`, in order of `x`: the fields of the first two x
 /// components, without a subtraction. Returns the values written to each; `None` if a slice
 /// is too short (never, for the builder's rows). With `simd`, one vectorized pass where it
-/// applies ([`crate::simd::tiled_row`], the same values).
+/// applies ([`crate::simd::tiled_row`], the same values), which may pack the first `kp` local
+/// sums straight into `pack` (`(words, bit, k, exact)`: `k`-bit fields from bit `bit < 32` of
+/// `words`, the component row of the local sums; `exact` if every local sum is below `2^k`) and not write `local[..kp]`; returns `(kb,
+/// kl, kp)` (`kp = 0` on the portable path). `ahead` (the first word and the word count of the
+/// rows the fields go to) is a prefetch hint for the kernel, never dereferenced.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the row step's slices, the prefetch hint and the packing target"
+)]
 fn row_fields<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     lower: Option<&mut [E]>,
@@ -1744,28 +1756,44 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     t: usize,
     bnd: &mut [E],
     local: &mut [E],
-    ahead: [&[u32]; 2],
-) -> Option<(usize, usize)> {
+    ahead: Ahead,
+    pack: Option<(&mut [u32], u64, u32, bool)>,
+) -> Option<(usize, usize, usize)> {
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-    let _ = ahead;
+    let _ = (ahead, pack);
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    let lower = match lower {
-        // The kernel needs its own borrow of `lower`: try it, then fall through.
-        Some(l) => {
-            if let Some(done) =
-                crate::simd::tiled_row::<T, E, C>(texels, Some(&mut *l), acc, t, bnd, local, ahead)
-            {
-                return Some(done);
+    let lower = {
+        let pack = pack.map(|(words, bit, k, exact)| crate::simd::PackTo {
+            words,
+            bit,
+            k,
+            exact,
+        });
+        match lower {
+            // The kernel needs its own borrow of `lower`: try it, then fall through.
+            Some(l) => {
+                if let Some(done) = crate::simd::tiled_row::<T, E, C>(
+                    texels,
+                    Some(&mut *l),
+                    acc,
+                    t,
+                    bnd,
+                    local,
+                    ahead,
+                    pack,
+                ) {
+                    return Some(done);
+                }
+                Some(l)
             }
-            Some(l)
-        }
-        None => {
-            if let Some(done) =
-                crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local, ahead)
-            {
-                return Some(done);
+            None => {
+                if let Some(done) =
+                    crate::simd::tiled_row::<T, E, C>(texels, None, acc, t, bnd, local, ahead, pack)
+                {
+                    return Some(done);
+                }
+                None
             }
-            None
         }
     };
     if let Some(l) = lower {
@@ -1779,15 +1807,15 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
     if C == 1 {
         #[cfg(target_pointer_width = "64")]
         match t {
-            2 => return row_tiles::<T, E, 2>(texels, acc, bnd, local),
-            4 => return row_tiles::<T, E, 4>(texels, acc, bnd, local),
-            8 => return row_tiles::<T, E, 8>(texels, acc, bnd, local),
-            16 => return row_tiles::<T, E, 16>(texels, acc, bnd, local),
+            2 => return row_tiles::<T, E, 2>(texels, acc, bnd, local).map(|(b, l)| (b, l, 0)),
+            4 => return row_tiles::<T, E, 4>(texels, acc, bnd, local).map(|(b, l)| (b, l, 0)),
+            8 => return row_tiles::<T, E, 8>(texels, acc, bnd, local).map(|(b, l)| (b, l, 0)),
+            16 => return row_tiles::<T, E, 16>(texels, acc, bnd, local).map(|(b, l)| (b, l, 0)),
             _ => {}
         }
         #[cfg(not(target_pointer_width = "64"))]
         if t == 8 {
-            return row_tiles::<T, E, 8>(texels, acc, bnd, local);
+            return row_tiles::<T, E, 8>(texels, acc, bnd, local).map(|(b, l)| (b, l, 0));
         }
     }
     let (mut kb, mut kl) = (0usize, 0usize);
@@ -1816,7 +1844,7 @@ fn row_fields<T: Texel, E: Entry, const C: usize>(
             kl = end;
         }
     }
-    Some((kb, kl))
+    Some((kb, kl, 0))
 }
 
 /// [`row_fields`] for one channel and tiles of `T` texels: per whole tile, the running sum
@@ -1960,10 +1988,11 @@ mod row_step_tests {
                             t,
                             &mut bnd,
                             &mut local,
-                            [&[], &[]],
+                            [(core::ptr::null(), 0); 2],
+                            None,
                         );
                         let what = (t, n, with_lower, C);
-                        assert_eq!(got, Some((want_b.len(), want_l.len())), "{what:?}");
+                        assert_eq!(got, Some((want_b.len(), want_l.len(), 0)), "{what:?}");
                         assert_eq!(acc, want_acc, "{what:?}");
                         if with_lower {
                             assert!(low.iter().all(|&v| v == E::ZERO), "{what:?}");
@@ -2218,21 +2247,53 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         // The words this row's fields go to in the first two x components (with `simd`, the
         // row step asks for them while it computes: a table being built is usually not in
         // cache, and the packing would wait on each line).
-        let mut ahead: [&[u32]; 2] = [&[], &[]];
-        for (p, a) in ahead.iter_mut().enumerate() {
-            if let Some(c) = g.component(p, q) {
-                let from = usize::try_from(c.offset(0, iy) / 32);
-                let to = usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
-                if let (Ok(from), Ok(to)) = (from, to) {
-                    *a = words.get(from..to).unwrap_or(&[]);
+        // The local sums' component row, which the row step may pack into directly (with
+        // `simd`; the rest of its fields below). Not on other targets (flash).
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let (ahead, pack) = {
+            let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
+            let mut rows = [(0usize, 0usize); 2];
+            for (p, (a, r)) in ahead.iter_mut().zip(&mut rows).enumerate() {
+                if let Some(c) = g.component(p, q) {
+                    let from = usize::try_from(c.offset(0, iy) / 32);
+                    let to =
+                        usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
+                    if let (Ok(from), Ok(to)) = (from, to) {
+                        if let Some(w) = words.get(from..to) {
+                            // The local sums' row and up to 256 words after it (most often
+                            // the next row's first 16 lines: it then finds them in cache).
+                            let len = if p == 0 {
+                                words
+                                    .len()
+                                    .saturating_sub(from)
+                                    .min(w.len().saturating_add(256))
+                            } else {
+                                w.len()
+                            };
+                            *a = (w.as_ptr(), len);
+                            *r = (from, to);
+                        }
+                    }
                 }
             }
-        }
+            let [row0, _] = rows;
+            let (bit0, k0) = g
+                .component(0, q)
+                .map_or((0, 0), |c| (c.offset(0, iy) % 32, c.bits));
+            // Without a modulus every field is below 2^bits (the width proof): `exact`.
+            let exact = g.spec.modulus.is_none();
+            (
+                ahead,
+                words.get_mut(row0.0..row0.1).map(|w| (w, bit0, k0, exact)),
+            )
+        };
+        #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+        let (ahead, pack): (Ahead, _) = ([(core::ptr::null(), 0); 2], None);
         // acc_q += acc_{q-1} + the row's sums (row_fields: in the accumulators' form), split.
         // Wrapping additions: without a modulus every sum is at most the texture's total, which
         // `E` holds (`check_value_type`); with one, only the low k bits are stored, and those
         // of a sum depend only on the low k bits of its terms.
-        let (kb, kl) = row_fields::<T, E, C>(
+        let (kb, kl, kp) = row_fields::<T, E, C>(
             texels,
             lower,
             acc,
@@ -2240,8 +2301,15 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             bnd.get_mut(C..).ok_or(short)?,
             local,
             ahead,
+            pack,
         )
         .ok_or(short)?;
+        // (Without `simd` nothing is packed in the row step: a constant, the code below folds.)
+        let kp = if cfg!(all(feature = "simd", target_arch = "x86_64")) {
+            kp
+        } else {
+            0
+        };
         // Row iy of every component (p, q): for each stored x, C_pq(x, y) = acc_q[x] -
         // acc_q[trunc_{p+1}(x)], packed as one stream (the components are stored row by row).
         // p = 0: the local sums; p >= 1: the same differences over the tile boundaries (x a
@@ -2259,8 +2327,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 reason = "u32 -> usize is lossless (MAX_DIMENSION)"
             )]
             let (b, big) = (g.ax.block(p) as usize, big as usize);
-            let fields: &[E] = if p == 0 {
-                local.get(..kl).ok_or(short)?
+            // p = 0: the first kp local sums are packed already (row_fields).
+            let (fields, done) = if p == 0 {
+                (local.get(..kl).ok_or(short)?, kp)
             } else {
                 // p >= 1: t = b_1 >= 2 divides b_p and b_{p+1}.
                 let (b, big) = (
@@ -2268,10 +2337,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                     big.checked_div(t).ok_or(short)?,
                 );
                 if b == 1 && big == 0 {
-                    bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?
+                    (bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?, 0)
                 } else {
                     let count = component_fields::<E, C>(bnd, nb, b, big, local).ok_or(short)?;
-                    local.get(..count).ok_or(short)?
+                    (local.get(..count).ok_or(short)?, 0)
                 }
             };
             // The stored positions, counted as Geometry::new counted them: a mismatch would
@@ -2283,7 +2352,13 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 return Err(short);
             }
             // (A component without stored positions on this axis has no fields, and 0 bits.)
-            if !fields.is_empty() && !pack_fields(words, comp.offset(0, iy), fields, comp.bits) {
+            let rest = fields.get(done..).ok_or(short)?;
+            let from = u64::try_from(done)
+                .ok()
+                .and_then(|d| d.checked_mul(u64::from(comp.bits)))
+                .and_then(|b| b.checked_add(comp.offset(0, iy)))
+                .ok_or(short)?;
+            if !rest.is_empty() && !pack_fields(words, from, rest, comp.bits) {
                 return Err(Error::StorageTooSmall {
                     needed: g.words,
                     got: words.len(),

@@ -23,6 +23,13 @@ time the processes spent waiting for a CPU, from /proc/<pid>/schedstat).
     python3 tools/examples/build_speed.py --variants native --rounds 41 --methods floor,build
     python3 tools/examples/build_speed.py --json out.json     # also the raw samples
 
+Before and after a change, in one run: build the example at each commit, copy the binaries, and
+pass them as servers instead of variants (the ratios to the first server's same method are then
+printed as well):
+
+    python3 tools/examples/build_speed.py --servers before=/tmp/a,after=/tmp/b \
+        --methods build,tiled --rounds 41 --no-opencv
+
 Every method's table is compared with `Sat::build`'s before it is timed (in the server), and
 OpenCV's with the texsat table (here).
 """
@@ -113,11 +120,16 @@ def main():
     ap.add_argument("--no-opencv", action="store_true")
     ap.add_argument("--json", help="write medians and raw samples here")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--servers", help="NAME=PATH,... of prebuilt build_speed binaries to time "
+                    "instead of building --variants (e.g. two commits' binaries)")
     args = ap.parse_args()
 
     sides = [int(s) for s in args.sides.split(",")]
     methods = args.methods.split(",")
-    servers = [Server(v, build(v)) for v in args.variants.split(",")]
+    if args.servers:
+        servers = [Server(*kv.split("=", 1)) for kv in args.servers.split(",")]
+    else:
+        servers = [Server(v, build(v)) for v in args.variants.split(",")]
     for s in servers:
         unknown = set(methods) - set(s.methods)
         if unknown:
@@ -226,16 +238,27 @@ def main():
         q = statistics.quantiles(r, n=4) if len(r) >= 2 else [r[0]] * 3
         return q[0], statistics.median(r), q[2]
 
-    print("\npaired ratios, median over rounds [quartiles]; per side: / floor, / cv2.integral")
+    print("\npaired ratios, median over rounds [quartiles]; per side: / floor, / cv2.integral, "
+          "/ the same variant's build (Sat::build)")
     for v, m in rows:
         if v == "opencv":
             continue
         cells = []
         for n in sides:
-            for ref in [(v, "floor", n), ("opencv", "cv2.integral", n)]:
+            for ref in [(v, "floor", n), ("opencv", "cv2.integral", n), (v, "build", n)]:
                 pr = paired((v, m, n), ref)
                 cells.append(f"{pr[1]:.2f} [{pr[0]:.2f}, {pr[2]:.2f}]" if pr else "")
         print(f"| {v} | {m} | " + " | ".join(cells) + " |")
+    if args.servers and len(servers) > 1:
+        first = servers[0].variant
+        print(f"\npaired ratios to {first}'s same method, median over rounds [quartiles], per side")
+        for s in servers[1:]:
+            for m in methods:
+                cells = []
+                for n in sides:
+                    pr = paired((s.variant, m, n), (first, m, n))
+                    cells.append(f"{pr[1]:.3f} [{pr[0]:.2f}, {pr[2]:.2f}]" if pr else "")
+                print(f"| {s.variant} / {first} | {m} | " + " | ".join(cells) + " |")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"kernels": {s.variant: s.kernel for s in servers},
