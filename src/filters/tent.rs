@@ -316,12 +316,23 @@ pub trait TentAcc: Copy + Ord + Default + core::fmt::Debug + 'static + sealed::S
     fn div_round_shift(num: Self, shift: u32, den: Self) -> Result<u64, Error>;
 }
 
+/// The checked binary operations of [`TentAcc`], each the primitive type's own.
+macro_rules! forward_checked {
+    ($t:ty: $($name:ident),*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, o: Self) -> Option<Self> {
+                <$t>::$name(self, o)
+            }
+        )*
+    };
+}
+
 macro_rules! impl_tent_acc {
     (
-        $t:ty, $bits:expr, $proves:expr,
+        $t:ty, $u:ty, $bits:expr, $proves:expr,
         $e:ident => $from_entry:expr,
-        $a:ident, $b:ident => $norm:expr,
-        $n:ident, $s:ident, $d:ident => $div:expr
+        $div:path
     ) => {
         impl TentAcc for $t {
             const BITS_AVAILABLE: u32 = $bits;
@@ -340,26 +351,8 @@ macro_rules! impl_tent_acc {
             fn from_entry<L: TentEntry>($e: L) -> Option<Self> {
                 $from_entry
             }
-            #[inline(always)]
-            fn checked_add(self, o: Self) -> Option<Self> {
-                <$t>::checked_add(self, o)
-            }
-            #[inline(always)]
-            fn checked_sub(self, o: Self) -> Option<Self> {
-                <$t>::checked_sub(self, o)
-            }
-            #[inline(always)]
-            fn checked_mul(self, o: Self) -> Option<Self> {
-                <$t>::checked_mul(self, o)
-            }
-            #[inline(always)]
-            fn checked_div_euclid(self, o: Self) -> Option<Self> {
-                <$t>::checked_div_euclid(self, o)
-            }
-            #[inline(always)]
-            fn checked_rem_euclid(self, o: Self) -> Option<Self> {
-                <$t>::checked_rem_euclid(self, o)
-            }
+            forward_checked!($t: checked_add, checked_sub, checked_mul, checked_div_euclid,
+                checked_rem_euclid);
             #[inline(always)]
             fn checked_shl(self, g: u32) -> Option<Self> {
                 let p = <Self as TentAcc>::ONE.checked_shl(g).filter(|&p| p > 0)?;
@@ -383,40 +376,24 @@ macro_rules! impl_tent_acc {
                 self.unsigned_abs().is_power_of_two()
             }
             #[inline]
-            fn normaliser($a: u64, $b: u64) -> Result<Self, Error> {
-                $norm
+            fn normaliser(a: u64, b: u64) -> Result<Self, Error> {
+                // a^2 b^2 in the unsigned word of the same width, then into the signed one.
+                let (wa, wb) = (<$u>::from(a), <$u>::from(b));
+                wa.checked_mul(wa)
+                    .and_then(|a2| wb.checked_mul(wb).and_then(|b2| a2.checked_mul(b2)))
+                    .and_then(|d| <$t>::try_from(d).ok())
+                    .ok_or_else(|| normaliser_too_wide(bits_of_u64(a), bits_of_u64(b), $bits))
             }
             #[inline]
-            fn div_round_shift($n: Self, $s: u32, $d: Self) -> Result<u64, Error> {
-                $div
+            fn div_round_shift(n: Self, s: u32, d: Self) -> Result<u64, Error> {
+                $div(n.max(0).unsigned_abs(), s, d.max(0).unsigned_abs())
             }
         }
     };
 }
 
-impl_tent_acc!(i64, 63, true,
-    e => e.to_i64(),
-    a, b => {
-        let d = a
-            .checked_mul(a)
-            .and_then(|a2| b.checked_mul(b).and_then(|b2| a2.checked_mul(b2)))
-            .and_then(|d| i64::try_from(d).ok());
-        d.ok_or_else(|| normaliser_too_wide(bits_of_u64(a), bits_of_u64(b), 63))
-    },
-    n, s, d => div_round_shift_u64(n.max(0).unsigned_abs(), s, d.max(0).unsigned_abs())
-);
-impl_tent_acc!(i128, 127, false,
-    e => Some(e.to_i128()),
-    a, b => {
-        let (a, b) = (u128::from(a), u128::from(b));
-        let d = a
-            .checked_mul(a)
-            .and_then(|a2| b.checked_mul(b).and_then(|b2| a2.checked_mul(b2)))
-            .and_then(|d| i128::try_from(d).ok());
-        d.ok_or_else(|| normaliser_too_wide(bits_of(a), bits_of(b), 127))
-    },
-    n, s, d => div_round_shift(n.max(0).unsigned_abs(), s, d.max(0).unsigned_abs())
-);
+impl_tent_acc!(i64, u64, 63, true, e => e.to_i64(), div_round_shift_u64);
+impl_tent_acc!(i128, u128, 127, false, e => Some(e.to_i128()), div_round_shift);
 
 /// The normaliser's refusal: `2 bits(a) + 2 bits(b)` bits needed.
 fn normaliser_too_wide(a_bits: u32, b_bits: u32, bits_available: u32) -> Error {
@@ -2487,11 +2464,37 @@ mod tests {
 
     /// Runs a lookup and returns the bits it needed ([`Track`]): at least 128 if it was
     /// refused.
-    fn peak<R>(f: impl FnOnce() -> Result<R, Error>) -> ((), u32) {
+    fn peak<R>(f: impl FnOnce() -> Result<R, Error>) -> u32 {
         PEAK.with(|p| p.set(0));
         let r = f();
         let bits = PEAK.with(|p| p.get());
-        ((), if r.is_err() { bits.max(128) } else { bits })
+        if r.is_err() {
+            bits.max(128)
+        } else {
+            bits
+        }
+    }
+
+    /// The bits of the exact form's bound ([`exact_bound`]) of a placed footprint, 65 past
+    /// `u64`.
+    fn exact_bound_bits(fp: &Footprint<i64>, t: Worst, m_t: u64) -> u32 {
+        let frac = |x: i64| (x & (fp.s - 1)) * (fp.s - (x & (fp.s - 1)));
+        let (pa, pb) = (fp.px.map(frac), fp.py.map(frac));
+        exact_bound(fp, &pa, &pb, t, m_t).map_or(65, bits_of_u64)
+    }
+
+    /// The bits the exact form needs on the `u64` table ([`peak`]).
+    fn exact_need<T: Texel>(
+        t64: &TentTable<'_, u64>,
+        lines: &TentLines<'_, u32>,
+        texture: &Texture<'_, T>,
+        r: &Rect<i64>,
+        fb: FracBits,
+        kind: EdgeKind,
+    ) -> u32 {
+        peak(|| {
+            t64.sample_exact_raw_in::<Track, _, _, _, _>(lines, texture, r, fb, kind, &mut NoCount)
+        })
     }
 
     /// What a lookup on both tables gave: `(answers, refusals)` so far.
@@ -2645,7 +2648,7 @@ mod tests {
                         Ok(Some(fp)) => Some(bits(paper_bound(&fp.ax, &fp.ay, fp.s as u64, q))),
                         Err(_) => None,
                     };
-                    let (_, need) =
+                    let need =
                         peak(|| t64.sample_raw_in::<Track, _, _>(&r, fb, kind, &mut NoCount));
                     let (got32, got64) = (
                         t32.sample_raw(&r, fb, kind, &mut NoCount),
@@ -2665,23 +2668,10 @@ mod tests {
                     // Exact form.
                     let bound = match &fp {
                         Ok(None) => Some(0),
-                        Ok(Some(fp)) => {
-                            let frac = |x: i64| (x & (fp.s - 1)) * (fp.s - (x & (fp.s - 1)));
-                            let (pa, pb) = (fp.px.map(frac), fp.py.map(frac));
-                            Some(bits(exact_bound(fp, &pa, &pb, q, m)))
-                        }
+                        Ok(Some(fp)) => Some(exact_bound_bits(fp, q, m)),
                         Err(_) => None,
                     };
-                    let (_, need) = peak(|| {
-                        t64.sample_exact_raw_in::<Track, _, _, _, _>(
-                            &lines,
-                            &texture,
-                            &r,
-                            fb,
-                            kind,
-                            &mut NoCount,
-                        )
-                    });
+                    let need = exact_need(&t64, &lines, &texture, &r, fb, kind);
                     let (got32, got64) = (
                         t32.sample_exact_raw(&lines, &texture, &r, fb, kind, &mut NoCount),
                         t64.sample_exact_raw(&lines, &texture, &r, fb, kind, &mut NoCount),
@@ -2724,7 +2714,7 @@ mod tests {
                     let ay = int_axes(kind, cyy, cb, h).ok()?;
                     Some(paper_bound(&ax, &ay, 1, q).map_or(65, bits_of_u64))
                 })();
-                let (_, need) =
+                let need =
                     peak(|| t64.sample_int_in::<Track, _, _>(cx, cy, a, b, kind, &mut NoCount));
                 compare(
                     t32.sample_int(cx, cy, a, b, kind, &mut NoCount),
@@ -2915,8 +2905,7 @@ mod tests {
                 };
                 let bound = paper_bound(&fp.ax, &fp.ay, fp.s as u64, t32.worst());
                 let bound = bound.map_or(65, bits_of_u64);
-                let (_, need) =
-                    peak(|| t64.sample_raw_in::<Track, _, _>(&r, fb, kind, &mut NoCount));
+                let need = peak(|| t64.sample_raw_in::<Track, _, _>(&r, fb, kind, &mut NoCount));
                 assert!(bound <= e + 2 * g + 3, "F={f}");
                 assert!(
                     need <= bound && bound <= need + 2,
@@ -2924,19 +2913,8 @@ mod tests {
                 );
                 let got = t32.sample_raw(&r, fb, kind, &mut NoCount);
                 assert_eq!(got.is_ok(), bound <= 63, "F={f}");
-                let frac = |x: i64| (x & (fp.s - 1)) * (fp.s - (x & (fp.s - 1)));
-                let (pa, pb) = (fp.px.map(frac), fp.py.map(frac));
-                let bound = exact_bound(&fp, &pa, &pb, t32.worst(), 65535).map_or(65, bits_of_u64);
-                let (_, need) = peak(|| {
-                    t64.sample_exact_raw_in::<Track, _, _, _, _>(
-                        &lines,
-                        &texture,
-                        &r,
-                        fb,
-                        kind,
-                        &mut NoCount,
-                    )
-                });
+                let bound = exact_bound_bits(&fp, t32.worst(), 65535);
+                let need = exact_need(&t64, &lines, &texture, &r, fb, kind);
                 assert!(bound <= e + 4 * g + 4, "F={f}");
                 assert!(
                     (need <= bound && bound <= need + 6) || (bound == 65 && need > 63),
