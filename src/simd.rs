@@ -53,7 +53,12 @@
 //!    kernels); the prefetches of `ahead` access no memory. With a packing target
 //!    ([`PackTo`]), it checks that the bytes the pairs of blocks pack into (`7 k / 2` per pair,
 //!    from byte `bit / 8`) lie inside the target's words before `tiled512::kernel8_packed`
-//!    writes them by masked byte stores (the bytes past them masked off: not accessed).
+//!    writes them: pair `p`'s `7 k / 2` bytes by one full 64-byte store only when it ends
+//!    inside those bytes (`7 k / 2 p + 64 <= 7 k / 2 pairs`; its excess lies in the later pairs'
+//!    bytes, which their own stores rewrite, in order), else by a masked byte store of exactly
+//!    its bytes (the lanes past them masked off: not accessed). The first byte starts at the
+//!    row's first bit and the last ends on a byte boundary, so no bit outside the row's fields
+//!    is written.
 //!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
@@ -745,7 +750,7 @@ mod pack512 {
 /// Where the tiled builder will pack a row's fields, for the row kernels' prefetches: per
 /// component, the first word and the number of words (a hint only: never read or written
 /// through, so any pointer will do; the builder passes the table's words).
-pub(crate) type Ahead = [(*const u32, usize); 2];
+pub(crate) use crate::layouts::tiled::Ahead;
 
 /// A component row the tiled row step may pack its local sums into directly (see
 /// [`tiled_row`]): `k`-bit fields from bit `bit` of `words` (field `i` at bit `bit + i k`,
@@ -801,29 +806,35 @@ pub(crate) fn tiled_row<T: Texel, E: Entry, const C: usize>(
     ahead: Ahead,
     pack: Option<PackTo<'_>>,
 ) -> Option<(usize, usize, usize)> {
-    tiled_row_with::<T, E, C>(
-        Kernel::best(),
-        vbmi(),
-        texels,
-        lower,
-        acc,
-        tile,
-        bnd,
-        local,
-        ahead,
-        pack,
-    )
+    // SAFETY: `Kernel::best` and `vbmi` are what this CPU runs (CPUID, cached).
+    unsafe {
+        tiled_row_with::<T, E, C>(
+            Kernel::best(),
+            vbmi(),
+            texels,
+            lower,
+            acc,
+            tile,
+            bnd,
+            local,
+            ahead,
+            pack,
+        )
+    }
 }
 
-/// [`tiled_row`] with `kernel` (which must be [`Kernel::available`]) and, if `vbmi` (which
-/// must be [`vbmi`]'s answer, or `false`), the packing kernel: AVX-512 VNNI for tiles of 2, 4, 8
-/// and 16 texels; AVX2 for tiles of 8 (each 128-bit half of its 16 texels is one tile, see
-/// `tiled256`); `None` otherwise.
+/// [`tiled_row`] with `kernel` and, if `vbmi`, the packing kernel: AVX-512 VNNI for tiles of
+/// 2, 4, 8 and 16 texels; AVX2 for tiles of 8 (each 128-bit half of its 16 texels is one tile,
+/// see `tiled256`); `None` otherwise.
+///
+/// # Safety
+/// `kernel` is [`Kernel::available`] on this CPU, and `vbmi` is `false` or [`vbmi`]'s answer:
+/// the kernels it selects use those instructions.
 #[allow(
     clippy::too_many_arguments,
     reason = "the row step's slices, as tiled_row's, plus the kernels"
 )]
-fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
+unsafe fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     kernel: Kernel,
     vbmi: bool,
     texels: &[T],
@@ -1295,8 +1306,9 @@ mod tiled512 {
             for pr in from..end {
                 let (va, vb) = (block(2 * pr), block(2 * pr + 1));
                 // SAFETY: the boundaries go to bnd[4 pr..4 pr + 4], inside bnd[..2 blocks];
-                // the packed bytes to out[bytes pr..bytes (pr + 1)], inside the caller's
-                // `bytes pairs`.
+                // the packed bytes to out[bytes pr..bytes pr + 64] when that ends inside the
+                // caller's `bytes pairs` (the excess is later pairs' bytes, rewritten by their
+                // stores), else to out[bytes pr..bytes (pr + 1)] by a masked store.
                 unsafe {
                     let bv = super::pack512::perm2(va, bnd_ix, vb);
                     _mm_storeu_si128(bnd.add(4 * pr).cast(), _mm512_castsi512_si128(bv));
@@ -1615,18 +1627,21 @@ mod tests {
                             let mut bnd = std::vec![7u32; nb + 20];
                             let mut local = std::vec![9u32; nl + 20];
                             let ahead = [(words.as_ptr(), n.min(100)), (words.as_ptr(), 3)];
-                            let got = tiled_row_with::<u8, u32, 1>(
-                                kernel,
-                                false,
-                                &t,
-                                with_lower.then_some(&mut low[..]),
-                                &mut acc,
-                                tile,
-                                &mut bnd[..nb],
-                                &mut local[..nl],
-                                ahead,
-                                None,
-                            );
+                            // SAFETY: `kernel` is one of the CPU's (`Kernel::available`).
+                            let got = unsafe {
+                                tiled_row_with::<u8, u32, 1>(
+                                    kernel,
+                                    false,
+                                    &t,
+                                    with_lower.then_some(&mut low[..]),
+                                    &mut acc,
+                                    tile,
+                                    &mut bnd[..nb],
+                                    &mut local[..nl],
+                                    ahead,
+                                    None,
+                                )
+                            };
                             let what = (kernel.name(), tile, n, pattern, with_lower);
                             if !runs {
                                 assert_eq!(got, None, "{what:?}");
@@ -1712,8 +1727,10 @@ mod tests {
         assert_eq!((acc, b, l, low), ([1; 40], [0; 40], [0; 40], [5; 31]));
     }
 
-    /// `tiled_row` with a packing target: on a CPU with AVX-512BW and VBMI (under Miri: never,
-    /// the CI's flags leave them out) and tiles of 8, for every even width `k` of 8 to 14 and
+    /// `tiled_row` with a packing target: on a CPU with AVX-512BW and VBMI (under Miri: when the
+    /// target features include them, as the last of `.ci/miri.sh`'s flag sets does; widths of
+    /// one, two and three pairs and more, so both the masked and the full 64-byte stores run)
+    /// and tiles of 8, for every even width `k` of 8 to 14 and
     /// byte-aligned starts 0, 8, 16, 24, the local sums of each pair of blocks go into the
     /// words exactly as the layouts' field-by-field write of their low `k` bits
     /// (`layouts::packed::write_bits`), every other bit of the words (before, between rows,
@@ -1730,7 +1747,7 @@ mod tests {
         const MAX: usize = 6 * BLOCK + 7;
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
         let widths: Vec<usize> = if cfg!(miri) {
-            std::vec![32, 50]
+            std::vec![32, 50, 64, 103]
         } else {
             (0..=MAX).collect()
         };
@@ -1741,7 +1758,7 @@ mod tests {
                 for k in [8u32, 10, 11, 12, 14, 16] {
                     for bit in [0u64, 3, 8, 16, 24] {
                         for (pattern, exact) in (0..4).flat_map(|p| [(p, false), (p, true)]) {
-                            if cfg!(miri) && (pattern != 3 || k != 14 || bit > 8) {
+                            if cfg!(miri) && (pattern != 3 || (k != 14 && k != 8) || bit > 8) {
                                 continue;
                             }
                             // `exact`: the local sums below 2^k (texels at most t_max, the
@@ -1809,23 +1826,26 @@ mod tests {
                                 let mut low = low0.clone();
                                 let mut bnd = std::vec![7u32; nb + 20];
                                 let mut local = std::vec![9u32; nl + 20];
-                                let got = tiled_row_with::<u8, u32, 1>(
-                                    Kernel::best(),
-                                    vbmi(),
-                                    &t,
-                                    with_lower.then_some(&mut low[..]),
-                                    &mut acc,
-                                    tile,
-                                    &mut bnd[..nb],
-                                    &mut local[..nl],
-                                    [(core::ptr::null(), 0); 2],
-                                    Some(PackTo {
-                                        words: &mut words[..len],
-                                        bit,
-                                        k,
-                                        exact,
-                                    }),
-                                );
+                                // SAFETY: the CPU's best kernel and its `vbmi` answer.
+                                let got = unsafe {
+                                    tiled_row_with::<u8, u32, 1>(
+                                        Kernel::best(),
+                                        vbmi(),
+                                        &t,
+                                        with_lower.then_some(&mut low[..]),
+                                        &mut acc,
+                                        tile,
+                                        &mut bnd[..nb],
+                                        &mut local[..nl],
+                                        [(core::ptr::null(), 0); 2],
+                                        Some(PackTo {
+                                            words: &mut words[..len],
+                                            bit,
+                                            k,
+                                            exact,
+                                        }),
+                                    )
+                                };
                                 let what = (tile, n, k, bit, pattern, exact, with_lower, short);
                                 if Kernel::best() != Kernel::Avx512Vnni
                                     && !(Kernel::best() == Kernel::Avx2 && tile == 8)

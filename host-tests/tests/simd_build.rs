@@ -149,6 +149,45 @@ fn tiled_builds_of_every_width() {
     }
 }
 
+/// The tiled and modular layout combined (8 x 8 tiles, every field modulo `2^m`): the local
+/// sums of 8-bit texels are 14 bits, so at `m` = 8 to 12 the packing kernel stores `m`-bit
+/// fields whose sums it must mask (`m` = 14, 16: the fields as they are, or too wide to pack).
+/// Every corner against the reference modulo `2^m`, widths around one, two and three pairs of
+/// blocks and beyond, heights with and without a tile row's end, saturated and random texels,
+/// into dirty words.
+#[test]
+fn tiled_modular_builds_equal_the_reference() {
+    let mut rng = texsat_host_tests::rng(0x7113);
+    for m in [8u32, 10, 12, 14, 16] {
+        let spec = TiledSpec::tiles(8, 8).unwrap().with_modulus(m);
+        for w in [1usize, 31, 32, 33, 47, 64, 65, 96, 100, 131] {
+            for h in [3usize, 9, 17] {
+                let random: Vec<u8> = (0..w * h).map(|_| rng.random_range(0..=255u8)).collect();
+                for t in [vec![255u8; w * h], random] {
+                    let want = reference(&t, w, h);
+                    let texture = Texture::<u8>::new(&t, w, h).unwrap();
+                    let mut words =
+                        vec![0xA5A5_A5A5u32; Tiled::<u32>::words_needed(spec, w, h, 8).unwrap()];
+                    let mut scratch =
+                        vec![0x5555_5555u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
+                    let tiled =
+                        Tiled::<u32>::build(&texture, spec, &mut words, &mut scratch).unwrap();
+                    let low = (1u64 << m) - 1;
+                    for y in 1..=h {
+                        for x in 1..=w {
+                            assert_eq!(
+                                u64::from(tiled.corner(x, y, &mut NoCount)[0]) & low,
+                                want[(y - 1) * w + x - 1] & low,
+                                "m {m}, {w}x{h}, corner ({x}, {y})"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Every width from 1 to 80 (five blocks) at a few heights, all texels 255: the largest sums
 /// every lane can see.
 #[test]

@@ -158,7 +158,7 @@
 //! paper numerator, a second difference, is far below its bound `P` when `a` is a texel or less,
 //! which only the paper form's error analysis could show) and footprints outside the table
 //! (up to 12 bits in the paper form, 22 in the exact form: the extension terms cancel); the
-//! integer form's within 5 bits. (These are the largest gaps on the tests' footprints, and the
+//! integer form's within 6 bits. (These are the largest gaps on the tests' footprints, and the
 //! tests hold the bound to them.)
 //!
 //! ## Widths and memory
@@ -2762,10 +2762,10 @@ mod tests {
         // Inside the table the bound of the Crow form is within 3 bits of what the worst-case
         // texture needs where it refuses; the exact form's within 25 (narrow footprints),
         // outside the table the Crow form's within 12 and the exact form's within 22, the
-        // integer form's within 5 (module docs, measured here).
+        // integer form's within 6 (module docs, measured here and on Miri's smaller set).
         let [paper_in, paper_out, exact_in, exact_out, int] = out.slack;
         assert!(
-            paper_in <= 3 && paper_out <= 12 && exact_in <= 25 && exact_out <= 22 && int <= 5,
+            paper_in <= 3 && paper_out <= 12 && exact_in <= 25 && exact_out <= 22 && int <= 6,
             "{out:?}"
         );
         // Both outcomes happen, inside the table too.

@@ -22,7 +22,7 @@
 
 mod modular;
 pub mod packed;
-mod tiled;
+pub(crate) mod tiled;
 
 pub use modular::{modulus_bits_for, Modular, ModularBuilder};
 

@@ -1723,8 +1723,9 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
 }
 
 /// The words of the component rows a row's fields go to (first word, word count), per x
-/// component 0 and 1: the row kernel's prefetch hint (never dereferenced).
-type Ahead = [(*const u32, usize); 2];
+/// component 0 and 1: the row kernel's prefetch hint (never dereferenced). The one definition,
+/// also the `simd` kernels' (`simd::Ahead`).
+pub(crate) type Ahead = [(*const u32, usize); 2];
 
 /// The row step of [`TiledBuilder::push_row`] on one accumulator row `acc` (position `x =
 /// 1..=n` at `(x - 1) C`, `C` values each) and, when the row ends a block of a level above 0,
