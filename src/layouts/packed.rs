@@ -221,6 +221,44 @@ pub(crate) fn read_masked32(words: &[u32], at: u32, mask: u32) -> u32 {
     (pair >> s) as u32 & mask
 }
 
+/// The 32 bits at bit `at` of `words` and the 32 bits at bit `at + delta` (both unmasked):
+/// when `at + delta <= u32::MAX`, exactly [`read_masked32`] of each with `mask = u32::MAX`.
+/// When both two-word windows lie inside the slice, one range check covers both: the second
+/// window starts `(at % 32 + delta) / 32` words after the first, a non-negative amount formed
+/// without wrapping, so the check of the later window implies the earlier one's and the
+/// compiler drops it (two reads of a column of a tiled component, a row apart: one check fewer
+/// per pair on the Cortex-M4). Otherwise the two reads one by one.
+///
+/// When `at + delta` passes `u32::MAX` the second value is unspecified (never a panic). The
+/// tiled lookups never ask for it: their offsets are below the layout's total bits, below
+/// `2^32`.
+#[inline(always)]
+#[allow(
+    clippy::as_conversions,
+    reason = "u32 -> usize is lossless (usize has at least 32 bits: MAX_DIMENSION); the casts to \
+              u32 keep the low 32 bits on purpose, as in read_masked32"
+)]
+pub(crate) fn read2_32(words: &[u32], at: u32, delta: u32) -> (u32, u32) {
+    let i = (at / WORD_BITS) as usize;
+    let s = at % WORD_BITS;
+    if let Some(t) = s.checked_add(delta) {
+        // i < 2^27 and t / 32 < 2^27: no wrap on a 32-bit usize, so j >= i.
+        let j = i.wrapping_add((t / WORD_BITS) as usize);
+        if let (Some(&[c, d]), Some(&[a, b])) = (
+            words.get(j..j.wrapping_add(2)),
+            words.get(i..i.wrapping_add(2)),
+        ) {
+            let lo = (u64::from(a) | u64::from(b) << 32) >> s;
+            let hi = (u64::from(c) | u64::from(d) << 32) >> (t % WORD_BITS);
+            return (lo as u32, hi as u32);
+        }
+    }
+    (
+        read_masked32(words, at, u32::MAX),
+        read_masked32(words, at.wrapping_add(delta), u32::MAX),
+    )
+}
+
 /// Reads `len <= 64` bits starting at bit `offset` of `words`; returns the value and the number
 /// of words touched. Bits past the end of the slice read as 0 (callers size the slice with
 /// [`words_for`], so this never happens for a valid layout); `len` above 64 reads 64 bits.
@@ -733,6 +771,42 @@ mod tests {
                     "len {len} at {at}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn read2_32_equals_two_single_reads() {
+        // Both windows at every pair of offsets of a pseudo-random slice (the second before,
+        // at or after the first, in the last word, past the slice): always the two
+        // read_masked32 calls' values.
+        let mut x = 0x2545_F491u32;
+        let words: [u32; 5] = core::array::from_fn(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        });
+        let step = if cfg!(miri) { 7 } else { 1 };
+        for at in (0..(6 * 32)).step_by(step) {
+            for second in (0..(6 * 32)).step_by(step) {
+                let delta = u32::wrapping_sub(second, at);
+                assert_eq!(
+                    read2_32(&words, at, delta),
+                    (
+                        read_masked32(&words, at, u32::MAX),
+                        read_masked32(&words, second, u32::MAX)
+                    ),
+                    "at {at} second {second}"
+                );
+            }
+        }
+        // A second offset past u32::MAX: no panic; the first value is still exact.
+        for (at, delta) in [(u32::MAX, 1), (u32::MAX - 31, 40), (33, u32::MAX - 1)] {
+            assert_eq!(
+                read2_32(&words, at, delta).0,
+                read_masked32(&words, at, u32::MAX),
+                "at {at} delta {delta}"
+            );
         }
     }
 

@@ -55,8 +55,8 @@
 use core::num::NonZeroU32;
 
 use super::packed::{
-    bits_of_mul, check_dimensions, mask, pack_fields, read_masked, read_masked32, word_shift,
-    words_of_bits, USIZE_MAX64, WORD_BITS,
+    bits_of_mul, check_dimensions, mask, pack_fields, read2_32, read_masked, read_masked32,
+    word_shift, words_of_bits, USIZE_MAX64, WORD_BITS,
 };
 use super::Layout;
 use crate::cost::{per_channel, Counter, Region};
@@ -537,6 +537,53 @@ impl OneLevel {
             d,
             q,
             i0: q.wrapping_mul(low).wrapping_add(d).wrapping_sub(1),
+        }
+    }
+}
+
+/// One column's (or row's) part of the bit offsets of a cell's fields under a [`OneLevel`]
+/// geometry, so that each offset is one addition `x.pNN + y.pNN`: for a column, `ix stride` of
+/// each component (`ix` the column's index there: `i0` for the local sums and the strips
+/// above, `q - 1` for the strips left and the tile corners); for a row, the component's offset
+/// plus `iy row`. `q`: a whole tile precedes it (else the parts with `q - 1` are unused).
+/// Formed once per column and per row of a 16-read lookup (two of each for four cells).
+#[derive(Clone, Copy)]
+pub(super) struct CellParts {
+    p00: u32,
+    p01: u32,
+    p10: u32,
+    p11: u32,
+    q: bool,
+}
+
+impl CellParts {
+    /// The parts of column `i`.
+    #[inline(always)]
+    fn x(o: &OneLevel, i: u32) -> CellParts {
+        let d = OneLevel::digits(o.shift_x, o.low_x, i);
+        let t = d.q.wrapping_sub(1);
+        let [c00, c01, c10, c11] = &o.comps;
+        CellParts {
+            p00: d.i0.wrapping_mul(c00.stride),
+            p01: d.i0.wrapping_mul(c01.stride),
+            p10: t.wrapping_mul(c10.stride),
+            p11: t.wrapping_mul(c11.stride),
+            q: d.q != 0,
+        }
+    }
+
+    /// The parts of row `j`, the components' offsets included.
+    #[inline(always)]
+    fn y(o: &OneLevel, j: u32) -> CellParts {
+        let d = OneLevel::digits(o.shift_y, o.low_y, j);
+        let t = d.q.wrapping_sub(1);
+        let [c00, c01, c10, c11] = &o.comps;
+        CellParts {
+            p00: c00.offset.wrapping_add(d.i0.wrapping_mul(c00.row)),
+            p01: c01.offset.wrapping_add(t.wrapping_mul(c01.row)),
+            p10: c10.offset.wrapping_add(d.i0.wrapping_mul(c10.row)),
+            p11: c11.offset.wrapping_add(t.wrapping_mul(c11.row)),
+            q: d.q != 0,
         }
     }
 }
@@ -1142,7 +1189,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             k.read_at(Region::Table, u64::from(a), c.stride);
             k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
         }
-        let v = read_masked32(self.words, at, c.pair_mask);
+        // Both fields are masked below: the 32 bits at `at` unmasked.
+        let v = read_masked32(self.words, at, u32::MAX);
         let (mut a, mut b) = ([E::ZERO; C], [E::ZERO; C]);
         // Channel c of the first entry at c bits, of the second at stride + c bits: both below
         // 2 stride <= 32 (pair_mask != 0), so the shifts are below 32.
@@ -1157,14 +1205,66 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         (a, b)
     }
 
+    /// Two entries of one column a component row apart (`at` and `at + row`: `iy` and `iy + 1`,
+    /// same `ix`), the reads counted as two [`Tiled::field_at`] calls count them: one range
+    /// check for both ([`read2_32`]) when there is one channel.
+    #[inline(always)]
+    fn column2_at<K: Counter>(&self, c: &Comp32, at: u32, k: &mut K) -> ([E; C], [E; C]) {
+        if C != 1 {
+            return (
+                self.field_at(c, at, k),
+                self.field_at(c, at.wrapping_add(c.row), k),
+            );
+        }
+        let next = at.wrapping_add(c.row);
+        for a in [at, next] {
+            k.reads(1, c.stride);
+            k.read_at(Region::Table, u64::from(a), c.stride);
+            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+        }
+        let (u, v) = read2_32(self.words, at, c.row);
+        let one = |v: u32| [E::from_u64_truncating(u64::from(v & c.mask)); C];
+        (one(u), one(v))
+    }
+
+    /// The entries `(ix, iy)`, `(ix + 1, iy)`, `(ix, iy + 1)`, `(ix + 1, iy + 1)` of a
+    /// component (`at`, `at + stride`, `at + row`, `at + row + stride`), read and counted as
+    /// two [`Tiled::pair_at`] calls: with one channel and pairs that fit 32 bits, two 32-bit
+    /// windows a row apart with one range check ([`read2_32`]).
+    #[inline(always)]
+    fn square_at<K: Counter>(&self, c: &Comp32, at: u32, k: &mut K) -> [[E; C]; 4] {
+        if C != 1 || c.pair_mask == 0 {
+            let (a, b) = self.pair_at(c, at, k);
+            let (d, e) = self.pair_at(c, at.wrapping_add(c.row), k);
+            return [a, b, d, e];
+        }
+        let below = at.wrapping_add(c.row);
+        for a in [
+            at,
+            at.wrapping_add(c.stride),
+            below,
+            below.wrapping_add(c.stride),
+        ] {
+            k.reads(1, c.stride);
+            k.read_at(Region::Table, u64::from(a), c.stride);
+            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+        }
+        let (u, v) = read2_32(self.words, at, c.row);
+        // One channel: the first entry at bit 0 of each window, the second at `stride` < 32.
+        let one = |v: u32| [E::from_u64_truncating(u64::from(v & c.mask)); C];
+        [
+            one(u),
+            one(u.wrapping_shr(c.stride)),
+            one(v),
+            one(v.wrapping_shr(c.stride)),
+        ]
+    }
+
     /// The corners of cell `(i, j)` when the cell lies inside one tile away from its left and
     /// top edges (`i` and `j` not multiples of the tile sides, and neither is `i + 1`, `j + 1`:
     /// every digit non-zero, both columns and both rows in the same tile): the usual corner of
     /// a 16-read lookup. The 9 fields ([`Tiled::quad_fast`]) at offsets formed by additions
-    /// from three products: the local sums at `o`, `o + stride` (next column), `o + row` (next
-    /// row), `o + row + stride`; the strips above at `o01` and `o01 + stride`; the strips left
-    /// at `o10` and `o10 + row`; the tile corner ([`Tiled::cell_in_tile`]). `None` when the
-    /// cell is not of that kind.
+    /// ([`Tiled::cell_in_tile`]). `None` when the cell is not of that kind.
     #[inline(always)]
     fn cell_fast<K: Counter>(
         &self,
@@ -1177,14 +1277,15 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             return None;
         }
         let mut out = [[E::ZERO; C]; 4];
-        self.cell_in_tile(o, i, j, &mut out, k);
+        self.cell_in_tile(o, &CellParts::x(o, i), &CellParts::y(o, j), &mut out, k);
         Some(out)
     }
 
     /// The four cells of a 16-read lookup, in [`Layout::cells4_placed`]'s order, when all four
     /// lie inside their tiles as [`Tiled::cell_fast`] needs (`None`, nothing read, otherwise):
-    /// the checks once, and each cell written in place by the one out-of-line copy of
-    /// [`Tiled::cell_in_tile`].
+    /// the checks once, the digits and the per-axis parts of the offsets of each of the two
+    /// columns and two rows once ([`CellParts`]), and each cell written in place by the one
+    /// out-of-line copy of [`Tiled::cell_in_tile`].
     #[inline(always)]
     fn cells4_fast<K: Counter>(
         &self,
@@ -1197,52 +1298,70 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             return None;
         }
         let mut out = [[[E::ZERO; C]; 4]; 4];
-        let [a, b, c, d] = &mut out;
-        self.cell_in_tile(o, i1, j1, a, k);
-        self.cell_in_tile(o, i1, j0, b, k);
-        self.cell_in_tile(o, i0, j1, c, k);
-        self.cell_in_tile(o, i0, j0, d, k);
+        self.cells4_in_tiles(o, [i0, i1], [j0, j1], &mut out, k);
         Some(out)
     }
 
-    /// [`Tiled::cell_fast`]'s cell into `out`, its digits checked by the caller
-    /// ([`OneLevel::inside_x`], [`OneLevel::inside_y`]). Out of line, written in place: one copy
-    /// serves [`Tiled::cell_fast`] and the four cells of [`Tiled::cells4_fast`] (the tiled
-    /// Stable lookup on the Cortex-M4: 1,232 -> 1,189 instructions, docs/benchmarks.md).
+    /// [`Tiled::cells4_fast`]'s reads, out of line.
+    #[inline(never)]
+    fn cells4_in_tiles<K: Counter>(
+        &self,
+        o: &OneLevel,
+        [i0, i1]: [u32; 2],
+        [j0, j1]: [u32; 2],
+        out: &mut [[[E; C]; 4]; 4],
+        k: &mut K,
+    ) {
+        let (x0, x1) = (CellParts::x(o, i0), CellParts::x(o, i1));
+        let (y0, y1) = (CellParts::y(o, j0), CellParts::y(o, j1));
+        let [a, b, c, d] = out;
+        self.cell_in_tile_inline(o, &x1, &y1, a, k);
+        self.cell_in_tile_inline(o, &x1, &y0, b, k);
+        self.cell_in_tile_inline(o, &x0, &y1, c, k);
+        self.cell_in_tile_inline(o, &x0, &y0, d, k);
+    }
+
+    /// [`Tiled::cell_fast`]'s cell into `out` from the parts of its column `x` and row `y`
+    /// ([`CellParts`]; the digits checked by the caller with [`OneLevel::inside_x`] and
+    /// [`OneLevel::inside_y`]): the local sums at `o00`, `o00 + stride` (next column), `o00 +
+    /// row` (next row) and `o00 + row + stride`; the strips above at `o01` and `o01 + stride`;
+    /// the strips left at `o10` and `o10 + row`; the tile corner at `o11`, each offset one
+    /// addition of the two parts. Out of line, written in place: one copy serves
+    /// [`Tiled::cell_fast`] and the four cells of [`Tiled::cells4_fast`] (docs/benchmarks.md).
     #[inline(never)]
     fn cell_in_tile<K: Counter>(
         &self,
         o: &OneLevel,
-        i: u32,
-        j: u32,
+        x: &CellParts,
+        y: &CellParts,
         out: &mut [[E; C]; 4],
         k: &mut K,
     ) {
-        let x = OneLevel::digits(o.shift_x, o.low_x, i);
-        let y = OneLevel::digits(o.shift_y, o.low_y, j);
+        self.cell_in_tile_inline(o, x, y, out, k);
+    }
+
+    #[inline(always)]
+    fn cell_in_tile_inline<K: Counter>(
+        &self,
+        o: &OneLevel,
+        x: &CellParts,
+        y: &CellParts,
+        out: &mut [[E; C]; 4],
+        k: &mut K,
+    ) {
         let [c00, c01, c10, c11] = &o.comps;
-        let at = |c: &Comp32, ix: u32, iy: u32| {
-            c.offset
-                .wrapping_add(iy.wrapping_mul(c.row))
-                .wrapping_add(ix.wrapping_mul(c.stride))
-        };
-        let o00 = at(c00, x.i0, y.i0);
-        let (mut s0, mut s1) = self.pair_at(c00, o00, k);
-        let (mut s2, mut s3) = self.pair_at(c00, o00.wrapping_add(c00.row), k);
-        if y.q != 0 {
-            let o01 = at(c01, x.i0, y.q.wrapping_sub(1));
-            let (a, b) = self.pair_at(c01, o01, k);
+        let [mut s0, mut s1, mut s2, mut s3] = self.square_at(c00, x.p00.wrapping_add(y.p00), k);
+        if y.q {
+            let (a, b) = self.pair_at(c01, x.p01.wrapping_add(y.p01), k);
             add_to(&mut s0, &a);
             add_to(&mut s1, &b);
             add_to(&mut s2, &a);
             add_to(&mut s3, &b);
         }
-        if x.q != 0 {
-            let o10 = at(c10, x.q.wrapping_sub(1), y.i0);
-            let mut a = self.field_at(c10, o10, k);
-            let mut b = self.field_at(c10, o10.wrapping_add(c10.row), k);
-            if y.q != 0 {
-                let t = self.field32(c11, x.q.wrapping_sub(1), y.q.wrapping_sub(1), k);
+        if x.q {
+            let (mut a, mut b) = self.column2_at(c10, x.p10.wrapping_add(y.p10), k);
+            if y.q {
+                let t = self.field_at(c11, x.p11.wrapping_add(y.p11), k);
                 add_to(&mut a, &t);
                 add_to(&mut b, &t);
             }
@@ -1251,19 +1370,17 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             add_to(&mut s2, &b);
             add_to(&mut s3, &b);
         }
-        let mut s = [s0, s1, s2, s3];
+        *out = [s0, s1, s2, s3];
         // The additions done: 4 for the strips above, 4 for those to the left, 2 for the
         // tile corner (into the two left strips), per channel.
         #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
-        let adds =
-            4 * u32::from(y.q != 0) + 4 * u32::from(x.q != 0) + 2 * u32::from(x.q != 0 && y.q != 0);
+        let adds = 4 * u32::from(y.q) + 4 * u32::from(x.q) + 2 * u32::from(x.q && y.q);
         k.adds(adds.saturating_mul(const { per_channel(1, C) }));
         if let Some(m) = self.geo.spec.modulus {
-            for v in s.iter_mut().flatten() {
+            for v in out.iter_mut().flatten() {
                 *v = v.low_bits(m);
             }
         }
-        *out = s;
     }
 
     /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
