@@ -545,7 +545,7 @@ impl OneLevel {
 /// geometry, so that each offset is one addition `x.pNN + y.pNN`: for a column, `ix stride` of
 /// each component (`ix` the column's index there: `i0` for the local sums and the strips
 /// above, `q - 1` for the strips left and the tile corners); for a row, the component's offset
-/// plus `iy row`. `q`: a whole tile precedes it (else the parts with `q - 1` are unused).
+/// plus `iy row`. `q`: the whole tiles before it (where 0, the parts with `q - 1` are unused).
 /// Formed once per column and per row of a 16-read lookup (two of each for four cells).
 #[derive(Clone, Copy)]
 pub(super) struct CellParts {
@@ -553,7 +553,8 @@ pub(super) struct CellParts {
     p01: u32,
     p10: u32,
     p11: u32,
-    q: bool,
+    /// Whole tiles before the column (row): non-zero when a tile lies left of (above) it.
+    q: u32,
 }
 
 impl CellParts {
@@ -568,7 +569,7 @@ impl CellParts {
             p01: d.i0.wrapping_mul(c01.stride),
             p10: t.wrapping_mul(c10.stride),
             p11: t.wrapping_mul(c11.stride),
-            q: d.q != 0,
+            q: d.q,
         }
     }
 
@@ -583,7 +584,7 @@ impl CellParts {
             p01: c01.offset.wrapping_add(t.wrapping_mul(c01.row)),
             p10: c10.offset.wrapping_add(d.i0.wrapping_mul(c10.row)),
             p11: c11.offset.wrapping_add(t.wrapping_mul(c11.row)),
-            q: d.q != 0,
+            q: d.q,
         }
     }
 }
@@ -1182,7 +1183,18 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     fn pair_at<K: Counter>(&self, c: &Comp32, at: u32, k: &mut K) -> ([E; C], [E; C]) {
         let next = at.wrapping_add(c.stride);
         if c.pair_mask == 0 {
-            return (self.field_at(c, at, k), self.field_at(c, next, k));
+            if C != 1 {
+                return (self.field_at(c, at, k), self.field_at(c, next, k));
+            }
+            // One channel: the two fields' windows with one range check.
+            for a in [at, next] {
+                k.reads(1, c.stride);
+                k.read_at(Region::Table, u64::from(a), c.stride);
+                k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+            }
+            let (u, v) = read2_32(self.words, at, c.stride);
+            let one = |v: u32| [E::from_u64_truncating(u64::from(v & c.mask)); C];
+            return (one(u), one(v));
         }
         for a in [at, next] {
             k.reads(1, c.stride);
@@ -1276,9 +1288,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         if !(o.inside_x(i) && o.inside_y(j)) {
             return None;
         }
-        let mut out = [[E::ZERO; C]; 4];
-        self.cell_in_tile(o, &CellParts::x(o, i), &CellParts::y(o, j), &mut out, k);
-        Some(out)
+        Some(self.cell_in_tile(o, &CellParts::x(o, i), &CellParts::y(o, j), k))
     }
 
     /// The four cells of a 16-read lookup, in [`Layout::cells4_placed`]'s order, when all four
@@ -1297,28 +1307,26 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         if !(o.inside_x(i0) && o.inside_x(i1) && o.inside_y(j0) && o.inside_y(j1)) {
             return None;
         }
-        let mut out = [[[E::ZERO; C]; 4]; 4];
-        self.cells4_in_tiles(o, [i0, i1], [j0, j1], &mut out, k);
-        Some(out)
+        Some(self.cells4_in_tiles(o, [i0, i1], [j0, j1], k))
     }
 
     /// [`Tiled::cells4_fast`]'s reads, out of line.
-    #[inline(never)]
+    #[inline(always)]
     fn cells4_in_tiles<K: Counter>(
         &self,
         o: &OneLevel,
         [i0, i1]: [u32; 2],
         [j0, j1]: [u32; 2],
-        out: &mut [[[E; C]; 4]; 4],
         k: &mut K,
-    ) {
+    ) -> [[[E; C]; 4]; 4] {
         let (x0, x1) = (CellParts::x(o, i0), CellParts::x(o, i1));
         let (y0, y1) = (CellParts::y(o, j0), CellParts::y(o, j1));
-        let [a, b, c, d] = out;
-        self.cell_in_tile_inline(o, &x1, &y1, a, k);
-        self.cell_in_tile_inline(o, &x1, &y0, b, k);
-        self.cell_in_tile_inline(o, &x0, &y1, c, k);
-        self.cell_in_tile_inline(o, &x0, &y0, d, k);
+        [
+            self.cell_in_tile(o, &x1, &y1, k),
+            self.cell_in_tile(o, &x1, &y0, k),
+            self.cell_in_tile(o, &x0, &y1, k),
+            self.cell_in_tile(o, &x0, &y0, k),
+        ]
     }
 
     /// [`Tiled::cell_fast`]'s cell into `out` from the parts of its column `x` and row `y`
@@ -1334,10 +1342,11 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         o: &OneLevel,
         x: &CellParts,
         y: &CellParts,
-        out: &mut [[E; C]; 4],
         k: &mut K,
-    ) {
-        self.cell_in_tile_inline(o, x, y, out, k);
+    ) -> [[E; C]; 4] {
+        let mut out = [[E::ZERO; C]; 4];
+        self.cell_in_tile_inline(o, x, y, &mut out, k);
+        out
     }
 
     #[inline(always)]
@@ -1351,16 +1360,16 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     ) {
         let [c00, c01, c10, c11] = &o.comps;
         let [mut s0, mut s1, mut s2, mut s3] = self.square_at(c00, x.p00.wrapping_add(y.p00), k);
-        if y.q {
+        if y.q != 0 {
             let (a, b) = self.pair_at(c01, x.p01.wrapping_add(y.p01), k);
             add_to(&mut s0, &a);
             add_to(&mut s1, &b);
             add_to(&mut s2, &a);
             add_to(&mut s3, &b);
         }
-        if x.q {
+        if x.q != 0 {
             let (mut a, mut b) = self.column2_at(c10, x.p10.wrapping_add(y.p10), k);
-            if y.q {
+            if y.q != 0 {
                 let t = self.field_at(c11, x.p11.wrapping_add(y.p11), k);
                 add_to(&mut a, &t);
                 add_to(&mut b, &t);
@@ -1370,17 +1379,19 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             add_to(&mut s2, &b);
             add_to(&mut s3, &b);
         }
-        *out = [s0, s1, s2, s3];
         // The additions done: 4 for the strips above, 4 for those to the left, 2 for the
         // tile corner (into the two left strips), per channel.
         #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
-        let adds = 4 * u32::from(y.q) + 4 * u32::from(x.q) + 2 * u32::from(x.q && y.q);
+        let (left, above) = (x.q != 0, y.q != 0);
+        let adds = 4 * u32::from(above) + 4 * u32::from(left) + 2 * u32::from(left && above);
         k.adds(adds.saturating_mul(const { per_channel(1, C) }));
-        if let Some(m) = self.geo.spec.modulus {
-            for v in out.iter_mut().flatten() {
-                *v = v.low_bits(m);
-            }
-        }
+        // Reduced in registers, then stored once (no copy through the stack).
+        let m = self.geo.spec.modulus;
+        let reduce = |v: [E; C]| match m {
+            Some(m) => v.map(|e| e.low_bits(m)),
+            None => v,
+        };
+        *out = [reduce(s0), reduce(s1), reduce(s2), reduce(s3)];
     }
 
     /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
