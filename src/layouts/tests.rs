@@ -983,3 +983,68 @@ fn tiled_cells4_equals_four_cells() {
         }
     }
 }
+
+/// The tiled four-cell reader against the flat table on fields too wide to pair in one 32-bit
+/// read (16-bit texels: 20-bit local sums and strips) and on the firmware's shape (8-bit
+/// texels, 8 x 8 tiles, 64 x 64: paired 14-bit local sums, unpaired 17-bit strips), one and
+/// two channels: every cell's four corners equal the flat table's `S`, reduced modulo `2^k` on
+/// a modular spec. The cell reader's two-window reads (`read2_32`) on every path.
+#[test]
+fn tiled_cells4_equal_the_flat_table_on_wide_fields() {
+    fn check<T: crate::Texel, const C: usize>(
+        texels: &[T],
+        w: usize,
+        h: usize,
+        bits: u32,
+        spec: TiledSpec,
+    ) -> [u32; 2] {
+        let t = Texture::<T, C>::new(texels, w, h).unwrap();
+        let mut flat_st = std::vec![0u32; w * h * C];
+        let flat = Sat::build(&t, &mut flat_st).unwrap();
+        let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, bits).unwrap()];
+        let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+        let l = Tiled::<u32, C>::build(&t, spec, &mut words, &mut scratch).unwrap();
+        let reduce = |v: [u32; C]| match spec.modulus {
+            Some(m) => v.map(|e| e & ((1u32 << m) - 1)),
+            None => v,
+        };
+        let s = |x: usize, y: usize| reduce(flat.corner(x, y).unwrap());
+        let cell = |i: usize, j: usize| [s(i, j), s(i + 1, j), s(i, j + 1), s(i + 1, j + 1)];
+        // Every column and row up to 20, every 5th past it; under Miri every 7th and 31st.
+        let step = |n: usize| match (cfg!(miri), n <= 20) {
+            (false, true) => 1,
+            (false, false) => 5,
+            (true, true) => 7,
+            (true, false) => 31,
+        };
+        for i0 in (0..w).step_by(step(w)) {
+            for i1 in (0..w).step_by(step(w)) {
+                for j0 in (0..h).step_by(step(h)) {
+                    for j1 in (0..h).step_by(step(h)) {
+                        let got = l.cells4_placed([i0, i1], [j0, j1], &mut NoCount);
+                        let want = [cell(i1, j1), cell(i1, j0), cell(i0, j1), cell(i0, j0)];
+                        assert_eq!(got, want, "{:?}", (C, w, h, spec, i0, i1, j0, j1));
+                    }
+                }
+            }
+        }
+        [0, 1].map(|q| l.field_bits(0, q).unwrap())
+    }
+    let wide: Vec<u16> = (0..19 * 13 * 2)
+        .map(|i: u32| (i.wrapping_mul(0x9E37_79B9) >> 16) as u16)
+        .collect();
+    for spec in [
+        TiledSpec::tiles(4, 4).unwrap(),
+        TiledSpec::tiles(8, 4).unwrap(),
+        TiledSpec::tiles(4, 4).unwrap().with_modulus(24),
+    ] {
+        // Local sums and strips wider than 16 bits: no two fit one 32-bit read.
+        let [b00, b01] = check::<u16, 1>(&wide[..19 * 13], 19, 13, 16, spec);
+        assert!(b00 > 16 && b01 > 16, "{spec:?}: {b00}, {b01}");
+        check::<u16, 2>(&wide, 19, 13, 16, spec);
+    }
+    // The firmware's shape: local sums paired (14 bits), strips above not (17 bits).
+    let tex = texture(64, 64, 7);
+    let [b00, b01] = check::<u8, 1>(&tex, 64, 64, 8, TiledSpec::tiles(8, 8).unwrap());
+    assert_eq!((b00, b01), (14, 17));
+}
