@@ -1381,8 +1381,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         }
         // The additions done: 4 for the strips above, 4 for those to the left, 2 for the
         // tile corner (into the two left strips), per channel.
-        #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
         let (left, above) = (x.q != 0, y.q != 0);
+        #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
         let adds = 4 * u32::from(above) + 4 * u32::from(left) + 2 * u32::from(left && above);
         k.adds(adds.saturating_mul(const { per_channel(1, C) }));
         // Reduced in registers, then stored once (no copy through the stack).
