@@ -18,7 +18,8 @@
 # binary under `qemu-system-arm -plugin insn_count.so,mark=ADDR` (ADDR: `texsat_count_mark`; the
 # plugin counts every executed instruction with a per-instruction inline add and prints the
 # running count at each mark) and count_insns.py counts the instructions between the harness's
-# `texsat_count_mark` calls: (11 calls - 1 call) / 10, minus the same for an empty wrapper. It
+# `texsat_count_mark` calls: (20 calls - 10 calls) / 10, both runs through the same
+# out-of-line loop (so the difference is exactly 10 calls), minus the same for an empty wrapper. It
 # first checks the self-check region (assembly, count known from the disassembly) and fails
 # if it is off. The fallback, `-singlestep -d exec,nochain` (one TB per instruction, one log line
 # per executed TB), gives the same counts, several times slower. Not part of the link gate; does
@@ -83,7 +84,7 @@ loud() {
 MARK=$("$LLVM_BIN/llvm-nm" "$ELF" | awk '$3 == "texsat_count_mark" { print $1 }')
 [ -n "$MARK" ] || die "texsat_count_mark not found in $ELF"
 QEMU_ARGS=(-M mps2-an386 -display none -monitor none -serial none -semihosting -kernel "$ELF")
-PARSE_ARGS=(--llvm-bin "$LLVM_BIN" --reps 11 --texels 4096 --mip)
+PARSE_ARGS=(--llvm-bin "$LLVM_BIN" --reps 10 --texels 4096 --mip)
 PCS=""
 if [ -n "${COUNT_PROFILE:-}" ]; then
   PARSE_ARGS+=(--profile)

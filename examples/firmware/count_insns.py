@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Executed instructions per call, from a QEMU run of the `texsat-count` (or `texsat-demo`) firmware.
 
-    count_insns.py ELF (--plugin-log LOG | --exec-log LOG) --llvm-bin DIR [--reps 11]
+    count_insns.py ELF (--plugin-log LOG | --exec-log LOG) --llvm-bin DIR [--reps 10]
                    [--texels 4096] [--mip] [--demo] [--regions-out FILE]
 
 Two sources, the same figures (count-insns.sh COUNT_METHOD=both checks that they agree to the
@@ -11,12 +11,15 @@ instruction on every region):
   not included) and, with the plugin's `pcs=on`, `pc ADDR N` lines before each mark line;
 - `--exec-log`: the log of `qemu-system-arm -singlestep -d exec,nochain`: one TB per
   instruction, one `Trace` line per executed TB, whose second bracketed field is the PC.
-The harness (src/count.rs) calls per entry point: a mark, the call once, a mark, the call REPS
-times, a mark. So the regions between consecutive marks come in triples (setup since the last
-mark, 1 call, REPS calls) and (count(REPS) - count(1)) / (REPS - 1) is the per-call count
-without the setup; the baseline entry (an empty wrapper of the same shape) is subtracted from
-the others. The first triple is the self-check `texsat_count_selftest` (assembly): its two
-regions must hold exactly the instructions its disassembly shows, else this script fails.
+The harness (src/count.rs) calls per entry point one out-of-line loop twice: a mark, the call
+REPS times, a mark; then a mark, the call 2 REPS times, a mark. So the regions between
+consecutive marks come in fours (setup since the last mark, REPS calls, the gap between the
+loops, 2 REPS calls) and (count(2 REPS) - count(REPS)) / REPS is the per-call count, exactly
+(the two regions run the same code and differ by REPS calls: this script fails if the
+difference is not a multiple of REPS); the baseline entry (an empty wrapper of the same shape)
+is subtracted from the others. First comes the self-check `texsat_count_selftest` (assembly,
+three marks): its two regions must hold exactly the instructions its disassembly shows, else
+this script fails.
 `--demo` prints run.sh's DEMO_COUNT table instead (marker `texsat_demo_mark`).
 """
 import argparse
@@ -175,8 +178,24 @@ def symbols(llvm_bin, elf):
     return syms
 
 
+def regions_of(i):
+    """Indices of entry i's REPS-call and 2 REPS-call regions (i >= 1: the self-check, entry 0,
+    has three marks, every other entry four)."""
+    base = 3 + 4 * (i - 1)
+    return base + 1, base + 3
+
+
+def per_call_pcs(pcs, i):
+    """Entry i's executed count per instruction address for REPS calls: its 2 REPS region less
+    its REPS region (the same code: what both ran once, the loop's setup, cancels)."""
+    r1, r2 = regions_of(i)
+    c = Counter(pcs[r2])
+    c.subtract(pcs[r1])
+    return Counter({pc: n for pc, n in c.items() if n > 0})
+
+
 def profile(a, entries, pcs):
-    """Instructions per call in each function, from the REPS region of each entry point."""
+    """Instructions per call in each function (the difference of each entry point's regions)."""
     import bisect
 
     syms = symbols(a.llvm_bin, a.elf)
@@ -185,7 +204,7 @@ def profile(a, entries, pcs):
         if key == "selftest":
             continue
         c = Counter()
-        for pc, n in pcs[3 * i + 2].items():
+        for pc, n in per_call_pcs(pcs, i).items():
             j = bisect.bisect_right(addrs, pc) - 1
             c[syms[j][1] if j >= 0 else "?"] += n
         print(f"profile {key} ({a.reps} calls, instructions per call by function):", file=sys.stderr)
@@ -199,7 +218,7 @@ def lines(a, entries, pcs, key):
     for i, (k, _label, _) in enumerate(entries):
         if k != key:
             continue
-        c = pcs[3 * i + 2]
+        c = per_call_pcs(pcs, i)
         addrs = sorted(c)
         # llvm-symbolizer (the system's, or the toolchain's llvm-tools if it ships one): for
         # each address its inlined frames, innermost first, a blank line after each address.
@@ -244,7 +263,7 @@ def main():
     src.add_argument("--plugin-log", metavar="LOG", help="output of the insn_count TCG plugin")
     src.add_argument("--exec-log", metavar="LOG", help="log of qemu-system-arm -singlestep -d exec,nochain")
     ap.add_argument("--llvm-bin", required=True)
-    ap.add_argument("--reps", type=int, default=11)
+    ap.add_argument("--reps", type=int, default=10)
     ap.add_argument("--texels", type=int, default=64 * 64)
     ap.add_argument("--mip", action="store_true")
     ap.add_argument("--demo", action="store_true", help="the texsat-demo firmware: print run.sh's table")
@@ -280,13 +299,15 @@ def main():
         return
 
     entries = ENTRIES + (MIP_ENTRIES if a.mip else [])
-    # The first setup region precedes the first mark: regions[3 i + 1] and regions[3 i + 2] are
-    # entry i's 1-call and REPS-call regions (and pcs[3 i + 2] the PCs of the latter).
+    # The first setup region precedes the first mark: regions[1] and regions[2] are the
+    # self-check's, then regions_of(i) entry i's REPS-call and 2 REPS-call regions (pcs[...] the
+    # same for their PCs).
     regions = [0] + between
     pcs = [Counter()] + pcs
-    if len(regions) != 3 * len(entries):
+    want = 3 + 4 * (len(entries) - 1)
+    if len(regions) != want:
         sys.exit(
-            f"count_insns: expected {3 * len(entries)} regions between marks, found {len(regions)} "
+            f"count_insns: expected {want} regions between marks, found {len(regions)} "
             "(did the firmware run to the end? is the log complete?)"
         )
     expected = selftest_expected(a.llvm_bin, a.elf)
@@ -303,13 +324,17 @@ def main():
     for i, (key, _, _) in enumerate(entries):
         if key == "selftest":
             continue
-        c1, cr = regions[3 * i + 1], regions[3 * i + 2]
-        d = cr - c1
-        if d % (a.reps - 1):
-            print(f"warning: {key}: {cr} - {c1} not divisible by {a.reps - 1}", file=sys.stderr)
-        per_call[key] = d / (a.reps - 1)
+        r1, r2 = regions_of(i)
+        c1, c2 = regions[r1], regions[r2]
+        d = c2 - c1
+        if d % a.reps:
+            sys.exit(
+                f"count_insns: {key}: the {2 * a.reps}-call region ({c2}) less the {a.reps}-call "
+                f"region ({c1}) is not a multiple of {a.reps}: the two regions did not run the same code"
+            )
+        per_call[key] = d // a.reps
         if a.raw:
-            print(f"raw {key}: 1 call region {c1}, {a.reps} calls region {cr}", file=sys.stderr)
+            print(f"raw {key}: {a.reps} calls region {c1}, {2 * a.reps} calls region {c2}", file=sys.stderr)
     if a.profile:
         profile(a, entries, pcs)
     if a.lines:

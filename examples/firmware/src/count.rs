@@ -1,14 +1,16 @@
 //! Instruction counter harness (feature `count`, bin `texsat-count`; run by `count-insns.sh`).
 //!
-//! Calls each measured texsat entry point from its own `#[inline(never)] fn m_<name>`, first once
-//! and then `REPS` times, with `texsat_count_mark` called between the runs. Under QEMU, the TCG
-//! plugin `plugin/insn_count.c` counts every executed instruction and prints the running count
-//! each time the mark's first instruction runs (fallback: `-singlestep -d exec,nochain`, one
-//! logged TB per executed instruction), so the instructions executed between two marks are
-//! known exactly; a self-check in assembly comes first (`texsat_count_selftest`).
-//! `count-insns.sh` takes `(count(REPS) - count(1)) / (REPS - 1)`, which removes the setup, and
-//! subtracts the same figure for `m_baseline` (an empty wrapper of the same shape: loop, call,
-//! return, `black_box`). Then it exits QEMU through semihosting `SYS_EXIT`.
+//! Calls each measured texsat entry point from its own `#[inline(never)] fn m_<name>`, first
+//! `REPS` times and then `2 REPS` times through one out-of-line loop ([`run`]: the same code for
+//! both), with `texsat_count_mark` called just before and after each loop. Under QEMU, the TCG plugin
+//! `plugin/insn_count.c` counts every executed instruction and prints the running count each
+//! time the mark's first instruction runs (fallback: `-singlestep -d exec,nochain`, one logged TB
+//! per executed instruction), so the instructions executed between two marks are known exactly;
+//! a self-check in assembly comes first (`texsat_count_selftest`). `count-insns.sh` takes
+//! `(count(2 REPS) - count(REPS)) / REPS`: the two regions run the same code and differ by
+//! exactly `REPS` calls, so the setup cancels and the figure is an integer. It subtracts the
+//! same figure for `m_baseline` (an empty wrapper of the same shape: loop, call, return,
+//! `black_box`). Then it exits QEMU through semihosting `SYS_EXIT`.
 //!
 //! Same types as the link gate: 8-bit texels, `u32` entries, one channel, `I24F8` corners,
 //! `NoCount`; a 64 x 64 pseudo-random texture. Same panic handler as the gate too: this binary
@@ -35,8 +37,8 @@ type Co = DefaultCoord;
 
 const W: usize = 64;
 const H: usize = 64;
-/// Extra runs: the per-call figure is (count(1 + REPS) .. ) see module docs.
-const REPS: u32 = 11;
+/// Calls in the first measured region (the second has twice as many): see the module docs.
+const REPS: u32 = 10;
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
@@ -107,19 +109,25 @@ fn rect_fix(x0: i32, y0: i32, x1: i32, y1: i32) -> Rect<Co> {
     ))
 }
 
-/// Three regions: whatever ran since the last mark (setup, ignored), a mark, the call once, a
-/// mark, the call `REPS` times, a mark.
+/// A mark, `f` called `n` times (`n` through `black_box`), a mark. Out of line, one copy per
+/// measured call: the two measured regions of [`measure!`] are this same code between its two
+/// marks, so they differ by exactly the calls.
+#[inline(never)]
+fn run<F: FnMut()>(n: u32, f: &mut F) {
+    texsat_count_mark();
+    for _ in 0..black_box(n) {
+        f();
+    }
+    texsat_count_mark();
+}
+
+/// Four regions: whatever ran since the last mark (setup, ignored), the call `REPS` times, the
+/// return and the next call of [`run`] (ignored), the call `2 REPS` times.
 macro_rules! measure {
     ($call:expr) => {{
-        texsat_count_mark();
-        for _ in 0..black_box(1u32) {
-            keep($call);
-        }
-        texsat_count_mark();
-        for _ in 0..black_box(REPS) {
-            keep($call);
-        }
-        texsat_count_mark();
+        let mut f = || keep($call);
+        run(REPS, &mut f);
+        run(2 * REPS, &mut f);
     }};
 }
 
