@@ -589,6 +589,19 @@ impl CellParts {
     }
 }
 
+/// Counts one read of the entry at bit `at` of `c` (all channels): the read, where it is, and
+/// the 32-bit words it touches.
+#[inline(always)]
+fn count_field<K: Counter>(c: &Comp32, at: u32, k: &mut K) {
+    k.reads(1, c.stride);
+    k.read_at(Region::Table, u64::from(at), c.stride);
+    k.words(
+        (at % WORD_BITS)
+            .saturating_add(c.stride)
+            .div_ceil(WORD_BITS),
+    );
+}
+
 /// [`Tiled::words_needed`] with the channels as a value.
 pub(super) const fn words_for_channels(
     spec: TiledSpec,
@@ -1006,13 +1019,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             .offset
             .wrapping_add(iy.wrapping_mul(c.row))
             .wrapping_add(ix.wrapping_mul(c.stride));
-        k.reads(1, c.stride);
-        k.read_at(Region::Table, u64::from(at), c.stride);
-        k.words(
-            (at % WORD_BITS)
-                .saturating_add(c.stride)
-                .div_ceil(WORD_BITS),
-        );
+        count_field(c, at, k);
         let mut out = [E::ZERO; C];
         for o in out.iter_mut() {
             *o = E::from_u64_truncating(u64::from(read_masked32(self.words, at, c.mask)));
@@ -1161,13 +1168,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
     /// offset already formed.
     #[inline(always)]
     fn field_at<K: Counter>(&self, c: &Comp32, mut at: u32, k: &mut K) -> [E; C] {
-        k.reads(1, c.stride);
-        k.read_at(Region::Table, u64::from(at), c.stride);
-        k.words(
-            (at % WORD_BITS)
-                .saturating_add(c.stride)
-                .div_ceil(WORD_BITS),
-        );
+        count_field(c, at, k);
         let mut out = [E::ZERO; C];
         for o in out.iter_mut() {
             *o = E::from_u64_truncating(u64::from(read_masked32(self.words, at, c.mask)));
@@ -1188,18 +1189,14 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             }
             // One channel: the two fields' windows with one range check.
             for a in [at, next] {
-                k.reads(1, c.stride);
-                k.read_at(Region::Table, u64::from(a), c.stride);
-                k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+                count_field(c, a, k);
             }
             let (u, v) = read2_32(self.words, at, c.stride);
             let one = |v: u32| [E::from_u64_truncating(u64::from(v & c.mask)); C];
             return (one(u), one(v));
         }
         for a in [at, next] {
-            k.reads(1, c.stride);
-            k.read_at(Region::Table, u64::from(a), c.stride);
-            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+            count_field(c, a, k);
         }
         // Both fields are masked below: the 32 bits at `at` unmasked.
         let v = read_masked32(self.words, at, u32::MAX);
@@ -1230,9 +1227,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         }
         let next = at.wrapping_add(c.row);
         for a in [at, next] {
-            k.reads(1, c.stride);
-            k.read_at(Region::Table, u64::from(a), c.stride);
-            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+            count_field(c, a, k);
         }
         let (u, v) = read2_32(self.words, at, c.row);
         let one = |v: u32| [E::from_u64_truncating(u64::from(v & c.mask)); C];
@@ -1257,9 +1252,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             below,
             below.wrapping_add(c.stride),
         ] {
-            k.reads(1, c.stride);
-            k.read_at(Region::Table, u64::from(a), c.stride);
-            k.words((a % WORD_BITS).saturating_add(c.stride).div_ceil(WORD_BITS));
+            count_field(c, a, k);
         }
         let (u, v) = read2_32(self.words, at, c.row);
         // One channel: the first entry at bit 0 of each window, the second at `stride` < 32.
