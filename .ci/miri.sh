@@ -14,7 +14,16 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-target}/miri"
 
-step() { printf '\n=== %s ===\n' "$*"; }
+# Each step prints the seconds since the script started and since the step before: the budget
+# is 90 minutes on a clean clone, and these say where the time goes.
+T0=$(date +%s)
+TPREV=$T0
+step() {
+  local now
+  now=$(date +%s)
+  printf '\n[%s s total, %s s in the step before]\n=== %s ===\n' "$((now - T0))" "$((now - TPREV))" "$*"
+  TPREV=$now
+}
 
 if ! rustup toolchain list | grep -q '^nightly'; then
   echo "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!"
