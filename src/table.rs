@@ -205,16 +205,15 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
             return Err(Error::StorageTooSmall { needed, got });
         };
         let overflow = entry_overflow::<E>();
+        if row_len == 0 {
+            return Err(Error::EmptyTexture);
+        }
+        // `table` is exactly `h` rows of `row_len` entries: `chunks_exact_mut` walks them.
         let mut above: Option<&[E]> = None;
-        let mut rest: &mut [E] = table;
-        for y in 0..h {
+        for (y, out) in table.chunks_exact_mut(row_len).enumerate() {
             let texels = texture.row(y).ok_or(Error::EmptyTexture)?;
-            let Some((out, tail)) = rest.split_at_mut_checked(row_len) else {
-                return Err(Error::StorageTooSmall { needed, got });
-            };
             build_row::<T, E, C, CHECKED>(texels, above, out).map_err(|_| overflow)?;
             above = Some(out);
-            rest = tail;
         }
         let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
         Self::from_parts(table, w, h, T::BITS)
