@@ -5,6 +5,8 @@
 #   examples/firmware/count-insns.sh            prints a markdown table
 #   COUNT_PROFILE=1 examples/firmware/count-insns.sh   also instructions per call by function (stderr)
 #   COUNT_LINES=mip_trilinear ...          also that entry point's instructions per call by source line
+#   COUNT_ANNOTATE=tiled_stable_border ... also the disassembly of what that entry point runs,
+#                                          each instruction with its count per call (stderr)
 #   COUNT_METHOD=both ...                  counts with the plugin and with the -singlestep exec log and
 #                                          fails unless every region agrees to the instruction
 #   COUNT_METHOD=plugin|singlestep ...     one method only (default `auto`: the plugin, falling back
@@ -88,6 +90,10 @@ PARSE_ARGS=(--llvm-bin "$LLVM_BIN" --reps 10 --texels 4096 --mip)
 PCS=""
 if [ -n "${COUNT_PROFILE:-}" ]; then
   PARSE_ARGS+=(--profile)
+  PCS=",pcs=on"
+fi
+if [ -n "${COUNT_ANNOTATE:-}" ]; then
+  PARSE_ARGS+=(--annotate "$COUNT_ANNOTATE")
   PCS=",pcs=on"
 fi
 if [ -n "${COUNT_LINES:-}" ]; then

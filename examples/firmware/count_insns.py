@@ -213,6 +213,43 @@ def profile(a, entries, pcs):
             print(f"  {n / a.reps:10.1f}  {name}", file=sys.stderr)
 
 
+def annotate(a, entries, pcs, key):
+    """The disassembly of every function one entry point runs, each instruction with its executed
+    count per call (a blank count: not executed), for finding where its instructions go."""
+    import bisect
+
+    syms = symbols(a.llvm_bin, a.elf)
+    addrs = [s[0] for s in syms]
+    for i, (k, _label, _) in enumerate(entries):
+        if k != key:
+            continue
+        c = per_call_pcs(pcs, i)
+        # The whole text once (generic names hold commas, which --disassemble-symbols splits
+        # on), each instruction filed under its function by address.
+        out = subprocess.run(
+            [f"{a.llvm_bin}/llvm-objdump", "-d", "--no-show-raw-insn", a.elf],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        funcs = {}
+        for line in out.splitlines():
+            m = INSN.match(line)
+            if m:
+                pc = int(m.group(1), 16)
+                j = bisect.bisect_right(addrs, pc) - 1
+                if j >= 0:
+                    funcs.setdefault(syms[j][1], []).append((pc, m.group(2), m.group(3)))
+        ran = {syms[bisect.bisect_right(addrs, pc) - 1][1] for pc in c}
+        for name in sorted(ran):
+            insns = funcs.get(name, [])
+            total = sum(c[pc] for pc, _, _ in insns)
+            print(f"annotate {key}: {name}: {total / a.reps:g} per call", file=sys.stderr)
+            for pc, mnem, ops in insns:
+                n = f"{c[pc] / a.reps:g}" if c[pc] else ""
+                print(f"  {n:>6}  {pc:6x}  {mnem:8} {ops}", file=sys.stderr)
+
+
 def lines(a, entries, pcs, key):
     """Instructions per call by source line (innermost inlined frame) for one entry point."""
     for i, (k, _label, _) in enumerate(entries):
@@ -283,10 +320,15 @@ def main():
         action="store_true",
         help="also print, per entry point, the instructions per call in each function (symbol)",
     )
+    ap.add_argument(
+        "--annotate",
+        metavar="KEY",
+        help="also print the disassembly of what entry point KEY runs, with counts per call",
+    )
     a = ap.parse_args()
 
     mark = symbol_addr(a.llvm_bin, a.elf, "texsat_demo_mark" if a.demo else "texsat_count_mark")
-    want_pcs = bool(a.profile or a.lines)
+    want_pcs = bool(a.profile or a.lines or a.annotate)
     if a.plugin_log:
         between, pcs = read_plugin_log(a.plugin_log, mark, want_pcs)
     else:
@@ -339,6 +381,8 @@ def main():
         profile(a, entries, pcs)
     if a.lines:
         lines(a, entries, pcs, a.lines)
+    if a.annotate:
+        annotate(a, entries, pcs, a.annotate)
     base = per_call["baseline"]
     print("| entry point | texsat, instructions per call | hand-written, same behaviour |")
     print("|---|---:|---:|")

@@ -138,7 +138,11 @@ pub trait Layout<const C: usize> {
     /// [`Layout::cell_corners_placed`], in the order `(i[1], j[1])`, `(i[1], j[0])`, `(i[0],
     /// j[1])`, `(i[0], j[0])` (reads counted in that order). A layout may share work between
     /// the four (the tiled one: one call, one geometry load, the digits of each coordinate once).
-    /// Hidden.
+    /// Under a modulus `k` ([`Layout::modulus`]) a layout may return any values congruent to the
+    /// stored ones modulo `2^k`: every lookup reduces its differences modulo `2^k` before it
+    /// uses them (`lookup::stable`'s `small`, `lookup::paper`'s final reduction), so the tiled
+    /// one leaves its four cells' sums of fields unreduced (one test of the modulus fewer on the
+    /// plain path). Hidden.
     #[doc(hidden)]
     #[inline(always)]
     fn cells4_placed<K: Counter>(

@@ -1281,7 +1281,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         if !(o.inside_x(i) && o.inside_y(j)) {
             return None;
         }
-        Some(self.cell_in_tile(o, &CellParts::x(o, i), &CellParts::y(o, j), k))
+        let cell = self.cell_in_tile(o, &CellParts::x(o, i), &CellParts::y(o, j), k);
+        Some(self.reduce_cells(cell))
     }
 
     /// The four cells of a 16-read lookup, in [`Layout::cells4_placed`]'s order, when all four
@@ -1300,6 +1301,8 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         if !(o.inside_x(i0) && o.inside_x(i1) && o.inside_y(j0) && o.inside_y(j1)) {
             return None;
         }
+        // Not reduced modulo 2^k under a modular spec: congruent values, which the lookups
+        // reduce after their differences ([`Layout::cells4_placed`]).
         Some(self.cells4_in_tiles(o, [i0, i1], [j0, j1], k))
     }
 
@@ -1378,13 +1381,23 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
         let adds = 4 * u32::from(above) + 4 * u32::from(left) + 2 * u32::from(left && above);
         k.adds(adds.saturating_mul(const { per_channel(1, C) }));
-        // Reduced in registers, then stored once (no copy through the stack).
-        let m = self.geo.spec.modulus;
-        let reduce = |v: [E; C]| match m {
-            Some(m) => v.map(|e| e.low_bits(m)),
-            None => v,
-        };
-        *out = [reduce(s0), reduce(s1), reduce(s2), reduce(s3)];
+        // Not reduced here: the callers reduce every cell after one test of the modulus
+        // ([`Tiled::reduce_cells`]), not one test per cell.
+        *out = [s0, s1, s2, s3];
+    }
+
+    /// Reduces each value of `cells` modulo `2^k` under a modular spec (its modulus `k`); a
+    /// plain spec leaves them as they are. One test of the modulus for all of them: the fast
+    /// cell paths ([`Tiled::cell_fast`], [`Tiled::cells4_fast`]) add their fields in full and
+    /// reduce here once (docs/benchmarks.md).
+    #[inline(always)]
+    fn reduce_cells<const N: usize>(&self, mut cells: [[E; C]; N]) -> [[E; C]; N] {
+        if let Some(m) = self.geo.spec.modulus {
+            for v in cells.iter_mut().flatten() {
+                *v = v.low_bits(m);
+            }
+        }
+        cells
     }
 
     /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
