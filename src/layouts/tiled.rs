@@ -1306,6 +1306,11 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         Some(self.cells4_in_tiles(o, [i0, i1], [j0, j1], k))
     }
 
+    /// [`Layout::cells4_placed`]'s cell-by-cell path, out of line.
+    #[inline(never)]
+    fn cells4_slow<K: Counter>(&self, i: [usize; 2], j: [usize; 2], k: &mut K) -> [[[E; C]; 4]; 4] {
+        super::cells4_by_cell(self, i, j, k)
+    }
     /// [`Tiled::cells4_fast`]'s reads, out of line.
     #[inline(always)]
     fn cells4_in_tiles<K: Counter>(
@@ -1631,7 +1636,7 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
                 }
             }
         }
-        super::cells4_by_cell(self, [i0, i1], [j0, j1], k)
+        self.cells4_slow([i0, i1], [j0, j1], k)
     }
     /// Under one level of power-of-two tiles (8 x 8 and the like), each field of the four corners
     /// read once (9 instead of 16 for a 16-read corner inside a tile); else four
