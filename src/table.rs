@@ -58,7 +58,8 @@ fn add<E: Entry, const CHECKED: bool>(a: E, b: E) -> Result<E, ()> {
 /// left LLVM too few registers, and it indexed the three rows with one counter (8 instructions
 /// per entry on the Cortex-M4); in a function of its own the loop walks them with
 /// post-incremented pointers and a count-down (7, like a hand-written loop), for one call per
-/// row (`examples/firmware/count-insns.sh`: 8.34 -> 7.59 per entry of a 64 x 64 table).
+/// row (`examples/firmware/count-insns.sh`: 8.34 -> 7.59 per entry of a 64 x 64 table; 7.57
+/// since [`Sat::build`] walks the table's rows with `chunks_exact_mut`).
 #[inline(never)]
 fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     texels: &[T],
