@@ -60,11 +60,18 @@ mkdir -p "$OUT"
 
 if [ $# -gt 0 ]; then SETS=("$@"); else SETS=("${ALL_SETS[@]}"); fi
 
-# build FEATURES LOG: one release build of the firmware; returns cargo's status.
+# build FEATURES LOG [ir]: one release build of the firmware; returns cargo's status. With
+# `ir`, the same build also writes its optimized (fat-LTO) LLVM IR for ir_check
+# (`--emit=llvm-ir,link`: one build per feature set, not a second one for the IR).
 build() {
-  local features=$1 log=$2
-  local args=(build --release --locked --target "$TARGET" --bin "$BIN" --no-default-features)
+  local features=$1 log=$2 ir=${3:-}
+  local args=(rustc --release --locked --target "$TARGET" --bin "$BIN" --no-default-features)
   [ -n "$features" ] && args+=(--features "$features")
+  if [ -n "$ir" ]; then
+    rm -f "$TARGET_DIR/$TARGET/release/deps/"*.ll
+    touch "$HERE/src/main.rs" # cargo would skip a build it thinks fresh, and emit no IR
+    args+=(-- --emit=llvm-ir,link)
+  fi
   CARGO_TARGET_DIR=$TARGET_DIR cargo "${args[@]}" >"$log" 2>&1
 }
 
@@ -148,13 +155,8 @@ echo "ok: a panic-free firmware links; one with [0u8; 4][black_box(9)] fails wit
 # those gates) gets one through an allowed callee either. (On 32-bit ARM a 128-bit division is
 # inlined, so symbol names cannot show it: the IR is the proof.)
 ir_check() {
-  local features=$1 name=$2 ll
-  rm -f "$TARGET_DIR/$TARGET/release/deps/"*.ll
-  touch "$HERE/src/main.rs" # cargo would skip a build it thinks fresh, and emit no IR
-  if ! CARGO_TARGET_DIR=$TARGET_DIR cargo rustc --release --locked --target "$TARGET" --bin "$BIN" --no-default-features ${features:+--features "$features"} -- --emit=llvm-ir >"$OUT/$name/ir.log" 2>&1; then
-    echo "!!! IR CHECK: the --emit=llvm-ir build failed (log: $OUT/$name/ir.log)"
-    return 1
-  fi
+  local name=$1 ll
+  # The IR of the build that just linked (build ... ir).
   ll=$(ls -t "$TARGET_DIR/$TARGET/release/deps/"*.ll 2>/dev/null | head -n 1)
   [ -n "$ll" ] || { echo "!!! IR CHECK: no .ll file produced"; return 1; }
   awk '/^define/{fn=$0; seen=0} /^}/{fn=""} fn != "" && !/^define/ && /^[^;!#]/ && !/#dbg/ && /[ (<{\[]i128[ ,)>}\]*]/ {if(!seen){print fn; seen=1}}' "$ll" \
@@ -191,12 +193,12 @@ for set in "${SETS[@]}"; do
   dir=$OUT/$name
   mkdir -p "$dir"
   banner "link gate: ${name} (texsat features: ${features:-none})"
-  if build "$features" "$dir/build.log"; then
+  if build "$features" "$dir/build.log" ir; then
     cp "$ELF" "$dir/gate.elf"
     STATUS[$name]="links: no panic path"
     echo "LINKS: no panic path remains. Flash (release, opt-level s, fat LTO):"
     sizes "$dir/gate.elf"
-    if ! ir_check "$features" "$name"; then
+    if ! ir_check "$name"; then
       STATUS[$name]="FAILS: i128 in the IR"
       FAILED+=("$name")
     else
