@@ -16,11 +16,13 @@
 //! the fold of the level below and the split into local sums and tile boundaries in one pass,
 //! with AVX-512 VNNI for tiles of 2 to 16 texels or AVX2 for tiles of 8; with AVX-512BW and
 //! VBMI as well, the local sums of tiles of 8 packed in the same pass). Everything else (and
-//! [`crate::Sat::build_checked`]) takes the portable path. Also, with AVX-512 only, [`pack_u32`]: the packing of `u32` fields of
-//! 11 to 32 bits into 32-bit words that the modular and tiled builders do per row (the portable
-//! packer, width-specialized scalar code, costs about a cycle per field). The kernel is the widest this CPU runs, detected once at run time from CPUID
-//! and XGETBV (no `std` needed), as OpenCV and the standard library's
-//! `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
+//! [`crate::Sat::build_checked`]) takes the portable path. Also, with AVX-512 or AVX2,
+//! [`pack_u32`]: the packing of `u32` fields of 11 to 32 bits into 32-bit words that the
+//! modular and tiled builders do per row (the portable packer, width-specialized scalar code,
+//! costs about a cycle per field; the AVX2 kernel, eight groups of 32 fields transposed into
+//! lanes, about a third to a half of it). The kernel is the widest this CPU runs, detected
+//! once at run time from CPUID and XGETBV (no `std` needed), as OpenCV and the standard
+//! library's `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
 //! * AVX-512 VNNI (`avx512f` + `avx512vnni`): the 16 prefix sums of a block are four `vpdpbusd`
 //!   dot products of a broadcast group of 4 texels with a constant triangle of 0/1 weights,
@@ -44,7 +46,10 @@
 //!    only reason for `unsafe` beyond the memory accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
 //!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
-//!    `words[g k..g k + k]` (16 words and a masked store of the rest) for `g < groups` only.
+//!    `words[g k..g k + k]` (AVX-512: 16 words and a masked store of the rest; AVX2: 8 words
+//!    at a time, then the group's last 4 or 8 words, some of them a second time with the same
+//!    value) for `g < groups` only; the AVX2 kernel's last pass of fewer than 8 groups reads
+//!    its last group again for the missing lanes and stores the groups it has only.
 //!    [`tiled_row`] checks its slices' lengths against the row (`acc`, `lower`: `n`; `bnd`:
 //!    `n / tile`; `local`: `n - n / tile`) before its kernel touches block `b` (16 texels) of
 //!    `t`, `acc` and `lower` for `b < n / 16` only; the boundary and local-sum stores stay inside
@@ -583,24 +588,44 @@ mod avx512vnni {
 }
 
 /// Packs fields of `k` bits (`MIN_PACK_BITS <= k <= 32`, the low `k` bits of each value) into
-/// `words` from its bit 0, 32 fields (exactly `k` words) at a time, with AVX-512F; returns the
-/// fields packed (whole groups of 32 that fit `words`; 0 for other types, widths, or CPUs
-/// without AVX-512). Each word written is the word the layouts' portable packing writes there
-/// (`layouts::packed::pack_fields`: field `i` at bit `i k`), written once.
+/// `words` from its bit 0, 32 fields (exactly `k` words) at a time, with AVX-512F or AVX2;
+/// returns the fields packed (whole groups of 32 that fit `words`; 0 for other types, widths,
+/// or CPUs without AVX2). Each word written ends as the word the layouts' portable packing
+/// writes there (`layouts::packed::pack_fields`: field `i` at bit `i k`); no word outside the
+/// groups' `k` words each is written.
 ///
-/// How: output word `j` of a group holds bits `32 j .. 32 j + 32`, that is
-/// `f[i] >> s | f[i + 1] << (k - s) | f[i + 2] << (2k - s) | f[i + 3] << (3k - s)` with
+/// With AVX-512F ([`pack512`]): output word `j` of a group holds bits `32 j .. 32 j + 32`, that
+/// is `f[i] >> s | f[i + 1] << (k - s) | f[i + 2] << (2k - s) | f[i + 3] << (3k - s)` with
 /// `i = floor(32 j / k)`, `s = 32 j - i k`: at most four fields for `k >= 11`. Per 16 output
 /// words: four `vpermt2d` gathering those fields from the group's two registers (indices past
 /// the group clamped to 31: their shift counts are at least 32, and AVX-512's variable shifts
 /// give 0 there, as for the terms a word does not need), one `vpsrlvd`, three `vpsllvd`, three
 /// ors, one (masked) store; from 16 bits on, a word holds parts of at most three fields: three
 /// of each. The index and count tables depend on `k` only: built once per call.
+///
+/// With AVX2 ([`pack256`]), which has no two-register permute: eight groups side by side, one
+/// per 32-bit lane, so that every shift is the same in all lanes (the constant shifts of the
+/// portable `packed::group`); see there.
 pub(crate) fn pack_u32<E: Entry>(words: &mut [u32], fields: &[E], k: u32) -> usize {
+    // SAFETY: `Kernel::best` is what this CPU runs (CPUID and XGETBV, cached).
+    unsafe { pack_u32_with(Kernel::best(), words, fields, k) }
+}
+
+/// [`pack_u32`] with `kernel`'s packing: [`pack512`] for [`Kernel::Avx512Vnni`], [`pack256`]
+/// for [`Kernel::Avx2`], none (0 fields) for [`Kernel::Sse2`].
+///
+/// # Safety
+/// `kernel` is [`Kernel::available`] on this CPU (the tests run each available one).
+unsafe fn pack_u32_with<E: Entry>(
+    kernel: Kernel,
+    words: &mut [u32],
+    fields: &[E],
+    k: u32,
+) -> usize {
     let Some(f) = as_u32(fields) else {
         return 0;
     };
-    if !(MIN_PACK_BITS..=32).contains(&k) || Kernel::best() != Kernel::Avx512Vnni {
+    if !(MIN_PACK_BITS..=32).contains(&k) || kernel == Kernel::Sse2 {
         return 0;
     }
     let ku = k as usize;
@@ -608,13 +633,30 @@ pub(crate) fn pack_u32<E: Entry>(words: &mut [u32], fields: &[E], k: u32) -> usi
     if groups == 0 {
         return 0;
     }
+    if kernel == Kernel::Avx2 {
+        macro_rules! by_width {
+            ($($k:literal)*) => {
+                match ku {
+                    // SAFETY: AVX2 is available (the caller's contract: `Kernel::Avx2` runs on
+                    // this CPU); `f` holds at least 32 groups values and `words` at least
+                    // groups k words (above); the kernel reads f[0..32 groups] and writes
+                    // words[0..groups k] only.
+                    $($k => unsafe { pack256::pack::<$k>(f.as_ptr(), words.as_mut_ptr(), groups) },)*
+                    _ => return 0,
+                }
+            };
+        }
+        by_width!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32);
+        return groups * 32;
+    }
     // idx[t][j], cnt[t][j]: the field (0..32 in the group) and the shift of term t of word j.
     let Some(table) = PACK_TABLES.get(ku - MIN_PACK_BITS as usize) else {
         return 0;
     };
-    // SAFETY: AVX-512F is available (Kernel::best() is Avx512Vnni, whose detection includes
-    // it); `f` holds at least 32 groups values and `words` at least groups k words (above); the
-    // kernel reads f[0..32 groups] and writes words[0..groups k] only; the table is k's.
+    // SAFETY: AVX-512F is available (`kernel` is Avx512Vnni, whose detection includes it, and
+    // available: the caller's contract); `f` holds at least 32 groups values and `words` at
+    // least groups k words (above); the kernel reads f[0..32 groups] and writes
+    // words[0..groups k] only; the table is k's.
     unsafe { pack512::pack(f.as_ptr(), words.as_mut_ptr(), groups, k, table) };
     groups * 32
 }
@@ -743,6 +785,237 @@ mod pack512 {
                     }
                 }
             }
+        }
+    }
+}
+
+/// [`pack_u32`]'s AVX2 kernel: eight groups of 32 fields at a time, one group per 32-bit lane.
+///
+/// Field `i` of a group (its low `K` bits, `v = f[i] & (2^K - 1)`) sits at bit `i K`: word
+/// `j = floor(i K / 32)` gets `v << s` (`s = i K mod 32`, the bits past 32 dropped) and, when
+/// the field crosses into the next word (`s + K > 32`), word `j + 1` gets `v >> (32 - s)`. With
+/// `K` a constant, `j` and `s` are constants per field: the portable `packed::group`'s shifts.
+/// AVX2 has no permute across its registers that would gather each word's fields from a group
+/// in four registers, so instead lane `g` of every register holds group `g` of the eight: each
+/// 8 x 8 block of `u32` (8 groups, 8 consecutive fields or words) is transposed on the way in
+/// and on the way out (two 4 x 4 transposes within the 128-bit halves, fed by 128-bit loads
+/// into both halves on the way in; then a swap of halves on the way out), and in between every
+/// field costs one `vpand`, one immediate shift and one `vpor` (two of each when it crosses a
+/// word boundary), shared by the eight groups.
+mod pack256 {
+    use super::*;
+
+    /// Two 4 x 4 transposes, one per 128-bit half: lane `c` of result `r` is lane `r` of `a[c]`
+    /// (both within the same half).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn transpose4(a: [__m256i; 4]) -> [__m256i; 4] {
+        let t0 = _mm256_unpacklo_epi32(a[0], a[1]);
+        let t1 = _mm256_unpackhi_epi32(a[0], a[1]);
+        let t2 = _mm256_unpacklo_epi32(a[2], a[3]);
+        let t3 = _mm256_unpackhi_epi32(a[2], a[3]);
+        [
+            _mm256_unpacklo_epi64(t0, t2),
+            _mm256_unpackhi_epi64(t0, t2),
+            _mm256_unpacklo_epi64(t1, t3),
+            _mm256_unpackhi_epi64(t1, t3),
+        ]
+    }
+
+    /// Words `at..at + 8` of the eight rows `p[g]`, transposed: lane `g` of result `c` is
+    /// `p[g][at + c]`.
+    ///
+    /// # Safety
+    /// `p[g]` is valid for reads of `at + 8` words, for every `g`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn load8x8(p: &[*const u32; 8], at: usize) -> [__m256i; 8] {
+        // SAFETY: p[g][at..at + 8] is readable (the caller's contract): 16-byte unaligned loads
+        // of words at..at + 4 and at + 4..at + 8.
+        let half = |g: usize, c: usize| unsafe {
+            _mm256_loadu2_m128i(p[g + 4].add(at + c).cast(), p[g].add(at + c).cast())
+        };
+        // Row g's words in the low half, row g + 4's in the high half.
+        let [c0, c1, c2, c3] = transpose4([half(0, 0), half(1, 0), half(2, 0), half(3, 0)]);
+        let [c4, c5, c6, c7] = transpose4([half(0, 4), half(1, 4), half(2, 4), half(3, 4)]);
+        [c0, c1, c2, c3, c4, c5, c6, c7]
+    }
+
+    /// Stores output words `j..j + 8` (`o[j + c]`, lane `g` for group `g`) of the first `gn`
+    /// groups: lane `g` of the eight registers into `q[g][j..j + 8]`.
+    ///
+    /// # Safety
+    /// `gn <= 8`; `q[g]` is valid for writes of `j + 8` words for `g < gn`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn store8x8(q: &[*mut u32; 8], gn: usize, j: usize, o: &[__m256i]) {
+        let x = transpose4([o[j], o[j + 1], o[j + 2], o[j + 3]]);
+        let y = transpose4([o[j + 4], o[j + 5], o[j + 6], o[j + 7]]);
+        // x[g], y[g]: words j..j + 4 and j + 4..j + 8 of group g (low half), g + 4 (high half).
+        let rows = [
+            _mm256_permute2x128_si256::<0x20>(x[0], y[0]),
+            _mm256_permute2x128_si256::<0x20>(x[1], y[1]),
+            _mm256_permute2x128_si256::<0x20>(x[2], y[2]),
+            _mm256_permute2x128_si256::<0x20>(x[3], y[3]),
+            _mm256_permute2x128_si256::<0x31>(x[0], y[0]),
+            _mm256_permute2x128_si256::<0x31>(x[1], y[1]),
+            _mm256_permute2x128_si256::<0x31>(x[2], y[2]),
+            _mm256_permute2x128_si256::<0x31>(x[3], y[3]),
+        ];
+        // SAFETY: g < gn: q[g][j..j + 8] is writable (the caller's contract).
+        unsafe {
+            if gn == 8 {
+                for (g, r) in rows.iter().enumerate() {
+                    _mm256_storeu_si256(q[g].add(j).cast(), *r);
+                }
+            } else {
+                for (g, r) in rows.iter().enumerate().take(gn) {
+                    _mm256_storeu_si256(q[g].add(j).cast(), *r);
+                }
+            }
+        }
+    }
+
+    /// As [`store8x8`] for the four words `j..j + 4`.
+    ///
+    /// # Safety
+    /// `gn <= 8`; `q[g]` is valid for writes of `j + 4` words for `g < gn`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn store8x4(q: &[*mut u32; 8], gn: usize, j: usize, o: &[__m256i]) {
+        let x = transpose4([o[j], o[j + 1], o[j + 2], o[j + 3]]);
+        let rows = [
+            _mm256_castsi256_si128(x[0]),
+            _mm256_castsi256_si128(x[1]),
+            _mm256_castsi256_si128(x[2]),
+            _mm256_castsi256_si128(x[3]),
+            _mm256_extracti128_si256::<1>(x[0]),
+            _mm256_extracti128_si256::<1>(x[1]),
+            _mm256_extracti128_si256::<1>(x[2]),
+            _mm256_extracti128_si256::<1>(x[3]),
+        ];
+        // SAFETY: g < gn: q[g][j..j + 4] is writable (the caller's contract).
+        unsafe {
+            if gn == 8 {
+                for (g, r) in rows.iter().enumerate() {
+                    _mm_storeu_si128(q[g].add(j).cast(), *r);
+                }
+            } else {
+                for (g, r) in rows.iter().enumerate().take(gn) {
+                    _mm_storeu_si128(q[g].add(j).cast(), *r);
+                }
+            }
+        }
+    }
+
+    /// [`pack`] for the widths that divide 32 (`K` = 16 or 32), where a word holds whole fields
+    /// and no transpose is needed (the portable packer, which the compiler vectorizes for these,
+    /// is faster than the transposing kernel): 32 bits, a copy; 16 bits, each 16 fields masked
+    /// to their low 16 bits and narrowed by `vpackusdw` (no saturation: every value is below
+    /// 2^16), the 64-bit quarters put back in order (`vpermq`: `vpackusdw` interleaves its two
+    /// sources per 128-bit half), 8 words stored.
+    ///
+    /// # Safety
+    /// As [`pack`], with `K` = 16 or 32.
+    #[target_feature(enable = "avx2")]
+    unsafe fn whole<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
+        if K == 32 {
+            // SAFETY: f[0..32 groups] readable, w[0..32 groups] writable (the caller's
+            // contract); separate slices (a `&` and a `&mut`), so not overlapping.
+            unsafe { core::ptr::copy_nonoverlapping(f, w, 32 * groups) };
+            return;
+        }
+        let m = _mm256_set1_epi32(0xffff);
+        let mut i = 0;
+        while i < 32 * groups {
+            // SAFETY: i + 16 <= 32 groups: f[i..i + 16] readable and w[i / 2..i / 2 + 8]
+            // writable (i / 2 + 8 <= 16 groups = groups K; the caller's contract).
+            unsafe {
+                let a = _mm256_and_si256(_mm256_loadu_si256(f.add(i).cast()), m);
+                let b = _mm256_and_si256(_mm256_loadu_si256(f.add(i + 8).cast()), m);
+                let v = _mm256_permute4x64_epi64::<0xd8>(_mm256_packus_epi32(a, b));
+                _mm256_storeu_si256(w.add(i / 2).cast(), v);
+            }
+            i += 16;
+        }
+    }
+
+    /// The kernel: `groups` groups of 32 `K`-bit fields from `f` into `K` words each at `w`
+    /// (group `g`: `f[32 g..32 g + 32]` into `w[g K..g K + K]`), eight groups per pass (the
+    /// last pass's missing lanes repeat its last group, and are not stored). Words `0..8 (K /
+    /// 8)` of a group are stored 8 at a time; the `K mod 8` after them, if any, by a store of
+    /// the group's last 4 words (`K mod 8 <= 4`) or last 8 (above), whose first words are
+    /// written twice, with the same value: nothing outside the group's words is written.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `11 <= K <= 32`; `f` is valid for reads of `32 groups` values and `w`
+    /// for writes of `groups K` words.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn pack<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
+        if K == 16 || K == 32 {
+            // SAFETY: forwarded (the caller's contract).
+            unsafe { whole::<K>(f, w, groups) };
+            return;
+        }
+        let m = _mm256_set1_epi32(if K >= 32 {
+            -1
+        } else {
+            ((1u32 << K) - 1) as i32
+        });
+        let mut g0 = 0;
+        while g0 < groups {
+            let gn = (groups - g0).min(8);
+            // SAFETY: g0 + min(g, gn - 1) < groups: each row pointer starts a group of 32
+            // readable values (its own or the pass's last), each output pointer a group of K
+            // writable words (used for g < gn only).
+            let (p, q) = unsafe {
+                (
+                    core::array::from_fn::<_, 8, _>(|g| f.add(32 * (g0 + g.min(gn - 1)))),
+                    core::array::from_fn::<_, 8, _>(|g| w.add(K * (g0 + g.min(gn - 1)))),
+                )
+            };
+            let mut o = [_mm256_setzero_si256(); K];
+            // Field i of every group: its low K bits into word j at bit s (and the bits past
+            // 32 into word j + 1). Written out per field so that j and s are constants.
+            macro_rules! fields {
+                ($at:literal: $($c:literal)*) => {{
+                    // SAFETY: at + 8 <= 32: inside each row's group.
+                    let v = unsafe { load8x8(&p, $at) };
+                    $(
+                        let i: usize = $at + $c;
+                        let (j, s) = (i * K / 32, (i * K % 32) as i32);
+                        let x = _mm256_and_si256(v[$c], m);
+                        o[j] = _mm256_or_si256(o[j], _mm256_sll_epi32(x, _mm_cvtsi32_si128(s)));
+                        if s as usize + K > 32 {
+                            o[j + 1] = _mm256_or_si256(
+                                o[j + 1],
+                                _mm256_srl_epi32(x, _mm_cvtsi32_si128(32 - s)),
+                            );
+                        }
+                    )*
+                }};
+            }
+            fields!(0: 0 1 2 3 4 5 6 7);
+            fields!(8: 0 1 2 3 4 5 6 7);
+            fields!(16: 0 1 2 3 4 5 6 7);
+            fields!(24: 0 1 2 3 4 5 6 7);
+            // SAFETY: the stores cover q[g][j..j + 8] with j + 8 <= K, or q[g][K - 4..K] /
+            // q[g][K - 8..K] (K >= 11), for g < gn: inside the group's K words.
+            unsafe {
+                let mut j = 0;
+                while j + 8 <= K {
+                    store8x8(&q, gn, j, &o);
+                    j += 8;
+                }
+                if j < K {
+                    if K - j <= 4 {
+                        store8x4(&q, gn, K - 4, &o);
+                    } else {
+                        store8x8(&q, gn, K - 8, &o);
+                    }
+                }
+            }
+            g0 += 8;
         }
     }
 }
@@ -1497,17 +1770,30 @@ mod tests {
 
     /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
     /// low `k` bits gives (`layouts::packed::write_bits`), for whole groups of 32 only, and
-    /// nothing past them; values with their high bits set (only the low `k` stored); 0 fields
-    /// packed without AVX-512 (Miri: the kernel the target features enable), for another
-    /// type, or a width outside 11..=32.
+    /// nothing past them; values with their high bits set (only the low `k` stored); counts
+    /// below, at and past whole groups, and past whole passes of 8 groups of the AVX2 kernel
+    /// (a last pass of 1 to 7 groups). Every packing kernel the CPU runs, explicitly (AVX2 on
+    /// an AVX-512 CPU too), then `pack_u32` itself: all the whole groups packed with AVX2 or
+    /// AVX-512 (Miri: the kernel the target features enable), 0 without, for another type, or
+    /// a width outside 11..=32.
     #[test]
     fn pack_u32_equals_field_by_field() {
         extern crate std;
         use std::vec::Vec;
         let counts: &[usize] = if cfg!(miri) {
-            &[33]
+            &[33, 9 * 32 + 1]
         } else {
-            &[0, 31, 32, 64, 101]
+            &[
+                0,
+                31,
+                32,
+                64,
+                101,
+                8 * 32,
+                8 * 32 + 31,
+                15 * 32 + 7,
+                17 * 32,
+            ]
         };
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         let mut next = move || {
@@ -1516,28 +1802,54 @@ mod tests {
             seed ^= seed << 17;
             seed as u32
         };
-        let avx512 = Kernel::best() == Kernel::Avx512Vnni;
-        for k in MIN_PACK_BITS..=32 {
-            for &n in counts {
-                let fields: Vec<u32> = (0..n).map(|_| next()).collect();
-                let noise: Vec<u32> = (0..n * k as usize / 32 + 3).map(|_| next()).collect();
-                let mut words = noise.clone();
-                let done = pack_u32(&mut words, &fields, k);
-                assert_eq!(done, if avx512 { n / 32 * 32 } else { 0 }, "k {k} n {n}");
-                let mut want = noise.clone();
-                for (i, &f) in fields.iter().take(done).enumerate() {
-                    let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
-                    let at = i as u64 * u64::from(k);
-                    assert!(crate::layouts::packed::write_bits(
-                        &mut want,
-                        at,
-                        k,
-                        u64::from(f & m)
-                    ));
+        // None: `pack_u32`, which packs with AVX2 or AVX-512 (whichever is best).
+        let packs = Kernel::best() != Kernel::Sse2;
+        let kernels = [Kernel::Sse2, Kernel::Avx2, Kernel::Avx512Vnni]
+            .into_iter()
+            .filter(|k| k.available())
+            .map(Some)
+            .chain([None]);
+        let mut ran = 0;
+        for kernel in kernels {
+            for k in MIN_PACK_BITS..=32 {
+                for (c, &n) in counts.iter().enumerate() {
+                    // Under Miri, the count of several passes for a few widths only.
+                    if cfg!(miri) && c > 0 && ![11, 16, 21, 32].contains(&k) {
+                        continue;
+                    }
+                    let fields: Vec<u32> = (0..n).map(|_| next()).collect();
+                    let noise: Vec<u32> = (0..n * k as usize / 32 + 3).map(|_| next()).collect();
+                    let mut words = noise.clone();
+                    let (done, expect) = match kernel {
+                        // SAFETY: `kernel` is available on this CPU (filtered above).
+                        Some(kr) => (unsafe { pack_u32_with(kr, &mut words, &fields, k) }, {
+                            kr != Kernel::Sse2
+                        }),
+                        None => (pack_u32(&mut words, &fields, k), packs),
+                    };
+                    let name = kernel.map_or("pack_u32", Kernel::name);
+                    assert_eq!(
+                        done,
+                        if expect { n / 32 * 32 } else { 0 },
+                        "{name} k {k} n {n}"
+                    );
+                    ran += usize::from(done > 0);
+                    let mut want = noise.clone();
+                    for (i, &f) in fields.iter().take(done).enumerate() {
+                        let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+                        let at = i as u64 * u64::from(k);
+                        assert!(crate::layouts::packed::write_bits(
+                            &mut want,
+                            at,
+                            k,
+                            u64::from(f & m)
+                        ));
+                    }
+                    assert_eq!(words, want, "{name} k {k} n {n}");
                 }
-                assert_eq!(words, want, "k {k} n {n}");
             }
         }
+        assert_eq!(ran > 0, packs);
         let mut w = [0u32; 64];
         assert_eq!(pack_u32(&mut w, &[1u16; 64], 16), 0);
         assert_eq!(pack_u32(&mut w, &[1u32; 64], MIN_PACK_BITS - 1), 0);
