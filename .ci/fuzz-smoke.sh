@@ -1,16 +1,16 @@
 #!/usr/bin/env bash
 # Smoke run of every cargo fuzz target in fuzz/ (fuzz/README.md): each runs for a short time
-# (FUZZ_SMOKE_SECONDS, default 20) starting from its committed corpus, and any crash or mismatch
+# (FUZZ_SMOKE_SECONDS, default 10) starting from its committed corpus, and any crash or mismatch
 # fails the script. New inputs go to a temporary directory, so the committed corpora stay as
 # they are. Needs the nightly toolchain (libFuzzer's instrumentation); without it the smoke is
 # skipped, loudly, with exit status 0.
 #
-#   bash .ci/fuzz-smoke.sh                 # every target, 20 s each
+#   bash .ci/fuzz-smoke.sh                 # every target, 10 s each
 #   FUZZ_SMOKE_SECONDS=60 bash .ci/fuzz-smoke.sh lookup layouts
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-SECONDS_EACH="${FUZZ_SMOKE_SECONDS:-20}"
+SECONDS_EACH="${FUZZ_SMOKE_SECONDS:-10}"
 # cargo fuzz's own build directory (not the workspace's: the instrumented build differs).
 TARGET_DIR="${FUZZ_TARGET_DIR:-$PWD/fuzz/target}"
 
