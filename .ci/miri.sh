@@ -4,7 +4,7 @@
 #
 #   bash .ci/miri.sh              the CI tier: the crate's only unsafe code (src/simd.rs, the
 #                                 `simd::` tests) once per instruction set, and the core's
-#                                 doctests (about 8 minutes on 2 cores)
+#                                 doctests (about 12 minutes on 2 cores)
 #   MIRI_FULL=1 bash .ci/miri.sh  also the core's unit tests without features, the comparison
 #                                 filters' unit tests and doctests, and host-tests' build.rs and
 #                                 hostile.rs (30 minutes and more on 2 cores)
