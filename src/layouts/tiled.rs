@@ -1282,7 +1282,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             return None;
         }
         let cell = self.cell_in_tile(o, &CellParts::x(o, i), &CellParts::y(o, j), k);
-        Some(self.reduce_cells(cell))
+        Some(self.reduce_cell(cell))
     }
 
     /// The four cells of a 16-read lookup, in [`Layout::cells4_placed`]'s order, when all four
@@ -1386,23 +1386,22 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
         #[allow(clippy::arithmetic_side_effects, reason = "at most 4 + 4 + 2")]
         let adds = 4 * u32::from(above) + 4 * u32::from(left) + 2 * u32::from(left && above);
         k.adds(adds.saturating_mul(const { per_channel(1, C) }));
-        // Not reduced here: the callers reduce every cell after one test of the modulus
-        // ([`Tiled::reduce_cells`]), not one test per cell.
+        // Not reduced here: the four cells of a lookup stay unreduced (congruent values,
+        // [`Layout::cells4_placed`]); a single cell is reduced by [`Tiled::cell_fast`].
         *out = [s0, s1, s2, s3];
     }
 
-    /// Reduces each value of `cells` modulo `2^k` under a modular spec (its modulus `k`); a
-    /// plain spec leaves them as they are. One test of the modulus for all of them: the fast
-    /// cell paths ([`Tiled::cell_fast`], [`Tiled::cells4_fast`]) add their fields in full and
-    /// reduce here once (docs/benchmarks.md).
+    /// Reduces the four corners of [`Tiled::cell_fast`]'s cell modulo `2^k` under a modular
+    /// spec (its modulus `k`); a plain spec leaves them as they are. (The four cells of
+    /// [`Tiled::cells4_fast`] are left unreduced: docs/benchmarks.md.)
     #[inline(always)]
-    fn reduce_cells<const N: usize>(&self, mut cells: [[E; C]; N]) -> [[E; C]; N] {
+    fn reduce_cell(&self, mut cell: [[E; C]; 4]) -> [[E; C]; 4] {
         if let Some(m) = self.geo.spec.modulus {
-            for v in cells.iter_mut().flatten() {
+            for v in cell.iter_mut().flatten() {
                 *v = v.low_bits(m);
             }
         }
-        cells
+        cell
     }
 
     /// Adds `S(x, y)` for one level of tiles on both axes (`0 < x <= w`, `0 < y <= h`) to `out`:
