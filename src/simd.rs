@@ -471,9 +471,9 @@ mod sse2 {
 mod avx2 {
     use super::*;
 
-    /// `vpmaddubsw` weights for lane `j` (0..8) of an 8-texel chunk, bytes `4 j + b`: texel `q
-    /// + b` of the chunk (the broadcast quad `q` = 0 or 4) counts for lane `j` when `q + b <=
-    /// j`.
+    /// `vpmaddubsw` weights for lane `j` (0..8) of an 8-texel chunk, bytes `4 j + b`: texel
+    /// `q + b` of the chunk (the broadcast quad `q`, 0 or 4) counts for lane `j` when `q + b`
+    /// is at most `j`.
     const fn weights(q: usize) -> [i8; 32] {
         let mut w = [0i8; 32];
         let mut j = 0;
