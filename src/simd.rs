@@ -893,33 +893,41 @@ mod pack256 {
         ]
     }
 
-    /// Words `at..at + 8` of the eight rows `p[g]`, transposed: lane `g` of result `c` is
-    /// `p[g][at + c]`.
+    /// Words `at..at + 8` of the eight groups of 32 values from `f` (group `g` at `f + 32 g`,
+    /// or the last group, `gn - 1`, for the lanes past it; no clamp if `FULL`), transposed: lane
+    /// `g` of result `c` is word `at + c` of group `g`.
     ///
     /// # Safety
-    /// `p[g]` is valid for reads of `at + 8` words, for every `g`.
+    /// Each (clamped) group is valid for reads of `at + 8` words.
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn load8x8(p: &[*const u32; 8], at: usize) -> [__m256i; 8] {
-        // SAFETY: p[g][at..at + 8] is readable (the caller's contract): 16-byte unaligned loads
-        // of words at..at + 4 and at + 4..at + 8.
+    unsafe fn load8x8<const FULL: bool>(f: *const u32, gn: usize, at: usize) -> [__m256i; 8] {
+        // SAFETY: group g's words at..at + 8 are readable (the caller's contract): 16-byte
+        // unaligned loads of words at..at + 4 and at + 4..at + 8.
         let half = |g: usize, c: usize| unsafe {
-            _mm256_loadu2_m128i(p[g + 4].add(at + c).cast(), p[g].add(at + c).cast())
+            let p = |g: usize| f.add(32 * if FULL { g } else { g.min(gn - 1) });
+            _mm256_loadu2_m128i(p(g + 4).add(at + c).cast(), p(g).add(at + c).cast())
         };
-        // Row g's words in the low half, row g + 4's in the high half.
+        // Group g's words in the low half, group g + 4's in the high half.
         let [c0, c1, c2, c3] = transpose4([half(0, 0), half(1, 0), half(2, 0), half(3, 0)]);
         let [c4, c5, c6, c7] = transpose4([half(0, 4), half(1, 4), half(2, 4), half(3, 4)]);
         [c0, c1, c2, c3, c4, c5, c6, c7]
     }
 
     /// Stores output words `j..j + 8` (`o[j + c]`, lane `g` for group `g`) of the first `gn`
-    /// groups: lane `g` of the eight registers into `q[g][j..j + 8]`.
+    /// groups (all 8 if `FULL`): lane `g` of the eight registers into `w[stride g + j..][..8]`.
     ///
     /// # Safety
-    /// `gn <= 8`; `q[g]` is valid for writes of `j + 8` words for `g < gn`.
+    /// `gn <= 8`; `w + stride g` is valid for writes of `j + 8` words for `g < gn`.
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn store8x8(q: &[*mut u32; 8], gn: usize, j: usize, o: &[__m256i]) {
+    pub(super) unsafe fn store8x8<const FULL: bool>(
+        w: *mut u32,
+        stride: usize,
+        gn: usize,
+        j: usize,
+        o: &[__m256i],
+    ) {
         let x = transpose4([o[j], o[j + 1], o[j + 2], o[j + 3]]);
         let y = transpose4([o[j + 4], o[j + 5], o[j + 6], o[j + 7]]);
         // x[g], y[g]: words j..j + 4 and j + 4..j + 8 of group g (low half), g + 4 (high half).
@@ -933,27 +941,26 @@ mod pack256 {
             _mm256_permute2x128_si256::<0x31>(x[2], y[2]),
             _mm256_permute2x128_si256::<0x31>(x[3], y[3]),
         ];
-        // SAFETY: g < gn: q[g][j..j + 8] is writable (the caller's contract).
-        unsafe {
-            if gn == 8 {
-                for (g, r) in rows.iter().enumerate() {
-                    _mm256_storeu_si256(q[g].add(j).cast(), *r);
-                }
-            } else {
-                for (g, r) in rows.iter().enumerate().take(gn) {
-                    _mm256_storeu_si256(q[g].add(j).cast(), *r);
-                }
-            }
+        let n = if FULL { 8 } else { gn };
+        for (g, r) in rows.iter().enumerate().take(n) {
+            // SAFETY: g < gn: w[stride g + j..][..8] is writable (the caller's contract).
+            unsafe { _mm256_storeu_si256(w.add(stride * g + j).cast(), *r) };
         }
     }
 
     /// As [`store8x8`] for the four words `j..j + 4`.
     ///
     /// # Safety
-    /// `gn <= 8`; `q[g]` is valid for writes of `j + 4` words for `g < gn`.
+    /// `gn <= 8`; `w + stride g` is valid for writes of `j + 4` words for `g < gn`.
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn store8x4(q: &[*mut u32; 8], gn: usize, j: usize, o: &[__m256i]) {
+    pub(super) unsafe fn store8x4<const FULL: bool>(
+        w: *mut u32,
+        stride: usize,
+        gn: usize,
+        j: usize,
+        o: &[__m256i],
+    ) {
         let x = transpose4([o[j], o[j + 1], o[j + 2], o[j + 3]]);
         let rows = [
             _mm256_castsi256_si128(x[0]),
@@ -965,15 +972,62 @@ mod pack256 {
             _mm256_extracti128_si256::<1>(x[2]),
             _mm256_extracti128_si256::<1>(x[3]),
         ];
-        // SAFETY: g < gn: q[g][j..j + 4] is writable (the caller's contract).
+        let n = if FULL { 8 } else { gn };
+        for (g, r) in rows.iter().enumerate().take(n) {
+            // SAFETY: g < gn: w[stride g + j..][..4] is writable (the caller's contract).
+            unsafe { _mm_storeu_si128(w.add(stride * g + j).cast(), *r) };
+        }
+    }
+
+    /// Stores the `K` output words of each of `gn` groups (all 8 if `FULL`), group `g` at `w +
+    /// K g`: words `0..8 (K / 8)` 8 at a time; the `K mod 8` after them, if any, by a store of
+    /// the group's last 4 words (`K mod 8 <= 4`) or last 8, whose first words are written
+    /// twice, with the same value: nothing outside the groups' words is written.
+    ///
+    /// # Safety
+    /// `8 <= K`, `gn <= 8`; `w + K g` is valid for writes of `K` words for `g < gn`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn store_words<const K: usize, const FULL: bool>(
+        w: *mut u32,
+        gn: usize,
+        o: &[__m256i; K],
+    ) {
+        // SAFETY: the stores cover w[K g + j..][..8] with j + 8 <= K, or the group's last 4 or 8
+        // words (K >= 8), for g < gn: inside the groups' K words (the caller's contract).
         unsafe {
-            if gn == 8 {
-                for (g, r) in rows.iter().enumerate() {
-                    _mm_storeu_si128(q[g].add(j).cast(), *r);
+            let mut j = 0;
+            while j + 8 <= K {
+                store8x8::<FULL>(w, K, gn, j, o);
+                j += 8;
+            }
+            if j < K {
+                if K - j <= 4 {
+                    store8x4::<FULL>(w, K, gn, K - 4, o);
+                } else {
+                    store8x8::<FULL>(w, K, gn, K - 8, o);
                 }
-            } else {
-                for (g, r) in rows.iter().enumerate().take(gn) {
-                    _mm_storeu_si128(q[g].add(j).cast(), *r);
+            }
+        }
+    }
+
+    /// Field `i` (0..32) of every lane's group, `v`: its low `K` bits (`m`; all of them for
+    /// `K = 32`) into word `floor(i K / 32)` of `o` at bit `i K mod 32`, the bits past 32 into
+    /// the next word (the portable `packed::group`'s constant shifts).
+    #[inline(always)]
+    #[allow(clippy::as_conversions, reason = "i K mod 32 < 32: lossless into i32")]
+    pub(super) fn field<const K: usize>(o: &mut [__m256i; K], i: usize, v: __m256i, m: __m256i) {
+        let (j, s) = (i * K / 32, (i * K % 32) as i32);
+        // SAFETY (of the intrinsics): the caller's target features include AVX2 (this is only
+        // called from AVX2 functions, and inlined into them).
+        unsafe {
+            let x = if K == 32 { v } else { _mm256_and_si256(v, m) };
+            if let Some(oj) = o.get_mut(j) {
+                *oj = _mm256_or_si256(*oj, _mm256_sll_epi32(x, _mm_cvtsi32_si128(s)));
+            }
+            if s as usize + K > 32 {
+                if let Some(on) = o.get_mut(j + 1) {
+                    *on = _mm256_or_si256(*on, _mm256_srl_epi32(x, _mm_cvtsi32_si128(32 - s)));
                 }
             }
         }
@@ -1011,12 +1065,42 @@ mod pack256 {
         }
     }
 
+    /// One pass: the `gn` groups (all 8 if `FULL`) of 32 fields from `f` (group `g` at `f + 32
+    /// g`) into `K` words each at `w` (group `g` at `w + K g`). The lanes past `gn` repeat the
+    /// last group, and are not stored.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `11 <= K <= 32`, `1 <= gn <= 8`; `f` valid for reads of `32 gn` values
+    /// and `w` for writes of `gn K` words.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn pass<const K: usize, const FULL: bool>(f: *const u32, w: *mut u32, gn: usize) {
+        let m = _mm256_set1_epi32(if K >= 32 {
+            -1
+        } else {
+            ((1u32 << K) - 1) as i32
+        });
+        let mut o = [_mm256_setzero_si256(); K];
+        // Written out per field so that the word and the shift are constants.
+        macro_rules! fields {
+            ($at:literal: $($c:literal)*) => {{
+                // SAFETY: at + 8 <= 32: inside each (clamped) group.
+                let v = unsafe { load8x8::<FULL>(f, gn, $at) };
+                $(field::<K>(&mut o, $at + $c, v[$c], m);)*
+            }};
+        }
+        fields!(0: 0 1 2 3 4 5 6 7);
+        fields!(8: 0 1 2 3 4 5 6 7);
+        fields!(16: 0 1 2 3 4 5 6 7);
+        fields!(24: 0 1 2 3 4 5 6 7);
+        // SAFETY: w + K g holds K writable words for g < gn (the caller's contract).
+        unsafe { store_words::<K, FULL>(w, gn, &o) };
+    }
+
     /// The kernel: `groups` groups of 32 `K`-bit fields from `f` into `K` words each at `w`
-    /// (group `g`: `f[32 g..32 g + 32]` into `w[g K..g K + K]`), eight groups per pass (the
-    /// last pass's missing lanes repeat its last group, and are not stored). Words `0..8 (K /
-    /// 8)` of a group are stored 8 at a time; the `K mod 8` after them, if any, by a store of
-    /// the group's last 4 words (`K mod 8 <= 4`) or last 8 (above), whose first words are
-    /// written twice, with the same value: nothing outside the group's words is written.
+    /// (group `g`: `f[32 g..32 g + 32]` into `w[g K..g K + K]`), eight groups per pass, each
+    /// group in a 32-bit lane so that every shift is the same in all lanes; the last pass takes
+    /// the groups left (`pass::<K, false>`).
     ///
     /// # Safety
     /// The CPU has AVX2; `11 <= K <= 32`; `f` is valid for reads of `32 groups` values and `w`
@@ -1028,66 +1112,251 @@ mod pack256 {
             unsafe { whole::<K>(f, w, groups) };
             return;
         }
+        let mut g0 = 0;
+        // SAFETY: every pass reads groups g0..g0 + gn and writes their words, g0 + gn <=
+        // groups (the caller's contract).
+        unsafe {
+            while g0 + 8 <= groups {
+                pass::<K, true>(f.add(32 * g0), w.add(K * g0), 8);
+                g0 += 8;
+            }
+            if g0 < groups {
+                pass::<K, false>(f.add(32 * g0), w.add(K * g0), groups - g0);
+            }
+        }
+    }
+}
+
+/// Whether [`modular_row`] takes the rows of a modular build of `u8` texels into `u32` entries,
+/// one channel, `width` texels per row, `k`-bit fields: with AVX2 (and not AVX-512 VNNI, whose
+/// separate row kernel and packer are faster), `k` in `MIN_PACK_BITS..=32`, at least one pass of
+/// 256 texels, and every row starting on a word (`width k` a multiple of 32). The builder asks
+/// once: its working row is then stored transposed in blocks of 256 (see [`modular_row`]) for
+/// the whole build.
+pub(crate) fn modular_fused<T: Texel, E: Entry, const C: usize>(width: usize, k: u32) -> bool {
+    T::BITS == 8
+        && E::BITS == 32
+        && C == 1
+        && Kernel::best() == Kernel::Avx2
+        && (MIN_PACK_BITS..=32).contains(&k)
+        && width >= MODULAR_PASS
+        && width.checked_mul(k as usize).is_some_and(|b| b % 32 == 0)
+}
+
+/// Texels per pass of [`modular_row`]: 8 groups of 32.
+pub(crate) const MODULAR_PASS: usize = 256;
+
+/// One row of the modular build, fused (AVX2): for the first `p = floor(n / 256)` passes of 256
+/// texels, `acc[x] += r(x)` (wrapping; `r(x)` the row's prefix sum `t_0 + ... + t_x`) and the low
+/// `k` bits of the new `acc[x]` packed into `words` from its bit 0 (field `x` at bit `x k`, as
+/// `layouts::packed::pack_fields`). Returns the texels done (`256 p`) and `r` after them
+/// (wrapping), for the caller to finish the row's tail; `None` (nothing written) unless
+/// [`modular_fused`] holds and the slices are long enough (`acc`: `256 p`, `words`: `8 k p`).
+///
+/// **`acc` is transposed within each pass**: the value of position `256 b + 32 g + i` (group
+/// `g`, field `i`) is kept at index `256 b + 8 i + g`, so that field `i` of the pass's eight
+/// groups is one 8-lane vector. Only this function reads and writes that part of `acc`, and it
+/// is the same for every row of a build ([`modular_fused`] is asked once), so the order is
+/// private to the builder; positions from `256 p` on keep their own order.
+///
+/// Per pass (`modular256::row`): the eight groups' texels loaded (one 32-byte load each), their
+/// totals by `vpsadbw` and an exclusive scan across the lanes (plus the running sum) as each
+/// lane's start; the bytes transposed (24 unpacks) so that field `i` of every group is one
+/// vector; per field one widening, the running add, the add of `acc` (one load, one store) and
+/// the constant shifts of the AVX2 packer (`pack256`); the `k` words of each group transposed
+/// back and stored. It replaces the row kernel's pass, the packer's pass over the row, and the
+/// packer's transposes of the values on their way in.
+pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    acc: &mut [E],
+    words: &mut [u32],
+    k: u32,
+) -> Option<(usize, u32)> {
+    if !modular_fused::<T, E, C>(texels.len(), k) {
+        return None;
+    }
+    let t = as_u8(texels)?;
+    let a = as_u32_mut::<E, C>(acc)?;
+    let passes = t.len() / MODULAR_PASS;
+    let ku = k as usize;
+    if a.len() < passes * MODULAR_PASS || words.len() < passes * 8 * ku {
+        return None;
+    }
+    let (tp, ap, wp) = (t.as_ptr(), a.as_mut_ptr(), words.as_mut_ptr());
+    macro_rules! by_width {
+        ($($k:literal)*) => {
+            match ku {
+                // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2); `t`
+                // holds 256 passes texels, `a` 256 passes values and `words` 8 k passes words
+                // (checked above): what the kernel reads and writes.
+                $($k => unsafe { modular256::row::<$k>(tp, ap, wp, passes) },)*
+                _ => return None,
+            }
+        };
+    }
+    let run = by_width!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32);
+    Some((passes * MODULAR_PASS, run))
+}
+
+/// Puts a working row written by [`modular_row`] back in position order (each full pass of
+/// 256 values from its transposed order).
+pub(crate) fn modular_untranspose<E: Entry>(acc: &mut [E]) {
+    for pass in acc.chunks_exact_mut(MODULAR_PASS) {
+        let mut t = [E::ZERO; MODULAR_PASS];
+        t.copy_from_slice(pass);
+        for (x, v) in pass.iter_mut().enumerate() {
+            // x = 32 g + i is kept at 8 i + g < 256.
+            if let Some(&f) = t.get(8 * (x % 32) + x / 32) {
+                *v = f;
+            }
+        }
+    }
+}
+
+mod modular256 {
+    use super::*;
+
+    /// The lanes' group totals: lane `g` is the sum of the 32 texels of `g[g]` (`vpsadbw`
+    /// against zero gives four partial sums per group, at most 2,040 each; pairs of groups
+    /// joined into 32-bit lanes, then the partial sums added across).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn totals(g: &[__m256i; 8]) -> __m256i {
+        let z = _mm256_setzero_si256();
+        // Lanes [a0 b0 a1 b1 | a2 b2 a3 b3]: the four partial sums of groups 2h (a), 2h + 1 (b).
+        let pair = |h: usize| {
+            _mm256_or_si256(
+                _mm256_sad_epu8(g[2 * h], z),
+                _mm256_slli_epi64::<32>(_mm256_sad_epu8(g[2 * h + 1], z)),
+            )
+        };
+        let (r0, r1, r2, r3) = (pair(0), pair(1), pair(2), pair(3));
+        // [A B C D | A B C D]: partial sums 0 + 1 (low half) and 2 + 3 (high half).
+        let s01 = _mm256_add_epi32(_mm256_unpacklo_epi64(r0, r1), _mm256_unpackhi_epi64(r0, r1));
+        let s23 = _mm256_add_epi32(_mm256_unpacklo_epi64(r2, r3), _mm256_unpackhi_epi64(r2, r3));
+        _mm256_add_epi32(
+            _mm256_permute2x128_si256::<0x20>(s01, s23),
+            _mm256_permute2x128_si256::<0x31>(s01, s23),
+        )
+    }
+
+    /// The eight groups' bytes transposed: 64-bit unit `q` of result `c[2 (i mod 16) / 4 + (i
+    /// mod 4) / 2]`, with `q = (i mod 2) + 2 floor(i / 16)`, holds byte `i` of each group, group
+    /// `g` in byte `g` (unpacks of bytes, 16-bit and 32-bit units, all within 128-bit halves).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn transpose(g: &[__m256i; 8]) -> [__m256i; 8] {
+        // Bytes i = 0..8 (16..24 in the high half) and 8..16 (24..32), groups 2h, 2h + 1.
+        let u = |h: usize| _mm256_unpacklo_epi8(g[2 * h], g[2 * h + 1]);
+        let v = |h: usize| _mm256_unpackhi_epi8(g[2 * h], g[2 * h + 1]);
+        let (u0, u1, u2, u3) = (u(0), u(1), u(2), u(3));
+        let (v0, v1, v2, v3) = (v(0), v(1), v(2), v(3));
+        // 32-bit units: column i, groups 0..4 (a) and 4..8 (b); quads of i.
+        let a = [
+            _mm256_unpacklo_epi16(u0, u1),
+            _mm256_unpackhi_epi16(u0, u1),
+            _mm256_unpacklo_epi16(v0, v1),
+            _mm256_unpackhi_epi16(v0, v1),
+        ];
+        let b = [
+            _mm256_unpacklo_epi16(u2, u3),
+            _mm256_unpackhi_epi16(u2, u3),
+            _mm256_unpacklo_epi16(v2, v3),
+            _mm256_unpackhi_epi16(v2, v3),
+        ];
+        [
+            _mm256_unpacklo_epi32(a[0], b[0]),
+            _mm256_unpackhi_epi32(a[0], b[0]),
+            _mm256_unpacklo_epi32(a[1], b[1]),
+            _mm256_unpackhi_epi32(a[1], b[1]),
+            _mm256_unpacklo_epi32(a[2], b[2]),
+            _mm256_unpackhi_epi32(a[2], b[2]),
+            _mm256_unpacklo_epi32(a[3], b[3]),
+            _mm256_unpackhi_epi32(a[3], b[3]),
+        ]
+    }
+
+    /// Byte `i` (0..32) of every group, widened: lane `g` is texel `32 g + i` (see
+    /// [`transpose`]).
+    #[inline(always)]
+    fn column(c: &[__m256i; 8], i: usize) -> __m256i {
+        let r = i % 16;
+        let reg = c[2 * (r / 4) + (r % 4) / 2];
+        // SAFETY (of the intrinsics): only inlined into AVX2 functions.
+        unsafe {
+            let x = if i < 16 {
+                _mm256_castsi256_si128(reg)
+            } else {
+                _mm256_extracti128_si256::<1>(reg)
+            };
+            let x = if i.is_multiple_of(2) {
+                x
+            } else {
+                _mm_unpackhi_epi64(x, x)
+            };
+            _mm256_cvtepu8_epi32(x)
+        }
+    }
+
+    /// [`modular_row`]'s kernel over `passes` passes of 256 texels; returns the running sum
+    /// after them.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `11 <= K <= 32`; `t` is valid for reads of `256 passes` bytes, `acc`
+    /// for reads and writes of `256 passes` values, `w` for writes of `8 K passes` words, and
+    /// none overlaps another.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn row<const K: usize>(
+        t: *const u8,
+        acc: *mut u32,
+        w: *mut u32,
+        passes: usize,
+    ) -> u32 {
         let m = _mm256_set1_epi32(if K >= 32 {
             -1
         } else {
             ((1u32 << K) - 1) as i32
         });
-        let mut g0 = 0;
-        while g0 < groups {
-            let gn = (groups - g0).min(8);
-            // SAFETY: g0 + min(g, gn - 1) < groups: each row pointer starts a group of 32
-            // readable values (its own or the pass's last), each output pointer a group of K
-            // writable words (used for g < gn only).
-            let (p, q) = unsafe {
-                (
-                    core::array::from_fn::<_, 8, _>(|g| f.add(32 * (g0 + g.min(gn - 1)))),
-                    core::array::from_fn::<_, 8, _>(|g| w.add(K * (g0 + g.min(gn - 1)))),
-                )
-            };
+        let seven = _mm256_set1_epi32(7);
+        let mut carry = _mm256_setzero_si256();
+        for p in 0..passes {
+            // SAFETY: p < passes: the pass's 256 texels, 256 values and 8 K words are inside
+            // the caller's slices.
+            let (tp, ap, wp) = unsafe { (t.add(256 * p), acc.add(256 * p), w.add(8 * K * p)) };
+            // SAFETY: tp[32 g..32 g + 32] is readable for g < 8: unaligned loads.
+            let g: [__m256i; 8] =
+                core::array::from_fn(|h| unsafe { _mm256_loadu_si256(tp.add(32 * h).cast()) });
+            let tot = totals(&g);
+            // Inclusive scan across the 8 lanes: within the halves, then the low half's total
+            // into the high half.
+            let mut x = _mm256_add_epi32(tot, _mm256_slli_si256::<4>(tot));
+            x = _mm256_add_epi32(x, _mm256_slli_si256::<8>(x));
+            let low = _mm256_shuffle_epi32::<0xff>(x);
+            x = _mm256_add_epi32(x, _mm256_permute2x128_si256::<0x08>(low, low));
+            // Each group's start: the running sum and the groups before it.
+            let mut run = _mm256_add_epi32(carry, _mm256_sub_epi32(x, tot));
+            carry = _mm256_add_epi32(carry, _mm256_permutevar8x32_epi32(x, seven));
+            let c = transpose(&g);
             let mut o = [_mm256_setzero_si256(); K];
-            // Field i of every group: its low K bits into word j at bit s (and the bits past
-            // 32 into word j + 1). Written out per field so that j and s are constants.
-            macro_rules! fields {
-                ($at:literal: $($c:literal)*) => {{
-                    // SAFETY: at + 8 <= 32: inside each row's group.
-                    let v = unsafe { load8x8(&p, $at) };
-                    $(
-                        let i: usize = $at + $c;
-                        let (j, s) = (i * K / 32, (i * K % 32) as i32);
-                        let x = _mm256_and_si256(v[$c], m);
-                        o[j] = _mm256_or_si256(o[j], _mm256_sll_epi32(x, _mm_cvtsi32_si128(s)));
-                        if s as usize + K > 32 {
-                            o[j + 1] = _mm256_or_si256(
-                                o[j + 1],
-                                _mm256_srl_epi32(x, _mm_cvtsi32_si128(32 - s)),
-                            );
-                        }
-                    )*
-                }};
+            macro_rules! steps {
+                ($($i:literal)*) => {$(
+                    run = _mm256_add_epi32(run, column(&c, $i));
+                    // SAFETY: 8 i + 8 <= 256: inside the pass's values (unaligned).
+                    let f = unsafe {
+                        let at = ap.add(8 * $i);
+                        let f = _mm256_add_epi32(run, _mm256_loadu_si256(at.cast()));
+                        _mm256_storeu_si256(at.cast(), f);
+                        f
+                    };
+                    pack256::field::<K>(&mut o, $i, f, m);
+                )*};
             }
-            fields!(0: 0 1 2 3 4 5 6 7);
-            fields!(8: 0 1 2 3 4 5 6 7);
-            fields!(16: 0 1 2 3 4 5 6 7);
-            fields!(24: 0 1 2 3 4 5 6 7);
-            // SAFETY: the stores cover q[g][j..j + 8] with j + 8 <= K, or q[g][K - 4..K] /
-            // q[g][K - 8..K] (K >= 11), for g < gn: inside the group's K words.
-            unsafe {
-                let mut j = 0;
-                while j + 8 <= K {
-                    store8x8(&q, gn, j, &o);
-                    j += 8;
-                }
-                if j < K {
-                    if K - j <= 4 {
-                        store8x4(&q, gn, K - 4, &o);
-                    } else {
-                        store8x8(&q, gn, K - 8, &o);
-                    }
-                }
-            }
-            g0 += 8;
+            steps!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+            steps!(16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
+            // SAFETY: wp + K g holds K writable words for g < 8 (the pass's 8 K words).
+            unsafe { pack256::store_words::<K, true>(wp, 8, &o) };
         }
+        _mm256_cvtsi256_si32(carry) as u32
     }
 }
 
@@ -2371,6 +2640,90 @@ mod tests {
             }
         }
         assert!(ran >= 1 && Kernel::Sse2.available());
+    }
+
+    /// `modular256::row` against an independent reference, for every width 11..=32 (a few under
+    /// Miri): per position the running sum of the row's texels (each pass continuing the last)
+    /// added to a dirty working row (transposed as `modular_row` documents), the new values'
+    /// low `k` bits packed field by field with `write_bits`; texels all 255, all 0 and random;
+    /// the words past the passes untouched. Then `modular_untranspose` gives the values in
+    /// position order.
+    #[test]
+    fn modular_row_equals_the_reference() {
+        extern crate std;
+        use std::vec::Vec;
+        if !Kernel::Avx2.available() {
+            return;
+        }
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let passes_list: &[usize] = if cfg!(miri) { &[1] } else { &[1, 3] };
+        for k in MIN_PACK_BITS..=32 {
+            if cfg!(miri) && ![11, 21, 32].contains(&k) {
+                continue;
+            }
+            for &passes in passes_list {
+                for pattern in 0..3 {
+                    let n = passes * MODULAR_PASS;
+                    let t: Vec<u8> = (0..n)
+                        .map(|_| match pattern {
+                            0 => 255,
+                            1 => 0,
+                            _ => rng(&mut seed),
+                        })
+                        .collect();
+                    // Position-order values before the row, near the top of u32 (wrapping).
+                    let before: Vec<u32> = (0..n)
+                        .map(|x| (u32::MAX - 3 * x as u32).wrapping_add(u32::from(rng(&mut seed))))
+                        .collect();
+                    let to_kept = |x: usize| 256 * (x / 256) + 8 * (x % 32) + (x % 256) / 32;
+                    let mut acc = std::vec![0u32; n];
+                    for (x, &v) in before.iter().enumerate() {
+                        acc[to_kept(x)] = v;
+                    }
+                    let ku = k as usize;
+                    let noise: Vec<u32> = (0..8 * ku * passes + 5)
+                        .map(|_| u32::from(rng(&mut seed)) * 0x0101_0101)
+                        .collect();
+                    let mut words = noise.clone();
+                    let run = {
+                        let (tp, ap, wp) = (t.as_ptr(), acc.as_mut_ptr(), words.as_mut_ptr());
+                        macro_rules! by_width {
+                            ($($k:literal)*) => {
+                                match ku {
+                                    // SAFETY: AVX2 is available (checked above); the slices
+                                    // hold 256 passes texels and values and 8 k passes words.
+                                    $($k => unsafe { modular256::row::<$k>(tp, ap, wp, passes) },)*
+                                    _ => unreachable!(),
+                                }
+                            };
+                        }
+                        by_width!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32)
+                    };
+                    let mut want_words = noise.clone();
+                    let mut r = 0u32;
+                    let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+                    let mut want = before.clone();
+                    for x in 0..n {
+                        r = r.wrapping_add(u32::from(t[x]));
+                        want[x] = want[x].wrapping_add(r);
+                        assert!(crate::layouts::packed::write_bits(
+                            &mut want_words,
+                            x as u64 * u64::from(k),
+                            k,
+                            u64::from(want[x] & m)
+                        ));
+                    }
+                    let what = (k, passes, pattern);
+                    assert_eq!(run, r, "{what:?}");
+                    assert_eq!(words, want_words, "{what:?}");
+                    for x in 0..n {
+                        assert_eq!(acc[to_kept(x)], want[x], "{what:?} x {x}");
+                    }
+                    modular_untranspose(&mut acc);
+                    assert_eq!(acc, want, "{what:?}");
+                }
+            }
+        }
     }
 
     /// The detected kernel is available, and so is every narrower one.

@@ -6,7 +6,7 @@
 //! simd_build` (the widest kernel this CPU runs; the core's unit tests run every one).
 
 use proptest::prelude::*;
-use texsat::layouts::{Tiled, TiledSpec};
+use texsat::layouts::{Modular, ModularBuilder, Tiled, TiledSpec};
 use texsat::{Layout, NoCount, RowStreamBuilder, Sat, Texture};
 use texsat_host_tests::RngExt;
 
@@ -238,4 +238,86 @@ fn push_row_into_equals_push_row_and_a_copy() {
         .push_row_into(&t[..w * 3], &mut vec![0u64; w * 3])
         .is_err());
     assert_eq!(a.finish().unwrap(), b.finish().unwrap());
+}
+
+/// Modular builds of widths that take the fused AVX2 row (`simd` on an AVX2 CPU without
+/// AVX-512 VNNI: at least 256 texels, `w k` a multiple of 32; passes of 256 and a tail) and
+/// of widths beside them that do not: every corner against the reference modulo `2^k`, into
+/// dirty words and a dirty working row; texels all 255 and random.
+#[test]
+fn modular_builds_equal_the_reference() {
+    let mut rng = texsat_host_tests::rng(0x3d0d);
+    let cases: &[(usize, &[u32])] = &[
+        (256, &[11, 12, 13, 16, 17, 21, 24, 27, 31, 32]),
+        (288, &[11, 21, 32]),
+        (300, &[16, 24, 32, 21]),
+        (552, &[11, 21, 23]),
+        (255, &[21]),
+        (800, &[21]),
+    ];
+    for &(w, ks) in cases {
+        for &k in ks {
+            for h in [1usize, 6] {
+                let random: Vec<u8> = (0..w * h).map(|_| rng.random_range(0..=255u8)).collect();
+                for t in [vec![255u8; w * h], random] {
+                    let want = reference(&t, w, h);
+                    let texture = Texture::<u8>::new(&t, w, h).unwrap();
+                    let mut words =
+                        vec![0xA5A5_A5A5u32; Modular::<u32>::words_needed(w, h, k).unwrap() + 2];
+                    let mut row = vec![0x5555_5555u32; w];
+                    let m = Modular::<u32>::build(&texture, k, &mut words, &mut row).unwrap();
+                    let low = if k == 32 {
+                        u64::from(u32::MAX)
+                    } else {
+                        (1u64 << k) - 1
+                    };
+                    for y in 1..=h {
+                        for x in 1..=w {
+                            assert_eq!(
+                                u64::from(m.corner(x, y, &mut NoCount)[0]),
+                                want[(y - 1) * w + x - 1] & low,
+                                "k {k}, {w}x{h}, corner ({x}, {y})"
+                            );
+                        }
+                    }
+                    let n = Modular::<u32>::words_needed(w, h, k).unwrap();
+                    assert_eq!(&words[n..], &[0xA5A5_A5A5; 2], "wrote past the table");
+                }
+            }
+        }
+    }
+}
+
+/// A modular build whose rows change texel type part-way (`u8`, then `u16` with the same
+/// values, then `u8`): the fused row takes the `u8` rows until a `u16` row arrives, then the
+/// working row goes back to position order and the portable row takes the rest; the table
+/// equals the reference.
+#[test]
+fn modular_builds_across_texel_types() {
+    let mut rng = texsat_host_tests::rng(0x51de);
+    let (w, h, k) = (512usize, 5usize, 21u32);
+    let t: Vec<u8> = (0..w * h).map(|_| rng.random_range(0..=255u8)).collect();
+    let want = reference(&t, w, h);
+    let mut words = vec![0u32; Modular::<u32>::words_needed(w, h, k).unwrap()];
+    let mut row = vec![7u32; w];
+    let mut b = ModularBuilder::<u32>::new(w, h, 8, k, &mut words, &mut row).unwrap();
+    for y in 0..h {
+        let r = &t[y * w..][..w];
+        if y == 2 {
+            let wide: Vec<u16> = r.iter().map(|&v| u16::from(v)).collect();
+            b.push_row(&wide).unwrap();
+        } else {
+            b.push_row(r).unwrap();
+        }
+    }
+    let m = b.finish().unwrap();
+    for y in 1..=h {
+        for x in 1..=w {
+            assert_eq!(
+                u64::from(m.corner(x, y, &mut NoCount)[0]),
+                want[(y - 1) * w + x - 1] & ((1 << k) - 1),
+                "corner ({x}, {y})"
+            );
+        }
+    }
 }

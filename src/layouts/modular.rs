@@ -376,6 +376,10 @@ pub struct ModularBuilder<'a, 's, E: Entry, const C: usize = 1> {
     k: u32,
     sizes: Sizes,
     rows_done: usize,
+    /// Whether the rows so far went through `simd::modular_row` (decided at the first row), so
+    /// that `row` holds that function's transposed order.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    fused: bool,
 }
 
 impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
@@ -413,6 +417,8 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             k,
             sizes,
             rows_done: 0,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            fused: false,
         })
     }
 
@@ -451,6 +457,17 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
                 }
             }
         }
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        if self.fused_row(texels, offset)? {
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "rows_done < height (checked above)"
+            )]
+            {
+                self.rows_done += 1;
+            }
+            return Ok(());
+        }
         // The row of the table modulo 2^E::BITS (wrapping additions: only the low k bits are
         // kept, and those of a sum depend only on the low k bits of its terms); the same
         // vectorized row as the flat build where it applies (`simd`).
@@ -470,6 +487,54 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             self.rows_done += 1;
         }
         Ok(())
+    }
+
+    /// The row through `simd::modular_row` (AVX2: the prefix sums, the working row and the
+    /// packing in one pass per 256 texels), its tail as the portable row; `Ok(false)` (nothing
+    /// written) where that path does not apply. Decided at the first row for the whole build,
+    /// since the fused path keeps the working row in its own order; a later row it declines
+    /// (another texel type) puts the working row back in order first.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    fn fused_row<T: Texel>(&mut self, texels: &[T], offset: u64) -> Result<bool, Error> {
+        if self.rows_done == 0 {
+            self.fused = crate::simd::modular_fused::<T, E, C>(self.width, self.k);
+        }
+        if !self.fused {
+            return Ok(false);
+        }
+        // `modular_fused`: width k is a multiple of 32, so every row starts on a word.
+        let first = usize::try_from(offset.checked_div(u64::from(WORD_BITS)).unwrap_or(0))
+            .unwrap_or(usize::MAX);
+        let fused = self
+            .words
+            .get_mut(first..)
+            .and_then(|w| crate::simd::modular_row::<T, E, C>(texels, self.row, w, self.k));
+        let Some((done, run)) = fused else {
+            crate::simd::modular_untranspose(self.row);
+            self.fused = false;
+            return Ok(false);
+        };
+        // The tail after the last pass: the portable row, started at the passes' running sum.
+        let tail = self.row.get_mut(done..).unwrap_or(&mut []);
+        super::tiled::add_prefix_row::<T, E, C>(texels.get(done..).unwrap_or(&[]), tail);
+        let r = E::from_u64_truncating(u64::from(run));
+        for v in tail.iter_mut() {
+            *v = v.wrapping_add(r);
+        }
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "done <= width fields of k bits fit the storage (checked by the caller): \
+                      no wrap; usize -> u64 is lossless"
+        )]
+        let at = offset + done as u64 * u64::from(self.k);
+        if !pack_fields(self.words, at, tail, self.k) {
+            return Err(Error::StorageTooSmall {
+                needed: self.sizes.words,
+                got: self.words.len(),
+            });
+        }
+        Ok(true)
     }
 
     /// The sizes the writes use (tests: to make a write fail).
