@@ -20,15 +20,18 @@
 //! [`pack_u32`]: the packing of `u32` fields of 11 to 32 bits into 32-bit words that the
 //! modular and tiled builders do per row (the portable packer, width-specialized scalar code,
 //! costs about a cycle per field; the AVX2 kernel, eight groups of 32 fields transposed into
-//! lanes, about a third to a half of it). The kernel is the widest this CPU runs, detected
+//! lanes, about a third to a half of it); and, with AVX2 only, [`modular_row`]: the modular
+//! builder's whole row (prefix sums, working row and packing) in one pass per 256 texels, the
+//! working row kept transposed. The kernel is the widest this CPU runs, detected
 //! once at run time from CPUID and XGETBV (no `std` needed), as OpenCV and the standard
 //! library's `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
 //! * AVX-512 VNNI (`avx512f` + `avx512vnni`): the 16 prefix sums of a block are four `vpdpbusd`
 //!   dot products of a broadcast group of 4 texels with a constant triangle of 0/1 weights,
 //!   straight into 32-bit lanes: no shifts, no widening.
-//! * AVX2: texels widened to 16-bit lanes, prefix by three shift-and-adds per 128-bit half plus
-//!   one cross-half add, widened to 32 bits.
+//! * AVX2: the same dot products, per 8 texels: two broadcast groups of 4 texels times 0/1
+//!   weights by `vpmaddubsw` (16-bit pairs), added, then `vpmaddwd` with ones (32-bit lanes);
+//!   only the two 8-lane totals take a lane-crossing permute.
 //! * SSE2 (every x86-64): the same in two 8-lane halves.
 //!
 //! Why 16-bit lanes suffice for the in-block prefix: 16 texels of at most 255 sum to at most
@@ -50,6 +53,11 @@
 //!    at a time, then the group's last 4 or 8 words, some of them a second time with the same
 //!    value) for `g < groups` only; the AVX2 kernel's last pass of fewer than 8 groups reads
 //!    its last group again for the missing lanes and stores the groups it has only.
+//!    [`modular_row`] checks `acc.len() >= 256 p` and `words.len() >= 8 k p` (`p` passes of
+//!    256 texels, `p = floor(texels.len() / 256)`) before its kernel reads `texels[256 b..][..256]`
+//!    and reads and writes `acc[256 b..][..256]` (one 8-lane load and store per field) and
+//!    writes `words[8 k b..][..8 k]` (the packer's stores of each group's `k` words) for `b <
+//!    p` only.
 //!    [`tiled_row`] checks its slices' lengths against the row (`acc`, `lower`: `n`; `bnd`:
 //!    `n / tile`; `local`: `n - n / tile`) before its kernel touches block `b` (16 texels) of
 //!    `t`, `acc` and `lower` for `b < n / 16` only; the boundary and local-sum stores stay inside
