@@ -713,19 +713,16 @@ unsafe fn pack_u32_with<E: Entry>(
         return 0;
     }
     if kernel == Kernel::Avx2 {
-        macro_rules! by_width {
-            ($($k:literal)*) => {
-                match ku {
-                    // SAFETY: AVX2 is available (the caller's contract: `Kernel::Avx2` runs on
-                    // this CPU); `f` holds at least 32 groups values and `words` at least
-                    // groups k words (above); the kernel reads f[0..32 groups] and writes
-                    // words[0..groups k] only.
-                    $($k => unsafe { pack256::pack::<$k>(f.as_ptr(), words.as_mut_ptr(), groups) },)*
-                    _ => return 0,
-                }
-            };
-        }
-        by_width!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32);
+        // SAFETY: AVX2 is available (the caller's contract: `Kernel::Avx2` runs on this CPU);
+        // `f` holds at least 32 groups values and `words` at least groups k words (above); the
+        // kernel reads f[0..32 groups] and writes words[0..groups k] only.
+        unsafe {
+            by_pack_width!(
+                ku,
+                pack256::pack(f.as_ptr(), words.as_mut_ptr(), groups),
+                return 0
+            )
+        };
         return groups * 32;
     }
     // idx[t][j], cnt[t][j]: the field (0..32 in the group) and the shift of term t of word j.
@@ -739,6 +736,23 @@ unsafe fn pack_u32_with<E: Entry>(
     unsafe { pack512::pack(f.as_ptr(), words.as_mut_ptr(), groups, k, table) };
     groups * 32
 }
+
+/// `module::function::<K>(args)` for the field width `k` (`MIN_PACK_BITS..=32`: each width is
+/// its own instantiation, every shift a constant), `none` for any other width. Expands to the
+/// call only: the caller's `unsafe` block and safety argument cover it.
+macro_rules! by_pack_width {
+    ($k:expr, $m:ident::$f:ident($($arg:expr),*), $none:expr) => {
+        by_pack_width!(@ $k, $m, $f, ($($arg),*), $none;
+            11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32)
+    };
+    (@ $k:expr, $m:ident, $f:ident, $args:tt, $none:expr; $($w:literal)*) => {
+        match $k {
+            $($w => $m::$f::<$w> $args,)*
+            _ => $none,
+        }
+    };
+}
+use by_pack_width;
 
 /// The narrowest field [`pack_u32`] packs: from 11 bits on, a word holds parts of at most four
 /// fields.
@@ -1191,19 +1205,16 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
         return None;
     }
     let (tp, ap, wp) = (t.as_ptr(), a.as_mut_ptr(), words.as_mut_ptr());
-    macro_rules! by_width {
-        ($($k:literal)*) => {
-            match ku {
-                // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2); `t`
-                // holds 256 passes texels, `a` 256 passes values and `words` 8 k passes words
-                // (checked above): what the kernel reads and writes.
-                $($k => unsafe { modular256::row::<$k>(tp, ap, wp, passes) },)*
-                _ => return None,
-            }
-        };
-    }
-    let run = by_width!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32);
+    // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2); `t` holds 256
+    // passes texels, `a` 256 passes values and `words` 8 k passes words (checked above): what
+    // the kernel reads and writes.
+    let run = unsafe { by_pack_width!(ku, modular256::row(tp, ap, wp, passes), return None) };
     Some((passes * MODULAR_PASS, run))
+}
+
+/// Where [`modular_row`] keeps position `x = 32 g + i` of a pass (`x < 256`): at `8 i + g`.
+const fn kept_at(x: usize) -> usize {
+    8 * (x % 32) + x / 32
 }
 
 /// Puts a working row written by [`modular_row`] back in position order (each full pass of
@@ -1213,8 +1224,7 @@ pub(crate) fn modular_untranspose<E: Entry>(acc: &mut [E]) {
         let mut t = [E::ZERO; MODULAR_PASS];
         t.copy_from_slice(pass);
         for (x, v) in pass.iter_mut().enumerate() {
-            // x = 32 g + i is kept at 8 i + g < 256.
-            if let Some(&f) = t.get(8 * (x % 32) + x / 32) {
+            if let Some(&f) = t.get(kept_at(x)) {
                 *v = f;
             }
         }
@@ -2683,7 +2693,7 @@ mod tests {
                     let before: Vec<u32> = (0..n)
                         .map(|x| (u32::MAX - 3 * x as u32).wrapping_add(u32::from(rng(&mut seed))))
                         .collect();
-                    let to_kept = |x: usize| 256 * (x / 256) + 8 * (x % 32) + (x % 256) / 32;
+                    let to_kept = |x: usize| 256 * (x / 256) + kept_at(x % 256);
                     let mut acc = std::vec![0u32; n];
                     for (x, &v) in before.iter().enumerate() {
                         acc[to_kept(x)] = v;
@@ -2695,17 +2705,11 @@ mod tests {
                     let mut words = noise.clone();
                     let run = {
                         let (tp, ap, wp) = (t.as_ptr(), acc.as_mut_ptr(), words.as_mut_ptr());
-                        macro_rules! by_width {
-                            ($($k:literal)*) => {
-                                match ku {
-                                    // SAFETY: AVX2 is available (checked above); the slices
-                                    // hold 256 passes texels and values and 8 k passes words.
-                                    $($k => unsafe { modular256::row::<$k>(tp, ap, wp, passes) },)*
-                                    _ => unreachable!(),
-                                }
-                            };
+                        // SAFETY: AVX2 is available (checked above); the slices hold 256
+                        // passes texels and values and 8 k passes words.
+                        unsafe {
+                            by_pack_width!(ku, modular256::row(tp, ap, wp, passes), unreachable!())
                         }
-                        by_width!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32)
                     };
                     let mut want_words = noise.clone();
                     let mut r = 0u32;
