@@ -1087,6 +1087,77 @@ mod pack256 {
         }
     }
 
+    /// The packer for the even widths `K` = 12 and 14 (the tiled layouts' 14-bit local sums of
+    /// 8 x 8 tiles of 8-bit texels), 16 fields, `2 K` bytes, at a time in order, instead of
+    /// the transposing passes: each field masked to its low `K` bits and narrowed to 16 bits
+    /// (`vpackusdw`, no saturation, the quarters put back in order by `vpermq`); pairs joined
+    /// by `vpmaddwd` with weights `(1, 2^K)` (`f_0 + 2^K f_1 < 2^{2K} <= 2^28`); pairs of pairs
+    /// in each 64-bit lane by a shift (`P_0 + 2^{2K} P_1`, the `4 K / 8 = K / 2` bytes of 4
+    /// fields); the `K / 2` bytes of each 64-bit lane moved together (`vpshufb`, per 128-bit
+    /// half: `K` bytes) and stored as two 16-byte stores `K` bytes apart. A store's bytes past
+    /// its `K` are the next fields', rewritten by the next store in order; the last 16 fields
+    /// go through a buffer, so nothing past `groups K` words is written. About one
+    /// instruction per field (the passes below: four).
+    ///
+    /// # Safety
+    /// As [`pack`], with `K` = 12 or 14.
+    #[target_feature(enable = "avx2")]
+    unsafe fn even<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
+        let m = _mm256_set1_epi32((1 << K) - 1);
+        let weights = _mm256_set1_epi32(((1 << K) << 16 | 1) as i32);
+        let shift = _mm_cvtsi32_si128(32 - 2 * K as i32);
+        let zero = _mm256_setzero_si256();
+        // Byte j < K of each 128-bit half: byte j mod (K / 2) of its 64-bit lane j / (K / 2).
+        let mut idx = [-128i8; 32];
+        for (j, ix) in idx.iter_mut().enumerate() {
+            let j = j % 16;
+            if j < K {
+                *ix = (8 * (j / (K / 2)) + j % (K / 2)) as i8;
+            }
+        }
+        // SAFETY: 32 bytes: one unaligned load.
+        let squeeze = unsafe { _mm256_loadu_si256(idx.as_ptr().cast()) };
+        let out = w.cast::<u8>();
+        let steps = 2 * groups;
+        for s in 0..steps {
+            // SAFETY: 16 s + 16 <= 32 groups: f[16 s..16 s + 16] readable (the caller's
+            // contract).
+            let (a, b) = unsafe {
+                (
+                    _mm256_and_si256(_mm256_loadu_si256(f.add(16 * s).cast()), m),
+                    _mm256_and_si256(_mm256_loadu_si256(f.add(16 * s + 8).cast()), m),
+                )
+            };
+            let p = _mm256_permute4x64_epi64::<0xd8>(_mm256_packus_epi32(a, b));
+            let d = _mm256_madd_epi16(p, weights);
+            // Per 64-bit lane: P_0 (low half) + P_1 (high half) shifted down to bit 2 K.
+            let q = _mm256_or_si256(
+                _mm256_blend_epi32::<0xaa>(d, zero),
+                _mm256_srl_epi64(_mm256_blend_epi32::<0x55>(d, zero), shift),
+            );
+            let v = _mm256_shuffle_epi8(q, squeeze);
+            let (lo, hi) = (
+                _mm256_castsi256_si128(v),
+                _mm256_extracti128_si256::<1>(v),
+            );
+            let at = 2 * K * s;
+            // SAFETY: before the last step, the stores end at byte at + K + 16 <= 2 K (s + 1)
+            // + 2 K (K >= 8), inside the 4 K groups bytes of `w`; the last step's 2 K bytes
+            // are the last ones of `w[..groups K]` (the caller's contract).
+            unsafe {
+                if s + 1 < steps {
+                    _mm_storeu_si128(out.add(at).cast(), lo);
+                    _mm_storeu_si128(out.add(at + K).cast(), hi);
+                } else {
+                    let mut buf = [0u8; 32];
+                    _mm_storeu_si128(buf.as_mut_ptr().cast(), lo);
+                    _mm_storeu_si128(buf.as_mut_ptr().add(K).cast(), hi);
+                    core::ptr::copy_nonoverlapping(buf.as_ptr(), out.add(at), 2 * K);
+                }
+            }
+        }
+    }
+
     /// One pass: the `gn` groups (all 8 if `FULL`) of 32 fields from `f` (group `g` at `f + 32
     /// g`) into `K` words each at `w` (group `g` at `w + K g`). The lanes past `gn` repeat the
     /// last group, and are not stored.
@@ -1132,6 +1203,11 @@ mod pack256 {
         if K == 16 || K == 32 {
             // SAFETY: forwarded (the caller's contract).
             unsafe { whole::<K>(f, w, groups) };
+            return;
+        }
+        if K == 12 || K == 14 {
+            // SAFETY: forwarded (the caller's contract), K is 12 or 14.
+            unsafe { even::<K>(f, w, groups) };
             return;
         }
         let mut g0 = 0;
