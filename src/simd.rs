@@ -1087,24 +1087,31 @@ mod pack256 {
         }
     }
 
-    /// The packer for the even widths `K` = 12 and 14 (the tiled layouts' 14-bit local sums of
-    /// 8 x 8 tiles of 8-bit texels), 16 fields, `2 K` bytes, at a time in order, instead of
-    /// the transposing passes: each field masked to its low `K` bits and narrowed to 16 bits
-    /// (`vpackusdw`, no saturation, the quarters put back in order by `vpermq`); pairs joined
-    /// by `vpmaddwd` with weights `(1, 2^K)` (`f_0 + 2^K f_1 < 2^{2K} <= 2^28`); pairs of pairs
-    /// in each 64-bit lane by a shift (`P_0 + 2^{2K} P_1`, the `4 K / 8 = K / 2` bytes of 4
-    /// fields); the `K / 2` bytes of each 64-bit lane moved together (`vpshufb`, per 128-bit
-    /// half: `K` bytes) and stored as two 16-byte stores `K` bytes apart. A store's bytes past
-    /// its `K` are the next fields', rewritten by the next store in order; the last 16 fields
-    /// go through a buffer, so nothing past `groups K` words is written. About one
-    /// instruction per field (the passes below: four).
+    /// The packer for the even widths `K` = 8, 10, 12 and 14 (the tiled layouts' 14-bit local
+    /// sums of 8 x 8 tiles of 8-bit texels), `steps` steps of 16 fields, `2 K` bytes each, in
+    /// order, instead of the transposing passes: 16 fields as 16-bit lanes, each masked to its
+    /// low `K` bits (from `u32` values, `NARROW = false`: narrowed by `vpackusdw`, no
+    /// saturation after the mask, the quarters put back in order by `vpermq`; from `u16`
+    /// values, `NARROW`: one load); pairs joined by `vpmaddwd` with weights `(1, 2^K)` (`f_0 +
+    /// 2^K f_1 < 2^{2K} <= 2^28`); pairs of pairs in each 64-bit lane by a shift (`P_0 +
+    /// 2^{2K} P_1`, the `4 K / 8 = K / 2` bytes of 4 fields); the `K / 2` bytes of each 64-bit
+    /// lane moved together (`vpshufb`, per 128-bit half: `K` bytes) and stored as two 16-byte
+    /// stores `K` bytes apart. A store's bytes past its `K` are the next fields', rewritten by
+    /// the next store in order; the last step goes through a buffer, so nothing past `2 K
+    /// steps` bytes is written. About one instruction per field (the passes below: four).
     ///
     /// # Safety
-    /// As [`pack`], with `K` = 12 or 14.
+    /// The CPU has AVX2; `K` is 8, 10, 12 or 14; `f` is valid for reads of `16 steps` values
+    /// (`u16` if `NARROW`, else `u32`) and `out` for writes of `2 K steps` bytes.
     #[target_feature(enable = "avx2")]
-    unsafe fn even<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
-        let m = _mm256_set1_epi32((1 << K) - 1);
-        let weights = _mm256_set1_epi32(((1 << K) << 16 | 1) as i32);
+    pub(super) unsafe fn even<const K: usize, const NARROW: bool>(
+        f: *const u8,
+        out: *mut u8,
+        steps: usize,
+    ) {
+        let m32 = _mm256_set1_epi32((1 << K) - 1);
+        let m16 = _mm256_set1_epi16((1 << K) - 1);
+        let weights = _mm256_set1_epi32((1 << K) << 16 | 1);
         let shift = _mm_cvtsi32_si128(32 - 2 * K as i32);
         let zero = _mm256_setzero_si256();
         // Byte j < K of each 128-bit half: byte j mod (K / 2) of its 64-bit lane j / (K / 2).
@@ -1117,18 +1124,17 @@ mod pack256 {
         }
         // SAFETY: 32 bytes: one unaligned load.
         let squeeze = unsafe { _mm256_loadu_si256(idx.as_ptr().cast()) };
-        let out = w.cast::<u8>();
-        let steps = 2 * groups;
         for s in 0..steps {
-            // SAFETY: 16 s + 16 <= 32 groups: f[16 s..16 s + 16] readable (the caller's
-            // contract).
-            let (a, b) = unsafe {
-                (
-                    _mm256_and_si256(_mm256_loadu_si256(f.add(16 * s).cast()), m),
-                    _mm256_and_si256(_mm256_loadu_si256(f.add(16 * s + 8).cast()), m),
-                )
+            // SAFETY: step s reads values 16 s..16 s + 16 < 16 steps (the caller's contract).
+            let p = unsafe {
+                if NARROW {
+                    _mm256_and_si256(_mm256_loadu_si256(f.add(32 * s).cast()), m16)
+                } else {
+                    let a = _mm256_and_si256(_mm256_loadu_si256(f.add(64 * s).cast()), m32);
+                    let b = _mm256_and_si256(_mm256_loadu_si256(f.add(64 * s + 32).cast()), m32);
+                    _mm256_permute4x64_epi64::<0xd8>(_mm256_packus_epi32(a, b))
+                }
             };
-            let p = _mm256_permute4x64_epi64::<0xd8>(_mm256_packus_epi32(a, b));
             let d = _mm256_madd_epi16(p, weights);
             // Per 64-bit lane: P_0 (low half) + P_1 (high half) shifted down to bit 2 K.
             let q = _mm256_or_si256(
@@ -1136,14 +1142,11 @@ mod pack256 {
                 _mm256_srl_epi64(_mm256_blend_epi32::<0x55>(d, zero), shift),
             );
             let v = _mm256_shuffle_epi8(q, squeeze);
-            let (lo, hi) = (
-                _mm256_castsi256_si128(v),
-                _mm256_extracti128_si256::<1>(v),
-            );
+            let (lo, hi) = (_mm256_castsi256_si128(v), _mm256_extracti128_si256::<1>(v));
             let at = 2 * K * s;
             // SAFETY: before the last step, the stores end at byte at + K + 16 <= 2 K (s + 1)
-            // + 2 K (K >= 8), inside the 4 K groups bytes of `w`; the last step's 2 K bytes
-            // are the last ones of `w[..groups K]` (the caller's contract).
+            // + 2 K (K >= 8), inside the 2 K steps bytes of `out`; the last step's 2 K bytes
+            // are the last ones (the caller's contract).
             unsafe {
                 if s + 1 < steps {
                     _mm_storeu_si128(out.add(at).cast(), lo);
@@ -1206,8 +1209,9 @@ mod pack256 {
             return;
         }
         if K == 12 || K == 14 {
-            // SAFETY: forwarded (the caller's contract), K is 12 or 14.
-            unsafe { even::<K>(f, w, groups) };
+            // SAFETY: forwarded (the caller's contract: 32 groups values, 4 K groups bytes),
+            // K is 12 or 14.
+            unsafe { even::<K, false>(f.cast(), w.cast(), 2 * groups) };
             return;
         }
         let mut g0 = 0;
@@ -2187,6 +2191,287 @@ mod tiled256 {
     }
 }
 
+/// Whether the band rows ([`band_row`], [`band_flush`]) can take a tiled build's rows that end
+/// no tile row, entries `E`, `C` channels (with texels of [`band_types`]): `u32` entries, one
+/// channel; with AVX2 and not AVX-512 VNNI (whose row kernel packs in its pass); tiles 8
+/// texels wide (`tile`), the local sums' field width `k` at most 16 (the width proof of a
+/// layout without a modulus, which the caller checks: the sums over a tile row inside a tile,
+/// so the column sums and their prefix within a tile, fit 16 bits); a row of at least one
+/// block of 16 texels.
+pub(crate) fn band_applies<E: Entry, const C: usize>(width: usize, tile: u32, k: u32) -> bool {
+    E::BITS == 32
+        && C == 1
+        && Kernel::best() == Kernel::Avx2
+        && tile == 8
+        && k <= 16
+        && width >= BLOCK
+}
+
+/// The types [`band_row`] takes: `u8` texels, `u32` entries, one channel.
+pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
+    T::BITS == 8 && E::BITS == 32 && C == 1
+}
+
+/// The tiled builder's row step for a row that ends no tile row (`q = 0`), tiles of 8 texels,
+/// in the band form: instead of the level-0 accumulator (per position its local sum or, at a
+/// tile boundary, its total over the tile row's rows so far, 32 bits), the row `acc0` holds
+/// the *column sums* of the tile row's rows so far, 16 bits each, in the upper half of its
+/// storage (`u16` index `n + i` for column `i`; the lower half unused). The accumulator is a
+/// function of them: the local sum at `x` is the prefix of the column sums inside its tile,
+/// and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
+/// added to the column sums (one 16-bit add), their prefix inside each tile (three shifts and
+/// adds within each 128-bit half, which holds one tile), the 14 local sums stored as 16-bit
+/// values, the two tiles' totals extracted into the running boundary sum. Then the local sums
+/// packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and
+/// 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16), the rest widened into
+/// `local`. The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form
+/// and no level below: `(kb, kl, kp)` as there. Column sums and local sums fit 16 bits by
+/// [`band_applies`]'s conditions; the 16-bit additions wrap only past them. `None` (nothing
+/// written) for other types, without AVX2, or short slices.
+pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    acc0: &mut [E],
+    bnd: &mut [E],
+    local: &mut [E],
+    ahead: Ahead,
+    pack: Option<PackTo<'_>>,
+) -> Option<(usize, usize, usize)> {
+    if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
+        return None;
+    }
+    let t = as_u8(texels)?;
+    let acc0 = as_u32_mut::<E, C>(acc0)?;
+    let bnd = as_u32_mut::<E, C>(bnd)?;
+    let local = as_u32_mut::<E, C>(local)?;
+    let n = t.len();
+    let (nb, nl, blocks) = (n / 8, n - n / 8, n / BLOCK);
+    // The 16-bit local sums go to local's storage (2 per word): 14 blocks + 1 (the last
+    // block's overhang) and the tail's, at most 2 nl.
+    if acc0.len() != n
+        || bnd.len() < nb
+        || local.len() < nl
+        || (blocks > 0 && 14 * blocks + 1 > 2 * nl)
+    {
+        return None;
+    }
+    let base = local.as_mut_ptr();
+    let loc = base.cast::<u16>();
+    let cs = acc0.as_mut_ptr().cast::<u16>().wrapping_add(n);
+    let bp = bnd.as_mut_ptr();
+    // SAFETY: AVX2 is available (Kernel::best is AVX2 or AVX-512 VNNI, whose detection
+    // includes it); the kernel reads t[..16 blocks], reads and writes the column sums
+    // cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage), writes loc[..14 blocks
+    // + 1] (inside local's 2 nl u16, checked above) and bnd[..2 blocks] (<= nb); distinct
+    // slices.
+    let mut run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
+    // The tail, column by column (it starts on a tile boundary).
+    let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
+    let mut inner = 0u32;
+    for (i, &x) in t.iter().enumerate().skip(BLOCK * blocks) {
+        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0; kl < nl <= 2 nl u16 of local's
+        // storage; kb < nb.
+        unsafe {
+            let c = cs.add(i).read().wrapping_add(u16::from(x));
+            cs.add(i).write(c);
+            inner = inner.wrapping_add(u32::from(c));
+            if (i + 1) % 8 == 0 {
+                run = run.wrapping_add(inner);
+                bp.add(kb).write(run);
+                kb += 1;
+                inner = 0;
+            } else {
+                loc.add(kl).write(inner as u16);
+                kl += 1;
+            }
+        }
+    }
+    // The whole steps of 16 local sums packed from 16 bits, when the row starts on a byte.
+    let mut kp = 0;
+    if let Some(PackTo { words, bit, k, .. }) = pack {
+        let steps = kl / 16;
+        let ku = k as usize;
+        if matches!(k, 8 | 10 | 12 | 14)
+            && bit % 8 == 0
+            && bit < 32
+            && steps > 0
+            && bit as usize / 8 + 2 * ku * steps <= 4 * words.len()
+        {
+            let out = words
+                .as_mut_ptr()
+                .cast::<u8>()
+                .wrapping_add(bit as usize / 8);
+            // SAFETY: AVX2 (above); loc[..16 steps] readable (16 steps <= kl, written above);
+            // out[..2 k steps] inside words (checked above), not local's storage.
+            unsafe {
+                match k {
+                    8 => pack256::even::<8, true>(loc.cast(), out, steps),
+                    10 => pack256::even::<10, true>(loc.cast(), out, steps),
+                    12 => pack256::even::<12, true>(loc.cast(), out, steps),
+                    _ => pack256::even::<14, true>(loc.cast(), out, steps),
+                }
+            }
+            kp = 16 * steps;
+        }
+    }
+    // The rest widened to 32 bits in place, last first: word j holds u16 2 j and 2 j + 1, at
+    // least j, already read.
+    for j in (kp..kl).rev() {
+        // SAFETY: j < kl <= nl: u16 j and word j inside local's storage.
+        unsafe { base.add(j).write(u32::from(loc.add(j).read())) };
+    }
+    Some((kb, kl, kp))
+}
+
+/// Turns [`band_row`]'s column sums in `acc0` (`n` positions) back into the level-0
+/// accumulator (the local sums and boundaries of the column sums, `u32`), in place, before a
+/// row that ends a tile row (which adds it into the level above and clears it) or a row that
+/// leaves the band form. Forward: word `i` holds `u16` `2 i` and `2 i + 1`, that is column
+/// sums `2 i - n` and `2 i + 1 - n`, at most `i`: read already (a block of 16 reads its 16
+/// before it writes). With AVX2 per 16 columns ([`band256::flush`]), the rest column by
+/// column. `false` (nothing done) for entries other than `u32` with one channel.
+pub(crate) fn band_flush<E: Entry, const C: usize>(acc0: &mut [E]) -> bool {
+    let Some(a) = as_u32_mut::<E, C>(acc0) else {
+        return false;
+    };
+    let n = a.len();
+    let base = a.as_mut_ptr();
+    let cs = base.cast::<u16>().wrapping_add(n);
+    let blocks = if matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
+        n / BLOCK
+    } else {
+        0
+    };
+    // SAFETY: AVX2 is available when blocks > 0 (as in band_row); the kernel reads column
+    // sums cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n) and writes base[..16 blocks] (<= n),
+    // each block's reads before its writes, which reach only column sums read already.
+    let mut run = if blocks > 0 {
+        unsafe { band256::flush(base, cs, blocks) }
+    } else {
+        0
+    };
+    let mut inner = 0u32;
+    for i in BLOCK * blocks..n {
+        // SAFETY: i < n: u16 n + i < 2 n and word i inside the storage; the word written
+        // holds column sums at most i, read already.
+        unsafe {
+            inner = inner.wrapping_add(u32::from(cs.add(i).read()));
+            let v = if (i + 1) % 8 == 0 {
+                run = run.wrapping_add(inner);
+                inner = 0;
+                run
+            } else {
+                inner
+            };
+            base.add(i).write(v);
+        }
+    }
+    true
+}
+
+mod band256 {
+    use super::*;
+
+    /// The prefix sums of each 128-bit half's eight 16-bit lanes (one tile of 8 columns):
+    /// three shifts within the halves and adds, wrapping.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn prefix8(c: __m256i) -> __m256i {
+        let p = _mm256_add_epi16(c, _mm256_slli_si256::<2>(c));
+        let p = _mm256_add_epi16(p, _mm256_slli_si256::<4>(p));
+        _mm256_add_epi16(p, _mm256_slli_si256::<8>(p))
+    }
+
+    /// [`band_row`]'s kernel over `blocks` blocks of 16 columns; returns the running boundary
+    /// sum after them. Per block: 16 texels widened (`vpmovzxbw`) and added to the column
+    /// sums `cs`, stored back; their prefix within each tile; the two tiles' local sums
+    /// stored as 16-bit values, 7 apart (the second store overwrites the first's lane 7, the
+    /// tile's total; its own lane 7 is the next block's first, or one past the last block's);
+    /// the totals (lanes 7 and 15) added to the running sum, each sum after a tile stored as a
+    /// boundary. The lines of `ahead` asked for as in [`tiled256::kernel`].
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `t` valid for reads of `16 blocks` bytes, `cs` for reads and writes
+    /// of `16 blocks` `u16`, `loc` for writes of `14 blocks + 1` `u16`, `bnd` for writes of `2
+    /// blocks` `u32`; not overlapping.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn row(
+        t: *const u8,
+        cs: *mut u16,
+        loc: *mut u16,
+        bnd: *mut u32,
+        blocks: usize,
+        ahead: Ahead,
+    ) -> u32 {
+        const GROUP: usize = 8;
+        let mut prefetch = Prefetch::new(ahead, blocks);
+        let mut run = 0u32;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
+            prefetch.ask(end);
+            for b in from..end {
+                let i = BLOCK * b;
+                // SAFETY: i + 16 <= 16 blocks: t[i..i + 16] and cs[i..i + 16]; the local
+                // stores write loc[14 b..14 b + 15] (<= 14 blocks + 1), the boundaries bnd[2
+                // b], bnd[2 b + 1] (< 2 blocks): the caller's contract.
+                unsafe {
+                    let x = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+                    let c = _mm256_add_epi16(x, _mm256_loadu_si256(cs.add(i).cast()));
+                    _mm256_storeu_si256(cs.add(i).cast(), c);
+                    let p = prefix8(c);
+                    let (lo, hi) = (_mm256_castsi256_si128(p), _mm256_extracti128_si256::<1>(p));
+                    _mm_storeu_si128(loc.add(14 * b).cast(), lo);
+                    _mm_storeu_si128(loc.add(14 * b + 7).cast(), hi);
+                    let ta = _mm_extract_epi16::<7>(lo) as u32;
+                    let tb = _mm_extract_epi16::<7>(hi) as u32;
+                    let first = run.wrapping_add(ta);
+                    run = run.wrapping_add(ta.wrapping_add(tb));
+                    bnd.add(2 * b).write_unaligned(first);
+                    bnd.add(2 * b + 1).write_unaligned(run);
+                }
+            }
+            from = end;
+        }
+        run
+    }
+
+    /// [`band_flush`]'s kernel over `blocks` blocks of 16 columns; returns the running
+    /// boundary sum after them. Per block: the column sums' prefix within each tile, widened
+    /// to 32 bits, the boundary lanes (7 of each half) given the running sum (and the second
+    /// the first tile's total) as in [`tiled256::kernel`], stored over the block's words.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `cs` valid for reads of `16 blocks` `u16`, `out` for writes of `16
+    /// blocks` words; block `b`'s words (bytes `64 b..64 b + 64` from `out`) overlap no column
+    /// sum of a later block.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn flush(out: *mut u32, cs: *const u16, blocks: usize) -> u32 {
+        let seven = _mm256_set1_epi32(7);
+        let mut carry = _mm256_setzero_si256();
+        for b in 0..blocks {
+            let i = BLOCK * b;
+            // SAFETY: i + 16 <= 16 blocks: inside both (the caller's contract); the load
+            // before the stores.
+            unsafe {
+                let p = prefix8(_mm256_loadu_si256(cs.add(i).cast()));
+                let lo = _mm256_cvtepu16_epi32(_mm256_castsi256_si128(p));
+                let hi = _mm256_cvtepu16_epi32(_mm256_extracti128_si256::<1>(p));
+                let t0 = _mm256_permutevar8x32_epi32(lo, seven);
+                let t1 = _mm256_permutevar8x32_epi32(hi, seven);
+                let a = _mm256_blend_epi32::<0x80>(lo, _mm256_add_epi32(lo, carry));
+                let h = _mm256_blend_epi32::<0x80>(
+                    hi,
+                    _mm256_add_epi32(hi, _mm256_add_epi32(carry, t0)),
+                );
+                carry = _mm256_add_epi32(carry, _mm256_add_epi32(t0, t1));
+                _mm256_storeu_si256(out.add(i).cast(), a);
+                _mm256_storeu_si256(out.add(i + 8).cast(), h);
+            }
+        }
+        _mm256_cvtsi256_si32(carry) as u32
+    }
+}
+
 #[cfg(test)]
 #[allow(
     clippy::unwrap_used,
@@ -2734,6 +3019,134 @@ mod tests {
             }
         }
         assert!(ran >= 1 && Kernel::Sse2.available());
+    }
+
+    /// `band_row` and `band_flush` against an independent reference: rows of 0 to 70 texels and
+    /// a few long ones, column sums that start dirty (up to 6 rows of 255, the most a tile row
+    /// of 8 leaves before its last row), texels all 255 and random. The column sums after the
+    /// row (the upper half of `acc0`), the boundaries (the running sum of the tiles' column
+    /// totals), the local sums (the prefix of the column sums inside each tile) and their
+    /// counts; with a packing target of 14 and 10 bits from bits 0, 8, 24 (packed from 16
+    /// bits: `kp` a multiple of 16, the fields as `write_bits` writes them, the words past
+    /// them untouched) and 3 (not byte-aligned: nothing packed); then `band_flush` gives the
+    /// level-0 accumulator of the column sums (local sums, boundaries at multiples of 8).
+    #[test]
+    fn band_rows_equal_the_reference() {
+        extern crate std;
+        use std::vec::Vec;
+        let avx2 = matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni);
+        let sizes: Vec<usize> = if cfg!(miri) {
+            std::vec![0, 7, 16, 17, 40]
+        } else {
+            (0..=70).chain([255, 256, 1000]).collect()
+        };
+        let mut seed = 0x1234_5678_9abc_def0u64;
+        let mut ran = 0;
+        for &n in &sizes {
+            for full in [true, false] {
+                for (k, bit) in [(0, 0), (14, 0), (14, 8), (14, 24), (10, 0), (14, 3)] {
+                    if cfg!(miri) && k == 10 {
+                        continue;
+                    }
+                    let t: Vec<u8> = (0..n)
+                        .map(|_| if full { 255 } else { rng(&mut seed) })
+                        .collect();
+                    let cs0: Vec<u16> = (0..n)
+                        .map(|_| {
+                            if full {
+                                6 * 255
+                            } else {
+                                u16::from(rng(&mut seed)) * 6
+                            }
+                        })
+                        .collect();
+                    // acc0's storage: the column sums in u16 n..2 n, the lower half dirty.
+                    let mut halves: Vec<u16> = (0..n).map(|i| (i as u16) ^ 0x5a5a).collect();
+                    halves.extend(&cs0);
+                    let mut acc0: Vec<u32> = halves
+                        .chunks(2)
+                        .map(|p| u32::from(p[0]) | u32::from(p[1]) << 16)
+                        .collect();
+                    // The reference.
+                    let cs: Vec<u16> = cs0.iter().zip(&t).map(|(c, &x)| c + u16::from(x)).collect();
+                    let (mut want_b, mut want_l, mut form) = (Vec::new(), Vec::new(), Vec::new());
+                    let (mut run, mut inner) = (0u32, 0u32);
+                    for (i, &c) in cs.iter().enumerate() {
+                        inner += u32::from(c);
+                        if (i + 1) % 8 == 0 {
+                            run += inner;
+                            inner = 0;
+                            want_b.push(run);
+                            form.push(run);
+                        } else {
+                            want_l.push(inner);
+                            form.push(inner);
+                        }
+                    }
+                    let (nb, nl) = (n / 8, n - n / 8);
+                    let mut bnd = std::vec![0xdead_beefu32; nb + 1];
+                    let mut local = std::vec![0xdead_beefu32; nl + 1];
+                    let noise: Vec<u32> = (0..nl * 14 / 32 + 4)
+                        .map(|i| 0x9e37_79b9u32.rotate_left(i as u32))
+                        .collect();
+                    let mut words = noise.clone();
+                    let pack = (k > 0).then(|| PackTo {
+                        words: &mut words,
+                        bit,
+                        k,
+                        exact: true,
+                    });
+                    let got = band_row::<u8, u32, 1>(
+                        &t,
+                        &mut acc0,
+                        &mut bnd[..nb],
+                        &mut local[..nl],
+                        [(core::ptr::null(), 0); 2],
+                        pack,
+                    );
+                    if !avx2 {
+                        assert_eq!(got, None);
+                        continue;
+                    }
+                    ran += 1;
+                    let (kb, kl, kp) = got.unwrap_or_else(|| panic!("None: n {n} k {k} bit {bit}"));
+                    let packs = k > 0 && bit % 8 == 0 && nl >= 16;
+                    assert_eq!(
+                        (kb, kl, kp),
+                        (nb, nl, if packs { nl / 16 * 16 } else { 0 }),
+                        "n {n} k {k} bit {bit}"
+                    );
+                    let cs_got: Vec<u16> = acc0
+                        .iter()
+                        .flat_map(|w| [*w as u16, (w >> 16) as u16])
+                        .skip(n)
+                        .collect();
+                    assert_eq!(cs_got, cs, "column sums, n {n}");
+                    assert_eq!(&bnd[..nb], &want_b[..], "boundaries, n {n}");
+                    assert_eq!(bnd[nb], 0xdead_beef);
+                    assert_eq!(
+                        &local[kp..nl],
+                        &want_l[kp..],
+                        "local sums, n {n} k {k} bit {bit}"
+                    );
+                    assert_eq!(local[nl], 0xdead_beef);
+                    let mut want_w = noise.clone();
+                    for (i, &f) in want_l.iter().take(kp).enumerate() {
+                        let at = bit + i as u64 * u64::from(k);
+                        assert!(crate::layouts::packed::write_bits(
+                            &mut want_w,
+                            at,
+                            k,
+                            u64::from(f) & ((1 << k) - 1)
+                        ));
+                    }
+                    assert_eq!(words, want_w, "packed, n {n} k {k} bit {bit}");
+                    assert!(band_flush::<u32, 1>(&mut acc0));
+                    assert_eq!(acc0, form, "flush, n {n}");
+                }
+            }
+        }
+        assert_eq!(ran > 0, avx2);
     }
 
     /// `modular256::row` against an independent reference, for every width 11..=32 (a few under

@@ -321,3 +321,71 @@ fn modular_builds_across_texel_types() {
         }
     }
 }
+
+/// The tiled builder's band rows (`simd::band_row`: the rows inside a tile row of tiles 8
+/// wide kept as 16-bit column sums, turned back into the accumulator before a row that ends a
+/// tile row): tile heights 2, 4, 8 and 16 and two levels per axis (`[8, 32]`, rows that end
+/// both levels), y without levels (no band), widths around one and several blocks and a tail,
+/// saturated and random texels, rows of `u16` texels (the same values) at the start, inside
+/// and at the end of a tile row (the band left and entered again). Every corner against the
+/// reference, into dirty words.
+#[test]
+fn tiled_band_rows_equal_the_reference() {
+    use texsat::layouts::{AxisLevels, TiledBuilder};
+    let mut rng = texsat_host_tests::rng(0xba2d);
+    let specs = [
+        TiledSpec::tiles(8, 8).unwrap(),
+        TiledSpec::tiles(8, 2).unwrap(),
+        TiledSpec::tiles(8, 4).unwrap(),
+        TiledSpec::tiles(8, 16).unwrap(),
+        TiledSpec::square(&[8, 32]).unwrap(),
+        TiledSpec {
+            x: AxisLevels::new(&[8]).unwrap(),
+            y: AxisLevels::FLAT,
+            modulus: None,
+        },
+    ];
+    for spec in specs {
+        for w in [16usize, 17, 23, 31, 32, 40, 47, 64, 100, 263] {
+            for (h, wide_rows) in [(21usize, &[][..]), (40, &[0usize, 3, 7, 8, 15, 33][..])] {
+                for full in [true, false] {
+                    let t: Vec<u8> = (0..w * h)
+                        .map(|_| {
+                            if full {
+                                255
+                            } else {
+                                rng.random_range(0..=255u8)
+                            }
+                        })
+                        .collect();
+                    let want = reference(&t, w, h);
+                    let mut words =
+                        vec![0xA5A5_A5A5u32; Tiled::<u32>::words_needed(spec, w, h, 8).unwrap()];
+                    let mut scratch =
+                        vec![0x5555_5555u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
+                    let mut b =
+                        TiledBuilder::<u32>::new(spec, w, h, 8, &mut words, &mut scratch).unwrap();
+                    for y in 0..h {
+                        let r = &t[y * w..][..w];
+                        if wide_rows.contains(&y) {
+                            let wide: Vec<u16> = r.iter().map(|&v| u16::from(v)).collect();
+                            b.push_row(&wide).unwrap();
+                        } else {
+                            b.push_row(r).unwrap();
+                        }
+                    }
+                    let tiled = b.finish().unwrap();
+                    for y in 1..=h {
+                        for x in 1..=w {
+                            assert_eq!(
+                                u64::from(tiled.corner(x, y, &mut NoCount)[0]),
+                                want[(y - 1) * w + x - 1],
+                                "{spec:?} {w}x{h} corner ({x}, {y})"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

@@ -2239,6 +2239,11 @@ pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     /// `(w + 1) C`: one scratch row.
     row_len: usize,
     rows_done: usize,
+    /// With `simd`: whether the level-0 accumulator row holds column sums in the band form
+    /// (`simd::band_row`), decided at the first row and left (the row turned back) by a row
+    /// of other texels.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    band: bool,
 }
 
 impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
@@ -2275,6 +2280,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 row_len
             },
             rows_done: 0,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            band: false,
         })
     }
 
@@ -2287,6 +2294,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             geo: g,
             row_len,
             rows_done,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            band,
         } = self;
         let row_len = *row_len;
         if *rows_done >= g.height {
@@ -2332,6 +2341,36 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             return Err(short);
         };
         let iy = dy.index.get(q).copied().unwrap_or(0);
+        // With `simd`, the band form of the level-0 accumulator (`simd::band_row`: column
+        // sums) for rows that end no tile row: entered at a row that starts a tile row (the
+        // accumulator is zero there), turned back into the accumulator before any other row
+        // (one that ends a tile row reads it; one of other texels takes the other path).
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let band_row = {
+            let want = q == 0
+                && g.ax.levels >= 1
+                && g.ay.levels >= 1
+                && g.spec.modulus.is_none()
+                && crate::simd::band_types::<T, E, C>()
+                && g.component(0, 0)
+                    .is_some_and(|c| crate::simd::band_applies::<E, C>(n, g.ax.block(1), c.bits));
+            if *band && !want {
+                let acc0 = accs.get_mut(C..row_len).ok_or(short)?;
+                if !crate::simd::band_flush::<E, C>(acc0) {
+                    return Err(short);
+                }
+                *band = false;
+            }
+            #[allow(
+                clippy::as_conversions,
+                reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+            )]
+            let starts = rows_done.checked_rem(g.ay.block(1) as usize) == Some(0);
+            if want && starts {
+                *band = true;
+            }
+            *band
+        };
         // Invariant between rows: acc_j holds the rows in [trunc_{j+1}(y), trunc_j(y)) for
         // j >= 1 and acc_0 those in [trunc_1(y), y). Here y is a multiple of b_1, ..., b_q, so
         // adding the row and acc_0, ..., acc_{q-1} into acc_q (and clearing them) leaves in
@@ -2432,17 +2471,23 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         // Wrapping additions: without a modulus every sum is at most the texture's total, which
         // `E` holds (`check_value_type`); with one, only the low k bits are stored, and those
         // of a sum depend only on the low k bits of its terms.
-        let (kb, kl, kp) = row_fields::<T, E, C>(
-            texels,
-            lower,
-            acc,
-            t,
-            bnd.get_mut(C..).ok_or(short)?,
-            local,
-            ahead,
-            pack,
-        )
-        .ok_or(short)?;
+        let bnd_out = bnd.get_mut(C..).ok_or(short)?;
+        // In the band form (q = 0: no level below), `acc` holds acc_0's column sums.
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let done = if band_row {
+            let pack = pack.map(|(words, bit, k, exact)| crate::simd::PackTo {
+                words,
+                bit,
+                k,
+                exact,
+            });
+            crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, pack)
+        } else {
+            row_fields::<T, E, C>(texels, lower, acc, t, bnd_out, local, ahead, pack)
+        };
+        #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+        let done = row_fields::<T, E, C>(texels, lower, acc, t, bnd_out, local, ahead, pack);
+        let (kb, kl, kp) = done.ok_or(short)?;
         // (Without `simd` nothing is packed in the row step: a constant, the code below folds.)
         let kp = if cfg!(all(feature = "simd", target_arch = "x86_64")) {
             kp
