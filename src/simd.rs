@@ -22,7 +22,12 @@
 //! costs about a cycle per field; the AVX2 kernel, eight groups of 32 fields transposed into
 //! lanes, about a third to a half of it); and, with AVX2 only, [`modular_row`]: the modular
 //! builder's whole row (prefix sums, working row and packing) in one pass per 256 texels, the
-//! working row kept transposed. The kernel is the widest this CPU runs, detected
+//! working row kept transposed; and, with AVX2 only, [`band_row`]: the tiled builder's rows
+//! inside a tile row (tiles 8 wide, a layout without a modulus whose local sums fit 16 bits),
+//! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
+//! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]);
+//! [`band_flush`] turns the column sums back into the accumulator. The kernel is the widest
+//! this CPU runs, detected
 //! once at run time from CPUID and XGETBV (no `std` needed), as OpenCV and the standard
 //! library's `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
@@ -72,6 +77,17 @@
 //!    its bytes (the lanes past them masked off: not accessed). The first byte starts at the
 //!    row's first bit and the last ends on a byte boundary, so no bit outside the row's fields
 //!    is written.
+//!    [`band_row`] checks `acc0.len() = n`, `bnd.len() >= n / 8` and `local.len() >= n - n /
+//!    8` (its 16-bit local sums, `14 (n / 16) + 1` with the last block's overhang, and the
+//!    tail's, fit the `2 (n - n / 8)` halves of `local`'s words) before its kernel touches
+//!    block `b < n / 16`: texels `t[16 b..][..16]`, column sums `u16` `n + 16 b..` of `acc0`'s
+//!    `2 n` halves, local sums `14 b..14 b + 15`, boundaries `2 b`, `2 b + 1`. It packs from
+//!    16 bits into the target's words only after checking that the `2 k` bytes per 16 fields
+//!    from byte `bit / 8` lie inside them ([`pack256::even`] writes the last step's bytes
+//!    through a buffer: exactly `2 k steps` bytes); then it widens the rest in place, last
+//!    first (word `j` holds halves `2 j` and `2 j + 1`, read already). [`band_flush`] rewrites
+//!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and `2 i + 1
+//!    - n`, at most `i`, which a block reads before it writes its words.
 //!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
@@ -84,7 +100,10 @@
 //!    the streamed row is a third, separate `&mut [u32]` (at least `n` long). No reference is
 //!    created from the raw pointers.
 //! 4. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]` and `&mut [E]` to `&mut [u32]` only after
-//!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length.
+//!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length. The band
+//!    rows read and write `u32` words as pairs of `u16` halves through raw pointers derived
+//!    from the one slice (any bit pattern is a valid `u16` and `u32`; `u16`'s alignment
+//!    divides `u32`'s); no reference of the other type is created.
 #![allow(unsafe_code)]
 #![allow(
     clippy::indexing_slicing,
@@ -2314,8 +2333,16 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
         }
     }
     // The rest widened to 32 bits in place, last first: word j holds u16 2 j and 2 j + 1, at
-    // least j, already read.
-    for j in (kp..kl).rev() {
+    // least j, already read. 8 at a time from the end, then the first few.
+    let mut j = kl;
+    while j >= kp + 8 {
+        j -= 8;
+        // SAFETY: AVX2 (above); u16 j..j + 8 and words j..j + 8 inside local's storage (j + 8
+        // <= kl <= nl); the load before the store, which reaches u16 2 j.. (at least j: this
+        // step's, or read by the steps before).
+        unsafe { band256::widen8(base.add(j), loc.add(j)) };
+    }
+    for j in (kp..j).rev() {
         // SAFETY: j < kl <= nl: u16 j and word j inside local's storage.
         unsafe { base.add(j).write(u32::from(loc.add(j).read())) };
     }
@@ -2433,6 +2460,20 @@ mod band256 {
             from = end;
         }
         run
+    }
+
+    /// Eight `u16` at `from` widened to `u32` at `to` (one load, then one store).
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `from` valid for reads of 16 bytes, `to` for writes of 32.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn widen8(to: *mut u32, from: *const u16) {
+        // SAFETY: the caller's contract; unaligned.
+        unsafe {
+            let v = _mm256_cvtepu16_epi32(_mm_loadu_si128(from.cast()));
+            _mm256_storeu_si256(to.cast(), v);
+        }
     }
 
     /// [`band_flush`]'s kernel over `blocks` blocks of 16 columns; returns the running

@@ -2223,7 +2223,7 @@ mod row_step_tests {
 /// component (two for one level of tiles) plus one row of fields.
 ///
 /// Per row `y`, ending a block of y level `q` (`q = 0` for 7 rows in 8 with 8 x 8 tiles): one
-/// pass over the row (`row_fields`; with `simd`, one AVX-512 kernel) adds the row's sums and the
+/// pass over the row (`row_fields`; with `simd`, one AVX-512 or AVX2 kernel) adds the row's sums and the
 /// level below (`q >= 1`) into the accumulator of level `q`, which holds the sums in the form
 /// the fields are read in (inside a tile the local sum, at a tile boundary the total), and
 /// splits it into the row's local sums `C_0q(X, y)` and tile boundaries; the local sums are
@@ -2231,6 +2231,14 @@ mod row_step_tests {
 /// = acc_q[X] - acc_q[trunc_{p+1}(X)]`, are formed over the boundaries and packed as row `iy`
 /// of component `(p, q)`: 32 fields at a time, each output word written once, in order (see
 /// the module's "Storage order").
+///
+/// With `simd` on an AVX2 CPU without AVX-512 VNNI (tiles 8 wide, `u8` texels into `u32`
+/// entries, one channel, no modulus, local sums of at most 16 bits), the rows inside a tile
+/// row keep acc_0 as the tile row's 16-bit column sums instead (`simd::band_row`): acc_0's
+/// local sum at `X` is the prefix of the column sums inside the tile, and a boundary the
+/// prefix of the tiles' column totals, so one 16-bit addition per texel and a prefix within
+/// each tile give the row's fields, and the local sums are packed from 16 bits. A row that
+/// ends a tile row (or a row of other texels) first turns the column sums back into acc_0.
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
