@@ -86,8 +86,8 @@
 //!    from byte `bit / 8` lie inside them ([`pack256::even`] writes the last step's bytes
 //!    through a buffer: exactly `2 k steps` bytes); then it widens the rest in place, last
 //!    first (word `j` holds halves `2 j` and `2 j + 1`, read already). [`band_flush`] rewrites
-//!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and `2 i + 1
-//!    - n`, at most `i`, which a block reads before it writes its words.
+//!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and
+//!    `2 i + 1 - n`, at most `i`, which a block reads before it writes its words.
 //!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
