@@ -1789,6 +1789,22 @@ impl Prefetch {
         }
     }
 
+    /// Runs `each` on blocks `0..blocks` in order, asking for the lines due by the end of each
+    /// group of 8 blocks before it (the bookkeeping once per group).
+    #[inline(always)]
+    fn for_blocks(&mut self, blocks: usize, mut each: impl FnMut(usize)) {
+        const GROUP: usize = 8;
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + GROUP).min(blocks);
+            self.ask(end);
+            for b in from..end {
+                each(b);
+            }
+            from = end;
+        }
+    }
+
     /// Asks for the lines due by the end of the group ending at block `end`: all of them by
     /// the middle of the row (2 lines end / blocks, rounded up: the last lines are packed soon
     /// after the row step, so they need the lead; asking for all of them at once measured
@@ -1839,7 +1855,6 @@ mod tiled512 {
         ahead: Ahead,
     ) -> u32 {
         // Prefetching, a group of blocks at a time (the bookkeeping once per group).
-        const GROUP: usize = 8;
         let mut prefetch = Prefetch::new(ahead, blocks);
         let table = &TILE_TABLES[TILE.trailing_zeros() as usize - 1];
         let w = table.w.map(|g| {
@@ -1862,53 +1877,46 @@ mod tiled512 {
         let last = _mm512_set1_epi32(15);
         let zero = _mm512_setzero_si512();
         let mut carry = zero;
-        let mut from = 0;
-        while from < blocks {
-            let end = (from + GROUP).min(blocks);
-            prefetch.ask(end);
-            for b in from..end {
-                let i = BLOCK * b;
-                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
-                // contract). The boundary store writes nb lanes at bnd[b nb..], inside
-                // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
-                // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
-                // last block.
-                unsafe {
-                    let tp = t.add(i);
-                    let g =
-                        |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
-                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
-                    let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
-                    // The running sum before the block, kept in the boundary lanes only (zero
-                    // in the others): one addition gives every lane its r(x); the block's
-                    // total (lane 15, a boundary) joins it by a zero-masked permute.
-                    let mut v = _mm512_add_epi32(p, carry);
-                    carry = _mm512_add_epi32(carry, _mm512_maskz_permutexvar_epi32(bmask, last, p));
-                    if LOWER {
-                        v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
-                        _mm512_storeu_si512(lower.add(i).cast(), zero);
-                    }
-                    v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
-                    _mm512_storeu_si512(acc.add(i).cast(), v);
-                    let loc = _mm512_permutexvar_epi32(local_ix, v);
-                    let lo = local.add(b * nl);
-                    if b + 1 < blocks {
-                        _mm512_storeu_si512(lo.cast(), loc);
-                    } else {
-                        _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
-                    }
-                    let bv = _mm512_permutexvar_epi32(bnd_ix, v);
-                    let bo = bnd.add(b * nb);
-                    match nb {
-                        1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
-                        2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
-                        4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
-                        _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
-                    }
+        prefetch.for_blocks(blocks, |b| {
+            let i = BLOCK * b;
+            // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+            // contract). The boundary store writes nb lanes at bnd[b nb..], inside
+            // bnd[..blocks nb]; the local store 16 lanes at local[b nl..] for b + 2 <= blocks
+            // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
+            // last block.
+            unsafe {
+                let tp = t.add(i);
+                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
+                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
+                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                // The running sum before the block, kept in the boundary lanes only (zero
+                // in the others): one addition gives every lane its r(x); the block's
+                // total (lane 15, a boundary) joins it by a zero-masked permute.
+                let mut v = _mm512_add_epi32(p, carry);
+                carry = _mm512_add_epi32(carry, _mm512_maskz_permutexvar_epi32(bmask, last, p));
+                if LOWER {
+                    v = _mm512_add_epi32(v, _mm512_loadu_si512(lower.add(i).cast()));
+                    _mm512_storeu_si512(lower.add(i).cast(), zero);
+                }
+                v = _mm512_add_epi32(v, _mm512_loadu_si512(acc.add(i).cast()));
+                _mm512_storeu_si512(acc.add(i).cast(), v);
+                let loc = _mm512_permutexvar_epi32(local_ix, v);
+                let lo = local.add(b * nl);
+                if b + 1 < blocks {
+                    _mm512_storeu_si512(lo.cast(), loc);
+                } else {
+                    _mm512_mask_storeu_epi32(lo.cast(), ml, loc);
+                }
+                let bv = _mm512_permutexvar_epi32(bnd_ix, v);
+                let bo = bnd.add(b * nb);
+                match nb {
+                    1 => bo.write_unaligned(_mm512_cvtsi512_si32(bv) as u32),
+                    2 => _mm_storel_epi64(bo.cast(), _mm512_castsi512_si128(bv)),
+                    4 => _mm_storeu_si128(bo.cast(), _mm512_castsi512_si128(bv)),
+                    _ => _mm256_storeu_si256(bo.cast(), _mm512_castsi512_si256(bv)),
                 }
             }
-            from = end;
-        }
+        });
         // Lane 15, a boundary, holds the running sum.
         _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
     }
@@ -2150,62 +2158,52 @@ mod tiled256 {
         blocks: usize,
         ahead: Ahead,
     ) -> u32 {
-        const GROUP: usize = 8;
         let mut prefetch = Prefetch::new(ahead, blocks);
         let seven = _mm256_set1_epi32(7);
         let zero = _mm256_setzero_si256();
         let w = avx2::Weights::new();
         let mut carry = zero;
-        let mut from = 0;
-        while from < blocks {
-            let end = (from + GROUP).min(blocks);
-            prefetch.ask(end);
-            for b in from..end {
-                let i = BLOCK * b;
-                // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
-                // contract); the boundaries go to bnd[2 b], bnd[2 b + 1] < 2 blocks; the local
-                // stores write local[14 b .. 14 b + 15] for b + 1 < blocks (inside
-                // local[..14 blocks]), local[14 b .. 14 b + 14] for the last block.
-                unsafe {
-                    let lo = avx2::chunk(t.add(i), w);
-                    let hi = avx2::chunk(t.add(i + 8), w);
-                    // The tiles' totals in every lane.
-                    let t0 = _mm256_permutevar8x32_epi32(lo, seven);
-                    let t1 = _mm256_permutevar8x32_epi32(hi, seven);
-                    let mut a = _mm256_blend_epi32(lo, _mm256_add_epi32(lo, carry), 0x80);
-                    let mut h = _mm256_blend_epi32(
-                        hi,
-                        _mm256_add_epi32(hi, _mm256_add_epi32(carry, t0)),
-                        0x80,
-                    );
-                    carry = _mm256_add_epi32(carry, _mm256_add_epi32(t0, t1));
-                    if LOWER {
-                        a = _mm256_add_epi32(a, _mm256_loadu_si256(lower.add(i).cast()));
-                        h = _mm256_add_epi32(h, _mm256_loadu_si256(lower.add(i + 8).cast()));
-                        _mm256_storeu_si256(lower.add(i).cast(), zero);
-                        _mm256_storeu_si256(lower.add(i + 8).cast(), zero);
-                    }
-                    a = _mm256_add_epi32(a, _mm256_loadu_si256(acc.add(i).cast()));
-                    h = _mm256_add_epi32(h, _mm256_loadu_si256(acc.add(i + 8).cast()));
-                    _mm256_storeu_si256(acc.add(i).cast(), a);
-                    _mm256_storeu_si256(acc.add(i + 8).cast(), h);
-                    let lo_out = local.add(14 * b);
-                    _mm256_storeu_si256(lo_out.cast(), a);
-                    if b + 1 < blocks {
-                        _mm256_storeu_si256(lo_out.add(7).cast(), h);
-                    } else {
-                        let mut last = [0u32; 8];
-                        _mm256_storeu_si256(last.as_mut_ptr().cast(), h);
-                        core::ptr::copy_nonoverlapping(last.as_ptr(), lo_out.add(7), 7);
-                    }
-                    bnd.add(2 * b)
-                        .write_unaligned(_mm256_extract_epi32::<7>(a) as u32);
-                    bnd.add(2 * b + 1)
-                        .write_unaligned(_mm256_extract_epi32::<7>(h) as u32);
+        prefetch.for_blocks(blocks, |b| {
+            let i = BLOCK * b;
+            // SAFETY: i + 16 <= 16 blocks: inside `t`, `acc` and `lower` (the caller's
+            // contract); the boundaries go to bnd[2 b], bnd[2 b + 1] < 2 blocks; the local
+            // stores write local[14 b .. 14 b + 15] for b + 1 < blocks (inside
+            // local[..14 blocks]), local[14 b .. 14 b + 14] for the last block.
+            unsafe {
+                let lo = avx2::chunk(t.add(i), w);
+                let hi = avx2::chunk(t.add(i + 8), w);
+                // The tiles' totals in every lane.
+                let t0 = _mm256_permutevar8x32_epi32(lo, seven);
+                let t1 = _mm256_permutevar8x32_epi32(hi, seven);
+                let mut a = _mm256_blend_epi32(lo, _mm256_add_epi32(lo, carry), 0x80);
+                let mut h =
+                    _mm256_blend_epi32(hi, _mm256_add_epi32(hi, _mm256_add_epi32(carry, t0)), 0x80);
+                carry = _mm256_add_epi32(carry, _mm256_add_epi32(t0, t1));
+                if LOWER {
+                    a = _mm256_add_epi32(a, _mm256_loadu_si256(lower.add(i).cast()));
+                    h = _mm256_add_epi32(h, _mm256_loadu_si256(lower.add(i + 8).cast()));
+                    _mm256_storeu_si256(lower.add(i).cast(), zero);
+                    _mm256_storeu_si256(lower.add(i + 8).cast(), zero);
                 }
+                a = _mm256_add_epi32(a, _mm256_loadu_si256(acc.add(i).cast()));
+                h = _mm256_add_epi32(h, _mm256_loadu_si256(acc.add(i + 8).cast()));
+                _mm256_storeu_si256(acc.add(i).cast(), a);
+                _mm256_storeu_si256(acc.add(i + 8).cast(), h);
+                let lo_out = local.add(14 * b);
+                _mm256_storeu_si256(lo_out.cast(), a);
+                if b + 1 < blocks {
+                    _mm256_storeu_si256(lo_out.add(7).cast(), h);
+                } else {
+                    let mut last = [0u32; 8];
+                    _mm256_storeu_si256(last.as_mut_ptr().cast(), h);
+                    core::ptr::copy_nonoverlapping(last.as_ptr(), lo_out.add(7), 7);
+                }
+                bnd.add(2 * b)
+                    .write_unaligned(_mm256_extract_epi32::<7>(a) as u32);
+                bnd.add(2 * b + 1)
+                    .write_unaligned(_mm256_extract_epi32::<7>(h) as u32);
             }
-            from = end;
-        }
+        });
         _mm256_cvtsi256_si32(carry) as u32
     }
 }
@@ -2429,36 +2427,29 @@ mod band256 {
         blocks: usize,
         ahead: Ahead,
     ) -> u32 {
-        const GROUP: usize = 8;
         let mut prefetch = Prefetch::new(ahead, blocks);
         let mut run = 0u32;
-        let mut from = 0;
-        while from < blocks {
-            let end = (from + GROUP).min(blocks);
-            prefetch.ask(end);
-            for b in from..end {
-                let i = BLOCK * b;
-                // SAFETY: i + 16 <= 16 blocks: t[i..i + 16] and cs[i..i + 16]; the local
-                // stores write loc[14 b..14 b + 15] (<= 14 blocks + 1), the boundaries bnd[2
-                // b], bnd[2 b + 1] (< 2 blocks): the caller's contract.
-                unsafe {
-                    let x = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
-                    let c = _mm256_add_epi16(x, _mm256_loadu_si256(cs.add(i).cast()));
-                    _mm256_storeu_si256(cs.add(i).cast(), c);
-                    let p = prefix8(c);
-                    let (lo, hi) = (_mm256_castsi256_si128(p), _mm256_extracti128_si256::<1>(p));
-                    _mm_storeu_si128(loc.add(14 * b).cast(), lo);
-                    _mm_storeu_si128(loc.add(14 * b + 7).cast(), hi);
-                    let ta = _mm_extract_epi16::<7>(lo) as u32;
-                    let tb = _mm_extract_epi16::<7>(hi) as u32;
-                    let first = run.wrapping_add(ta);
-                    run = run.wrapping_add(ta.wrapping_add(tb));
-                    bnd.add(2 * b).write_unaligned(first);
-                    bnd.add(2 * b + 1).write_unaligned(run);
-                }
+        prefetch.for_blocks(blocks, |b| {
+            let i = BLOCK * b;
+            // SAFETY: i + 16 <= 16 blocks: t[i..i + 16] and cs[i..i + 16]; the local
+            // stores write loc[14 b..14 b + 15] (<= 14 blocks + 1), the boundaries bnd[2
+            // b], bnd[2 b + 1] (< 2 blocks): the caller's contract.
+            unsafe {
+                let x = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+                let c = _mm256_add_epi16(x, _mm256_loadu_si256(cs.add(i).cast()));
+                _mm256_storeu_si256(cs.add(i).cast(), c);
+                let p = prefix8(c);
+                let (lo, hi) = (_mm256_castsi256_si128(p), _mm256_extracti128_si256::<1>(p));
+                _mm_storeu_si128(loc.add(14 * b).cast(), lo);
+                _mm_storeu_si128(loc.add(14 * b + 7).cast(), hi);
+                let ta = _mm_extract_epi16::<7>(lo) as u32;
+                let tb = _mm_extract_epi16::<7>(hi) as u32;
+                let first = run.wrapping_add(ta);
+                run = run.wrapping_add(ta.wrapping_add(tb));
+                bnd.add(2 * b).write_unaligned(first);
+                bnd.add(2 * b + 1).write_unaligned(run);
             }
-            from = end;
-        }
+        });
         run
     }
 
