@@ -23,7 +23,7 @@
 //! lanes, about a third to a half of it); and, with AVX2 only, [`modular_row`]: the modular
 //! builder's whole row (prefix sums, working row and packing) in one pass per 256 texels, the
 //! working row kept transposed; and, with AVX2 only, [`band_row`]: the tiled builder's rows
-//! inside a tile row (tiles 8 wide, a layout without a modulus whose local sums fit 16 bits),
+//! inside a tile row (tiles 8 wide, a layout without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
 //! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]);
 //! [`band_flush`] turns the column sums back into the accumulator. The kernel is the widest
@@ -2211,16 +2211,32 @@ mod tiled256 {
 /// Whether the band rows ([`band_row`], [`band_flush`]) can take a tiled build's rows that end
 /// no tile row, entries `E`, `C` channels (with texels of [`band_types`]): `u32` entries, one
 /// channel; with AVX2 and not AVX-512 VNNI (whose row kernel packs in its pass); tiles 8
-/// texels wide (`tile`), the local sums' field width `k` at most 16 (the width proof of a
-/// layout without a modulus, which the caller checks: the sums over a tile row inside a tile,
-/// so the column sums and their prefix within a tile, fit 16 bits); a row of at least one
-/// block of 16 texels.
-pub(crate) fn band_applies<E: Entry, const C: usize>(width: usize, tile: u32, k: u32) -> bool {
+/// texels wide (`tile_w`); a row of at least one block of 16 texels; and the sum of a whole
+/// tile, `tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1`. The band rows keep the column
+/// sums and their prefix inside a tile, up to the tile's total (lane 7 of each half, the
+/// boundary's increment), as 16-bit values: a tile row's rows before its last are fewer than
+/// `tile_h`, so every such value is at most that bound. The local sums' field width is not
+/// enough: it bounds 7 columns, and a tile's total over 8 columns can pass `2^16` while the
+/// local sums fit 16 bits (`u8` texels, tiles of 8 x 36: local sums up to `7 * 35 * 255 =
+/// 62,475`, a tile row's total `8 * 35 * 255 = 71,400`).
+pub(crate) fn band_applies<E: Entry, const C: usize>(
+    width: usize,
+    tile_w: u32,
+    tile_h: u32,
+    texel_bits: u32,
+) -> bool {
+    let texel_max = if texel_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << texel_bits) - 1
+    };
     E::BITS == 32
         && C == 1
         && Kernel::best() == Kernel::Avx2
-        && tile == 8
-        && k <= 16
+        && tile_w == 8
+        && texel_max
+            .checked_mul(u64::from(tile_w) * u64::from(tile_h))
+            .is_some_and(|s| s <= u64::from(u16::MAX))
         && width >= BLOCK
 }
 
@@ -2242,8 +2258,9 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and
 /// 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16), the rest widened into
 /// `local`. The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form
-/// and no level below: `(kb, kl, kp)` as there. Column sums and local sums fit 16 bits by
-/// [`band_applies`]'s conditions; the 16-bit additions wrap only past them. `None` (nothing
+/// and no level below: `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals
+/// fit 16 bits by [`band_applies`]'s conditions (a tile's sum fits); the 16-bit additions wrap
+/// only past them. `None` (nothing
 /// written) for other types, without AVX2, or short slices.
 pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
@@ -2513,6 +2530,26 @@ mod band256 {
 mod tests {
     extern crate std;
     use super::*;
+
+    /// `band_applies` takes a tiling only where a tile's sum fits 16 bits: 8 x 32 tiles of `u8`
+    /// texels (65,280) and 8 x 64 of 7-bit ones (65,024), not 8 x 33 (67,320) nor 8 x 36, whose
+    /// local sums (7 x 35 x 255 = 62,475) fit 16 bits but its tile rows' totals do not; not 16-bit
+    /// texels, tiles other than 8 wide, rows shorter than a block, or other entries; only with AVX2
+    /// as the best kernel.
+    #[test]
+    fn band_applies_bounds_a_tiles_sum() {
+        let avx2 = Kernel::best() == Kernel::Avx2;
+        assert_eq!(band_applies::<u32, 1>(16, 8, 32, 8), avx2);
+        assert_eq!(band_applies::<u32, 1>(1024, 8, 64, 7), avx2);
+        assert!(!band_applies::<u32, 1>(16, 8, 33, 8));
+        assert!(!band_applies::<u32, 1>(16, 8, 36, 8));
+        assert!(!band_applies::<u32, 1>(16, 8, 65, 7));
+        assert!(!band_applies::<u32, 1>(16, 8, 1, 16));
+        assert!(!band_applies::<u32, 1>(16, 4, 8, 8));
+        assert!(!band_applies::<u32, 1>(15, 8, 8, 8));
+        assert!(!band_applies::<u64, 1>(16, 8, 8, 8));
+        assert!(!band_applies::<u32, 2>(16, 8, 8, 8));
+    }
 
     /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
     /// low `k` bits gives (`layouts::packed::write_bits`), for whole groups of 32 only, and

@@ -324,11 +324,13 @@ fn modular_builds_across_texel_types() {
 
 /// The tiled builder's band rows (`simd::band_row`: the rows inside a tile row of tiles 8
 /// wide kept as 16-bit column sums, turned back into the accumulator before a row that ends a
-/// tile row): tile heights 2, 4, 8 and 16 and two levels per axis (`[8, 32]`, rows that end
-/// both levels), y without levels (no band), widths around one and several blocks and a tail,
-/// saturated and random texels, rows of `u16` texels (the same values) at the start, inside
-/// and at the end of a tile row (the band left and entered again). Every corner against the
-/// reference, into dirty words.
+/// tile row): tile heights 2, 4, 8, 16 and 32 (a tile's sum of saturated texels just below
+/// 2^16) and two levels per axis (`[8, 32]`, rows that end both levels), tile heights 33 and
+/// 36 (a tile's sum past 2^16, local sums within 16 bits: no band), y without levels (no
+/// band), widths around one and several blocks and a tail, saturated and random texels, tile
+/// rows all of `u8` and rows of `u16` texels (the same values) at the start, inside and at the
+/// end of a tile row (the band left and entered again). Every corner against the reference,
+/// into dirty words.
 #[test]
 fn tiled_band_rows_equal_the_reference() {
     use texsat::layouts::{AxisLevels, TiledBuilder};
@@ -338,6 +340,11 @@ fn tiled_band_rows_equal_the_reference() {
         TiledSpec::tiles(8, 2).unwrap(),
         TiledSpec::tiles(8, 4).unwrap(),
         TiledSpec::tiles(8, 16).unwrap(),
+        // A tile's sum of u8 texels at the 16-bit bound (8 x 32: 65,280, band rows) and past
+        // it (8 x 33, 8 x 36: the reference path), though the local sums fit 16 bits.
+        TiledSpec::tiles(8, 32).unwrap(),
+        TiledSpec::tiles(8, 33).unwrap(),
+        TiledSpec::tiles(8, 36).unwrap(),
         TiledSpec::square(&[8, 32]).unwrap(),
         TiledSpec {
             x: AxisLevels::new(&[8]).unwrap(),
@@ -347,7 +354,11 @@ fn tiled_band_rows_equal_the_reference() {
     ];
     for spec in specs {
         for w in [16usize, 17, 23, 31, 32, 40, 47, 64, 100, 263] {
-            for (h, wide_rows) in [(21usize, &[][..]), (40, &[0usize, 3, 7, 8, 15, 33][..])] {
+            for (h, wide_rows) in [
+                (21usize, &[][..]),
+                (40, &[][..]),
+                (40, &[0usize, 3, 7, 8, 15, 33][..]),
+            ] {
                 for full in [true, false] {
                     let t: Vec<u8> = (0..w * h)
                         .map(|_| {

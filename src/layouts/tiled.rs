@@ -2233,7 +2233,7 @@ mod row_step_tests {
 /// the module's "Storage order").
 ///
 /// With `simd` on an AVX2 CPU without AVX-512 VNNI (tiles 8 wide, `u8` texels into `u32`
-/// entries, one channel, no modulus, local sums of at most 16 bits), the rows inside a tile
+/// entries, one channel, no modulus, a whole tile's sum below 2^16), the rows inside a tile
 /// row keep acc_0 as the tile row's 16-bit column sums instead (`simd::band_row`): acc_0's
 /// local sum at `X` is the prefix of the column sums inside the tile, and a boundary the
 /// prefix of the tiles' column totals, so one 16-bit addition per texel and a prefix within
@@ -2360,8 +2360,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 && g.ay.levels >= 1
                 && g.spec.modulus.is_none()
                 && crate::simd::band_types::<T, E, C>()
-                && g.component(0, 0)
-                    .is_some_and(|c| crate::simd::band_applies::<E, C>(n, g.ax.block(1), c.bits));
+                && crate::simd::band_applies::<E, C>(n, g.ax.block(1), g.ay.block(1), g.texel_bits);
             if *band && !want {
                 let acc0 = accs.get_mut(C..row_len).ok_or(short)?;
                 if !crate::simd::band_flush::<E, C>(acc0) {
