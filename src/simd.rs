@@ -2189,22 +2189,46 @@ mod tiled256 {
                 h = _mm256_add_epi32(h, _mm256_loadu_si256(acc.add(i + 8).cast()));
                 _mm256_storeu_si256(acc.add(i).cast(), a);
                 _mm256_storeu_si256(acc.add(i + 8).cast(), h);
-                let lo_out = local.add(14 * b);
-                _mm256_storeu_si256(lo_out.cast(), a);
-                if b + 1 < blocks {
-                    _mm256_storeu_si256(lo_out.add(7).cast(), h);
-                } else {
-                    let mut last = [0u32; 8];
-                    _mm256_storeu_si256(last.as_mut_ptr().cast(), h);
-                    core::ptr::copy_nonoverlapping(last.as_ptr(), lo_out.add(7), 7);
-                }
-                bnd.add(2 * b)
-                    .write_unaligned(_mm256_extract_epi32::<7>(a) as u32);
-                bnd.add(2 * b + 1)
-                    .write_unaligned(_mm256_extract_epi32::<7>(h) as u32);
+                split(a, h, local, bnd, b, b + 1 == blocks);
             }
         });
         _mm256_cvtsi256_si32(carry) as u32
+    }
+
+    /// Block `b`'s new accumulator values (`a`: the first tile, `h`: the second) split into
+    /// the streams: the local sums as two 8-lane stores 7 apart from `local + 14 b` (each
+    /// one's lane 7, a boundary, is overwritten by the next store; the `last` block's `h`
+    /// through a copy of its 7 local sums), the two boundaries (lanes 7) to `bnd + 2 b`.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `local` valid for writes of `14 b + 15` words (`14 b + 14` if
+    /// `last`), `bnd` of `2 b + 2`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn split(
+        a: __m256i,
+        h: __m256i,
+        local: *mut u32,
+        bnd: *mut u32,
+        b: usize,
+        last: bool,
+    ) {
+        // SAFETY: the caller's contract.
+        unsafe {
+            let lo_out = local.add(14 * b);
+            _mm256_storeu_si256(lo_out.cast(), a);
+            if !last {
+                _mm256_storeu_si256(lo_out.add(7).cast(), h);
+            } else {
+                let mut rest = [0u32; 8];
+                _mm256_storeu_si256(rest.as_mut_ptr().cast(), h);
+                core::ptr::copy_nonoverlapping(rest.as_ptr(), lo_out.add(7), 7);
+            }
+            bnd.add(2 * b)
+                .write_unaligned(_mm256_extract_epi32::<7>(a) as u32);
+            bnd.add(2 * b + 1)
+                .write_unaligned(_mm256_extract_epi32::<7>(h) as u32);
+        }
     }
 }
 
@@ -2364,6 +2388,76 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     Some((kb, kl, kp))
 }
 
+/// The tiled builder's row step for a row that ends a tile row (`q = 1`, the level above the
+/// local one) while the level-0 accumulator `acc0` is in [`band_row`]'s form (column sums):
+/// the row added to the column sums; their form (the level-0 accumulator they stand for:
+/// local sums inside each tile, at a boundary the prefix of the tiles' totals) added into
+/// the level above, `acc` (`n` positions, wrapping, as [`tiled_row`] adds the level below);
+/// the column sums cleared, which is acc_0 = 0 in the band form, so the next tile row goes
+/// on in it; `acc`'s new values split into `bnd` and `local` as [`tiled_row`] does, `(kb,
+/// kl, 0)` returned as there. One pass ([`band256::end_row`]) instead of [`band_flush`]
+/// (which writes acc_0's 32-bit form) and the 32-bit row kernel with a level below (which
+/// reads it back, adds it and clears it). The column sums with this row are a whole tile's
+/// at most: they fit 16 bits by [`band_applies`]. `None` (nothing written) for other types,
+/// without AVX2, or short slices (`acc0` must be exactly `n`).
+pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    acc0: &mut [E],
+    acc: &mut [E],
+    bnd: &mut [E],
+    local: &mut [E],
+    ahead: Ahead,
+) -> Option<(usize, usize, usize)> {
+    if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
+        return None;
+    }
+    let t = as_u8(texels)?;
+    let acc0 = as_u32_mut::<E, C>(acc0)?;
+    let acc = as_u32_mut::<E, C>(acc)?;
+    let bnd = as_u32_mut::<E, C>(bnd)?;
+    let local = as_u32_mut::<E, C>(local)?;
+    let n = t.len();
+    let (nb, nl, blocks) = (n / 8, n - n / 8, n / BLOCK);
+    if acc0.len() != n || acc.len() < n || bnd.len() < nb || local.len() < nl {
+        return None;
+    }
+    let cs = acc0.as_mut_ptr().cast::<u16>().wrapping_add(n);
+    let (ap, bp, lp) = (acc.as_mut_ptr(), bnd.as_mut_ptr(), local.as_mut_ptr());
+    // SAFETY: AVX2 is available (as in band_row); the kernel reads t[..16 blocks], reads and
+    // writes the column sums cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage)
+    // and acc[..16 blocks] (<= n), writes local[..14 blocks] (<= nl) and bnd[..2 blocks] (<=
+    // nb), checked above; distinct slices.
+    let mut run = unsafe { band256::end_row(t.as_ptr(), cs, ap, bp, lp, blocks, ahead) };
+    // The tail, column by column (it starts on a tile boundary).
+    let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
+    let mut inner = 0u32;
+    for (i, &x) in t.iter().enumerate().skip(BLOCK * blocks) {
+        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0, acc[i]; kb < nb, kl < nl.
+        unsafe {
+            inner = inner.wrapping_add(u32::from(cs.add(i).read()) + u32::from(x));
+            cs.add(i).write(0);
+            let boundary = (i + 1) % 8 == 0;
+            if boundary {
+                run = run.wrapping_add(inner);
+                inner = 0;
+            }
+            let v = ap
+                .add(i)
+                .read()
+                .wrapping_add(if boundary { run } else { inner });
+            ap.add(i).write(v);
+            if boundary {
+                bp.add(kb).write(v);
+                kb += 1;
+            } else {
+                lp.add(kl).write(v);
+                kl += 1;
+            }
+        }
+    }
+    Some((kb, kl, 0))
+}
+
 /// Turns [`band_row`]'s column sums in `acc0` (`n` positions) back into the level-0
 /// accumulator (the local sums and boundaries of the column sums, `u32`), in place, before a
 /// row that ends a tile row (which adds it into the level above and clears it) or a row that
@@ -2502,21 +2596,74 @@ mod band256 {
             // SAFETY: i + 16 <= 16 blocks: inside both (the caller's contract); the load
             // before the stores.
             unsafe {
-                let p = prefix8(_mm256_loadu_si256(cs.add(i).cast()));
-                let lo = _mm256_cvtepu16_epi32(_mm256_castsi256_si128(p));
-                let hi = _mm256_cvtepu16_epi32(_mm256_extracti128_si256::<1>(p));
-                let t0 = _mm256_permutevar8x32_epi32(lo, seven);
-                let t1 = _mm256_permutevar8x32_epi32(hi, seven);
-                let a = _mm256_blend_epi32::<0x80>(lo, _mm256_add_epi32(lo, carry));
-                let h = _mm256_blend_epi32::<0x80>(
-                    hi,
-                    _mm256_add_epi32(hi, _mm256_add_epi32(carry, t0)),
-                );
-                carry = _mm256_add_epi32(carry, _mm256_add_epi32(t0, t1));
+                let (a, h) = form(_mm256_loadu_si256(cs.add(i).cast()), seven, &mut carry);
                 _mm256_storeu_si256(out.add(i).cast(), a);
                 _mm256_storeu_si256(out.add(i + 8).cast(), h);
             }
         }
+        _mm256_cvtsi256_si32(carry) as u32
+    }
+
+    /// The level-0 accumulator's form of 16 column sums `c` (two tiles, one per 128-bit half):
+    /// their prefix inside each tile, widened to 32 bits (`a`: the first tile, `h`: the
+    /// second); the boundary lanes (7 of each) given the running sum `carry` (and `h`'s the
+    /// first tile's total too), which then grows by both tiles' totals (`vpermd` broadcasts of
+    /// lane 7), as in [`tiled256::kernel`].
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn form(c: __m256i, seven: __m256i, carry: &mut __m256i) -> (__m256i, __m256i) {
+        let p = prefix8(c);
+        let lo = _mm256_cvtepu16_epi32(_mm256_castsi256_si128(p));
+        let hi = _mm256_cvtepu16_epi32(_mm256_extracti128_si256::<1>(p));
+        let t0 = _mm256_permutevar8x32_epi32(lo, seven);
+        let t1 = _mm256_permutevar8x32_epi32(hi, seven);
+        let a = _mm256_blend_epi32::<0x80>(lo, _mm256_add_epi32(lo, *carry));
+        let h = _mm256_blend_epi32::<0x80>(hi, _mm256_add_epi32(hi, _mm256_add_epi32(*carry, t0)));
+        *carry = _mm256_add_epi32(*carry, _mm256_add_epi32(t0, t1));
+        (a, h)
+    }
+
+    /// [`band_end_row`]'s kernel over `blocks` blocks of 16 columns; returns the running
+    /// boundary sum after them. Per block: 16 texels widened and added to the column sums,
+    /// which are cleared (one 32-byte store of zeros); the sums' [`form`] added to `acc` and
+    /// stored; the new values split into the streams ([`tiled256::split`]). The lines of
+    /// `ahead` asked for as in [`tiled256::kernel`].
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `t` valid for reads of `16 blocks` bytes, `cs` for reads and writes
+    /// of `16 blocks` `u16`, `acc` for reads and writes of `16 blocks` words, `local` for
+    /// writes of `14 blocks` words, `bnd` of `2 blocks`; not overlapping.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn end_row(
+        t: *const u8,
+        cs: *mut u16,
+        acc: *mut u32,
+        bnd: *mut u32,
+        local: *mut u32,
+        blocks: usize,
+        ahead: Ahead,
+    ) -> u32 {
+        let mut prefetch = Prefetch::new(ahead, blocks);
+        let seven = _mm256_set1_epi32(7);
+        let zero = _mm256_setzero_si256();
+        let mut carry = zero;
+        prefetch.for_blocks(blocks, |b| {
+            let i = BLOCK * b;
+            // SAFETY: i + 16 <= 16 blocks: inside `t`, `cs` and `acc`; `split` writes
+            // local[..14 b + 15] (14 b + 14 for the last block) <= 14 blocks and bnd[..2 b +
+            // 2] <= 2 blocks (the caller's contract).
+            unsafe {
+                let x = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+                let c = _mm256_add_epi16(x, _mm256_loadu_si256(cs.add(i).cast()));
+                _mm256_storeu_si256(cs.add(i).cast(), zero);
+                let (a, h) = form(c, seven, &mut carry);
+                let a = _mm256_add_epi32(a, _mm256_loadu_si256(acc.add(i).cast()));
+                let h = _mm256_add_epi32(h, _mm256_loadu_si256(acc.add(i + 8).cast()));
+                _mm256_storeu_si256(acc.add(i).cast(), a);
+                _mm256_storeu_si256(acc.add(i + 8).cast(), h);
+                tiled256::split(a, h, local, bnd, b, b + 1 == blocks);
+            }
+        });
         _mm256_cvtsi256_si32(carry) as u32
     }
 }
@@ -3213,6 +3360,94 @@ mod tests {
                     assert!(band_flush::<u32, 1>(&mut acc0));
                     assert_eq!(acc0, form, "flush, n {n}");
                 }
+            }
+        }
+        assert_eq!(ran > 0, avx2);
+    }
+
+    /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256 and
+    /// 1,000 (a few under Miri), saturated and random texels, dirty column sums of up to 7 rows
+    /// of 255 (with the row: a tile row of 8), a dirty level above (values near 2^32: the adds
+    /// wrap). Checked: the level above plus the column sums' form, its split into boundaries
+    /// and local sums (nothing written past them), the column sums cleared, the lower half of
+    /// acc_0's storage untouched; `None` without AVX2.
+    #[test]
+    fn band_end_row_equals_the_reference() {
+        extern crate std;
+        use std::vec::Vec;
+        let avx2 = matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni);
+        let sizes: Vec<usize> = if cfg!(miri) {
+            std::vec![0, 7, 16, 17, 40]
+        } else {
+            (0..=70).chain([255, 256, 1000]).collect()
+        };
+        let mut seed = 0x0fed_cba9_8765_4321u64;
+        let mut ran = 0;
+        for &n in &sizes {
+            for full in [true, false] {
+                let mut next = || if full { 255 } else { rng(&mut seed) };
+                let t: Vec<u8> = (0..n).map(|_| next()).collect();
+                let cs0: Vec<u16> = (0..n).map(|_| u16::from(next()) * 7).collect();
+                let acc1: Vec<u32> = (0..n)
+                    .map(|_| {
+                        u32::from(next())
+                            .wrapping_mul(0x0101_0101)
+                            .wrapping_add(0xff00_0000)
+                    })
+                    .collect();
+                let mut halves: Vec<u16> = (0..n).map(|i| (i as u16) ^ 0x5a5a).collect();
+                halves.extend(&cs0);
+                let mut acc0: Vec<u32> = halves
+                    .chunks(2)
+                    .map(|p| u32::from(p[0]) | u32::from(p[1]) << 16)
+                    .collect();
+                // The reference: the level above plus the form of the column sums with the row.
+                let (mut want_acc, mut want_b, mut want_l) = (acc1.clone(), Vec::new(), Vec::new());
+                let (mut run, mut inner) = (0u32, 0u32);
+                for i in 0..n {
+                    inner += u32::from(cs0[i]) + u32::from(t[i]);
+                    let form = if (i + 1) % 8 == 0 {
+                        run += inner;
+                        inner = 0;
+                        run
+                    } else {
+                        inner
+                    };
+                    want_acc[i] = want_acc[i].wrapping_add(form);
+                    if (i + 1) % 8 == 0 {
+                        want_b.push(want_acc[i]);
+                    } else {
+                        want_l.push(want_acc[i]);
+                    }
+                }
+                let (nb, nl) = (n / 8, n - n / 8);
+                let mut acc = acc1.clone();
+                let mut bnd = std::vec![0xdead_beefu32; nb + 1];
+                let mut local = std::vec![0xdead_beefu32; nl + 1];
+                let got = band_end_row::<u8, u32, 1>(
+                    &t,
+                    &mut acc0,
+                    &mut acc,
+                    &mut bnd[..nb],
+                    &mut local[..nl],
+                    [(core::ptr::null(), 0); 2],
+                );
+                if !avx2 {
+                    assert_eq!(got, None);
+                    continue;
+                }
+                ran += 1;
+                assert_eq!(got, Some((nb, nl, 0)), "n {n}");
+                assert_eq!(acc, want_acc, "level above, n {n}");
+                assert_eq!(&bnd[..nb], &want_b[..], "boundaries, n {n}");
+                assert_eq!(&local[..nl], &want_l[..], "local sums, n {n}");
+                assert_eq!((bnd[nb], local[nl]), (0xdead_beef, 0xdead_beef), "n {n}");
+                let after: Vec<u16> = acc0
+                    .iter()
+                    .flat_map(|w| [*w as u16, (w >> 16) as u16])
+                    .collect();
+                assert_eq!(&after[..n], &halves[..n], "lower half, n {n}");
+                assert!(after[n..].iter().all(|&c| c == 0), "column sums, n {n}");
             }
         }
         assert_eq!(ran > 0, avx2);

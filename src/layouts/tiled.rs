@@ -2351,17 +2351,21 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let iy = dy.index.get(q).copied().unwrap_or(0);
         // With `simd`, the band form of the level-0 accumulator (`simd::band_row`: column
         // sums) for rows that end no tile row: entered at a row that starts a tile row (the
-        // accumulator is zero there), turned back into the accumulator before any other row
-        // (one that ends a tile row reads it; one of other texels takes the other path).
+        // accumulator is zero there). A row that ends a tile row and no level above it (q = 1)
+        // adds the form into acc_1 and clears the column sums (`simd::band_end_row`): the band
+        // goes on. Before any other row the column sums are turned back into the accumulator
+        // (a row ending a higher level reads it in its 32-bit form; one of other texels takes
+        // the other path).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        let band_row = {
-            let want = q == 0
-                && g.ax.levels >= 1
+        let (band_row, band_end) = {
+            let fits = g.ax.levels >= 1
                 && g.ay.levels >= 1
                 && g.spec.modulus.is_none()
                 && crate::simd::band_types::<T, E, C>()
                 && crate::simd::band_applies::<E, C>(n, g.ax.block(1), g.ay.block(1), g.texel_bits);
-            if *band && !want {
+            let want = q == 0 && fits;
+            let end = q == 1 && fits && *band;
+            if *band && !want && !end {
                 let acc0 = accs.get_mut(C..row_len).ok_or(short)?;
                 if !crate::simd::band_flush::<E, C>(acc0) {
                     return Err(short);
@@ -2376,7 +2380,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             if want && starts {
                 *band = true;
             }
-            *band
+            (want && *band, end)
         };
         // Invariant between rows: acc_j holds the rows in [trunc_{j+1}(y), trunc_j(y)) for
         // j >= 1 and acc_0 those in [trunc_1(y), y). Here y is a multiple of b_1, ..., b_q, so
@@ -2489,6 +2493,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 exact,
             });
             crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, pack)
+        } else if band_end {
+            // q = 1: `lower` is acc_0's storage (n positions from its first), in the band form.
+            let acc0 = lower.and_then(|l| l.get_mut(..n)).ok_or(short)?;
+            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead)
         } else {
             row_fields::<T, E, C>(texels, lower, acc, t, bnd_out, local, ahead, pack)
         };
