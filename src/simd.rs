@@ -934,7 +934,7 @@ mod pack256 {
         ]
     }
 
-    /// Words `at..at + 8` of the eight groups of 32 values from `f` (group `g` at `f + 32 g`,
+    /// Words `at..at + 8` of the eight groups of `S` values from `f` (group `g` at `f + S g`,
     /// or the last group, `gn - 1`, for the lanes past it; no clamp if `FULL`), transposed: lane
     /// `g` of result `c` is word `at + c` of group `g`.
     ///
@@ -942,11 +942,15 @@ mod pack256 {
     /// Each (clamped) group is valid for reads of `at + 8` words.
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn load8x8<const FULL: bool>(f: *const u32, gn: usize, at: usize) -> [__m256i; 8] {
+    unsafe fn load8x8<const FULL: bool, const S: usize>(
+        f: *const u32,
+        gn: usize,
+        at: usize,
+    ) -> [__m256i; 8] {
         // SAFETY: group g's words at..at + 8 are readable (the caller's contract): 16-byte
         // unaligned loads of words at..at + 4 and at + 4..at + 8.
         let half = |g: usize, c: usize| unsafe {
-            let p = |g: usize| f.add(32 * if FULL { g } else { g.min(gn - 1) });
+            let p = |g: usize| f.add(S * if FULL { g } else { g.min(gn - 1) });
             _mm256_loadu2_m128i(p(g + 4).add(at + c).cast(), p(g).add(at + c).cast())
         };
         // Group g's words in the low half, group g + 4's in the high half.
@@ -956,14 +960,15 @@ mod pack256 {
     }
 
     /// Stores output words `j..j + 8` (`o[j + c]`, lane `g` for group `g`) of the first `gn`
-    /// groups (all 8 if `FULL`): lane `g` of the eight registers into `w[stride g + j..][..8]`.
+    /// groups (all 8 if `FULL`): lane `g` of the eight registers into the 8 words from byte
+    /// `stride g + 4 j` of `w` (unaligned).
     ///
     /// # Safety
-    /// `gn <= 8`; `w + stride g` is valid for writes of `j + 8` words for `g < gn`.
+    /// `gn <= 8`; `w + stride g` is valid for writes of `4 j + 32` bytes for `g < gn`.
     #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn store8x8<const FULL: bool>(
-        w: *mut u32,
+        w: *mut u8,
         stride: usize,
         gn: usize,
         j: usize,
@@ -984,19 +989,20 @@ mod pack256 {
         ];
         let n = if FULL { 8 } else { gn };
         for (g, r) in rows.iter().enumerate().take(n) {
-            // SAFETY: g < gn: w[stride g + j..][..8] is writable (the caller's contract).
-            unsafe { _mm256_storeu_si256(w.add(stride * g + j).cast(), *r) };
+            // SAFETY: g < gn: bytes stride g + 4 j.. + 32 of w are writable (the caller's
+            // contract).
+            unsafe { _mm256_storeu_si256(w.add(stride * g + 4 * j).cast(), *r) };
         }
     }
 
     /// As [`store8x8`] for the four words `j..j + 4`.
     ///
     /// # Safety
-    /// `gn <= 8`; `w + stride g` is valid for writes of `j + 4` words for `g < gn`.
+    /// `gn <= 8`; `w + stride g` is valid for writes of `4 j + 16` bytes for `g < gn`.
     #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn store8x4<const FULL: bool>(
-        w: *mut u32,
+        w: *mut u8,
         stride: usize,
         gn: usize,
         j: usize,
@@ -1015,8 +1021,9 @@ mod pack256 {
         ];
         let n = if FULL { 8 } else { gn };
         for (g, r) in rows.iter().enumerate().take(n) {
-            // SAFETY: g < gn: w[stride g + j..][..4] is writable (the caller's contract).
-            unsafe { _mm_storeu_si128(w.add(stride * g + j).cast(), *r) };
+            // SAFETY: g < gn: bytes stride g + 4 j.. + 16 of w are writable (the caller's
+            // contract).
+            unsafe { _mm_storeu_si128(w.add(stride * g + 4 * j).cast(), *r) };
         }
     }
 
@@ -1037,16 +1044,17 @@ mod pack256 {
         // SAFETY: the stores cover w[K g + j..][..8] with j + 8 <= K, or the group's last 4 or 8
         // words (K >= 8), for g < gn: inside the groups' K words (the caller's contract).
         unsafe {
+            let (w, stride) = (w.cast::<u8>(), 4 * K);
             let mut j = 0;
             while j + 8 <= K {
-                store8x8::<FULL>(w, K, gn, j, o);
+                store8x8::<FULL>(w, stride, gn, j, o);
                 j += 8;
             }
             if j < K {
                 if K - j <= 4 {
-                    store8x4::<FULL>(w, K, gn, K - 4, o);
+                    store8x4::<FULL>(w, stride, gn, K - 4, o);
                 } else {
-                    store8x8::<FULL>(w, K, gn, K - 8, o);
+                    store8x8::<FULL>(w, stride, gn, K - 8, o);
                 }
             }
         }
@@ -1200,7 +1208,7 @@ mod pack256 {
         macro_rules! fields {
             ($at:literal: $($c:literal)*) => {{
                 // SAFETY: at + 8 <= 32: inside each (clamped) group.
-                let v = unsafe { load8x8::<FULL>(f, gn, $at) };
+                let v = unsafe { load8x8::<FULL, 32>(f, gn, $at) };
                 $(field::<K>(&mut o, $at + $c, v[$c], m);)*
             }};
         }
@@ -1212,10 +1220,94 @@ mod pack256 {
         unsafe { store_words::<K, FULL>(w, gn, &o) };
     }
 
+    /// [`pass`] over runs of 16 fields instead of groups of 32, for the groups left after the
+    /// whole passes when they are 4 or fewer (the tiled build's 128 boundaries of a 1,024-texel
+    /// row: 4 groups, which a pass of 8 lanes would take at the cost of 8): `hn <= 8` runs from
+    /// `f` (run `h` at `f + 16 h`), each lane one run, half the fields of a pass. Sixteen
+    /// fields are `16 K` bits, `2 K` bytes, so run `h`'s fields start on byte `2 K h` of `out`
+    /// and each run is packed as if from bit 0 (the same constant shifts in every lane) into
+    /// `ceil(K / 2)` words; for an odd `K` the last word's upper 16 bits are zero and belong to
+    /// the next run. The runs are stored 8 words at a time (4 for the last ones) at byte `2 K
+    /// h`, the last words of every run first, so each run's first words, stored last,
+    /// overwrite the zeros its predecessor's last word wrote over them. For an odd `K` the
+    /// last run is written after the others, word by word, its last word's 16 bits only:
+    /// nothing past `2 K hn` bytes is written.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `11 <= K <= 32`, `1 <= hn <= 8`; `f` valid for reads of `16 hn` values
+    /// and `out` for writes of `2 K hn` bytes.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn runs16<const K: usize>(f: *const u32, out: *mut u8, hn: usize) {
+        let m = _mm256_set1_epi32(if K >= 32 {
+            -1
+        } else {
+            ((1u32 << K) - 1) as i32
+        });
+        // Only words 0..ceil(K / 2) are written: field 15 ends at bit 16 K.
+        let mut o = [_mm256_setzero_si256(); K];
+        // Written out per field so that the word and the shift are constants.
+        macro_rules! fields {
+            ($at:literal: $($c:literal)*) => {{
+                // SAFETY: at + 8 <= 16: inside each (clamped) run.
+                let v = unsafe { load8x8::<false, 16>(f, hn, $at) };
+                $(field::<K>(&mut o, $at + $c, v[$c], m);)*
+            }};
+        }
+        fields!(0: 0 1 2 3 4 5 6 7);
+        fields!(8: 0 1 2 3 4 5 6 7);
+        let words = K.div_ceil(2);
+        // For an odd K, the last run's last word would pass byte 2 K hn: that run is written
+        // apart, after the others.
+        let direct = if K.is_multiple_of(2) { hn } else { hn - 1 };
+        // The chunks of each run's words, from the last: 8 or 4 words ending at `words`, then
+        // 8 at a time down to 0 (a chunk may overlap the one after it: the same values).
+        let mut end = words;
+        // SAFETY: each store writes words j..j + 8 (or + 4) <= words of runs h < direct, bytes
+        // 2 K h + 4 j.. < 2 K h + 4 words <= 2 K (h + 1) + 2 <= 2 K hn for h < hn - 1 (odd K),
+        // and <= 2 K (h + 1) for an even K: inside out's 2 K hn bytes (the caller's contract).
+        unsafe {
+            while end > 0 {
+                if end >= 8 {
+                    store8x8::<false>(out, 2 * K, direct, end - 8, &o);
+                    end -= 8;
+                } else if end >= 4 {
+                    store8x4::<false>(out, 2 * K, direct, end - 4, &o);
+                    end -= 4;
+                } else {
+                    // Fewer than 4 left: words 0..4 (overlapping the chunk after them).
+                    store8x4::<false>(out, 2 * K, direct, 0, &o);
+                    end = 0;
+                }
+            }
+        }
+        if direct < hn {
+            // The last run (odd K): its words one by one (lane hn - 1), the last one's low
+            // 16 bits only.
+            let lane = _mm256_set1_epi32(direct as i32);
+            let at = 2 * K * direct;
+            for (j, v) in o.iter().take(words).enumerate() {
+                let x = _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(*v, lane)) as u32;
+                // SAFETY: bytes at + 4 j.. + 4 for j + 1 < words (4 j + 4 <= 2 K - 2), and at
+                // + 4 j.. + 2 for the last (4 (words - 1) + 2 = 2 K): inside out's 2 K hn
+                // bytes (the caller's contract).
+                unsafe {
+                    let to = out.add(at + 4 * j);
+                    if j + 1 < words {
+                        to.cast::<u32>().write_unaligned(x);
+                    } else {
+                        to.cast::<u16>().write_unaligned(x as u16);
+                    }
+                }
+            }
+        }
+    }
+
     /// The kernel: `groups` groups of 32 `K`-bit fields from `f` into `K` words each at `w`
     /// (group `g`: `f[32 g..32 g + 32]` into `w[g K..g K + K]`), eight groups per pass, each
     /// group in a 32-bit lane so that every shift is the same in all lanes; the last pass takes
-    /// the groups left (`pass::<K, false>`).
+    /// the groups left (`pass::<K, false>`), or, when they are 4 or fewer, their runs of 16
+    /// fields in one lane each ([`runs16`]: half the work).
     ///
     /// # Safety
     /// The CPU has AVX2; `11 <= K <= 32`; `f` is valid for reads of `32 groups` values and `w`
@@ -1241,8 +1333,10 @@ mod pack256 {
                 pass::<K, true>(f.add(32 * g0), w.add(K * g0), 8);
                 g0 += 8;
             }
-            if g0 < groups {
+            if groups - g0 > 4 {
                 pass::<K, false>(f.add(32 * g0), w.add(K * g0), groups - g0);
+            } else if g0 < groups {
+                runs16::<K>(f.add(32 * g0), w.add(K * g0).cast(), 2 * (groups - g0));
             }
         }
     }
@@ -2719,8 +2813,10 @@ mod tests {
                 32,
                 64,
                 101,
+                4 * 32,
                 8 * 32,
                 8 * 32 + 31,
+                12 * 32 + 5,
                 15 * 32 + 7,
                 17 * 32,
             ]
