@@ -1198,6 +1198,26 @@ mod pack256 {
     #[inline]
     #[target_feature(enable = "avx2")]
     unsafe fn pass<const K: usize, const FULL: bool>(f: *const u32, w: *mut u32, gn: usize) {
+        // SAFETY: each (clamped) group holds 32 readable values (the caller's contract).
+        let o = unsafe { lanes::<K, FULL, 32>(f, gn) };
+        // SAFETY: w + K g holds K writable words for g < gn (the caller's contract).
+        unsafe { store_words::<K, FULL>(w, gn, &o) };
+    }
+
+    /// The output words of the eight lanes' runs of `S` (32 or 16) fields, run `g` at `f + S g`
+    /// (or the last run, `gn - 1`, for the lanes past it; no clamp if `FULL`): each field's low
+    /// `K` bits at its place from bit 0 (word `floor(i K / 32)`, [`field`]), lane `g` for run
+    /// `g`; the words past the runs' `S K` bits zero.
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `11 <= K <= 32`, `1 <= gn <= 8`; each (clamped) run is valid for
+    /// reads of `S` values.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn lanes<const K: usize, const FULL: bool, const S: usize>(
+        f: *const u32,
+        gn: usize,
+    ) -> [__m256i; K] {
         let m = _mm256_set1_epi32(if K >= 32 {
             -1
         } else {
@@ -1207,17 +1227,18 @@ mod pack256 {
         // Written out per field so that the word and the shift are constants.
         macro_rules! fields {
             ($at:literal: $($c:literal)*) => {{
-                // SAFETY: at + 8 <= 32: inside each (clamped) group.
-                let v = unsafe { load8x8::<FULL, 32>(f, gn, $at) };
+                // SAFETY: at + 8 <= S: inside each (clamped) run.
+                let v = unsafe { load8x8::<FULL, S>(f, gn, $at) };
                 $(field::<K>(&mut o, $at + $c, v[$c], m);)*
             }};
         }
         fields!(0: 0 1 2 3 4 5 6 7);
         fields!(8: 0 1 2 3 4 5 6 7);
-        fields!(16: 0 1 2 3 4 5 6 7);
-        fields!(24: 0 1 2 3 4 5 6 7);
-        // SAFETY: w + K g holds K writable words for g < gn (the caller's contract).
-        unsafe { store_words::<K, FULL>(w, gn, &o) };
+        if S == 32 {
+            fields!(16: 0 1 2 3 4 5 6 7);
+            fields!(24: 0 1 2 3 4 5 6 7);
+        }
+        o
     }
 
     /// [`pass`] over runs of 16 fields instead of groups of 32, for the groups left after the
@@ -1239,23 +1260,9 @@ mod pack256 {
     #[inline]
     #[target_feature(enable = "avx2")]
     unsafe fn runs16<const K: usize>(f: *const u32, out: *mut u8, hn: usize) {
-        let m = _mm256_set1_epi32(if K >= 32 {
-            -1
-        } else {
-            ((1u32 << K) - 1) as i32
-        });
-        // Only words 0..ceil(K / 2) are written: field 15 ends at bit 16 K.
-        let mut o = [_mm256_setzero_si256(); K];
-        // Written out per field so that the word and the shift are constants.
-        macro_rules! fields {
-            ($at:literal: $($c:literal)*) => {{
-                // SAFETY: at + 8 <= 16: inside each (clamped) run.
-                let v = unsafe { load8x8::<false, 16>(f, hn, $at) };
-                $(field::<K>(&mut o, $at + $c, v[$c], m);)*
-            }};
-        }
-        fields!(0: 0 1 2 3 4 5 6 7);
-        fields!(8: 0 1 2 3 4 5 6 7);
+        // Only words 0..ceil(K / 2) are set: field 15 ends at bit 16 K.
+        // SAFETY: each (clamped) run holds 16 readable values (the caller's contract).
+        let o = unsafe { lanes::<K, false, 16>(f, hn) };
         let words = K.div_ceil(2);
         // For an odd K, the last run's last word would pass byte 2 K hn: that run is written
         // apart, after the others.
@@ -3347,11 +3354,7 @@ mod tests {
         extern crate std;
         use std::vec::Vec;
         let avx2 = matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni);
-        let sizes: Vec<usize> = if cfg!(miri) {
-            std::vec![0, 7, 16, 17, 40]
-        } else {
-            (0..=70).chain([255, 256, 1000]).collect()
-        };
+        let sizes = band_sizes();
         let mut seed = 0x1234_5678_9abc_def0u64;
         let mut ran = 0;
         for &n in &sizes {
@@ -3373,12 +3376,7 @@ mod tests {
                         })
                         .collect();
                     // acc0's storage: the column sums in u16 n..2 n, the lower half dirty.
-                    let mut halves: Vec<u16> = (0..n).map(|i| (i as u16) ^ 0x5a5a).collect();
-                    halves.extend(&cs0);
-                    let mut acc0: Vec<u32> = halves
-                        .chunks(2)
-                        .map(|p| u32::from(p[0]) | u32::from(p[1]) << 16)
-                        .collect();
+                    let (_, mut acc0) = band_storage(&cs0);
                     // The reference.
                     let cs: Vec<u16> = cs0.iter().zip(&t).map(|(c, &x)| c + u16::from(x)).collect();
                     let (mut want_b, mut want_l, mut form) = (Vec::new(), Vec::new(), Vec::new());
@@ -3461,6 +3459,28 @@ mod tests {
         assert_eq!(ran > 0, avx2);
     }
 
+    /// The row lengths of the band tests: 0 to 70 and 255, 256 and 1,000 (a few under Miri).
+    fn band_sizes() -> std::vec::Vec<usize> {
+        if cfg!(miri) {
+            std::vec![0, 7, 16, 17, 40]
+        } else {
+            (0..=70).chain([255, 256, 1000]).collect()
+        }
+    }
+
+    /// acc_0's storage in the band form for column sums `cs0` (`n` of them): its `u16`
+    /// halves (the lower `n` dirty, then the column sums) and the words that hold them.
+    fn band_storage(cs0: &[u16]) -> (std::vec::Vec<u16>, std::vec::Vec<u32>) {
+        let n = cs0.len();
+        let mut halves: std::vec::Vec<u16> = (0..n).map(|i| (i as u16) ^ 0x5a5a).collect();
+        halves.extend(cs0);
+        let words = halves
+            .chunks(2)
+            .map(|p| u32::from(p[0]) | u32::from(p[1]) << 16)
+            .collect();
+        (halves, words)
+    }
+
     /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256 and
     /// 1,000 (a few under Miri), saturated and random texels, dirty column sums of up to 7 rows
     /// of 255 (with the row: a tile row of 8), a dirty level above (values near 2^32: the adds
@@ -3472,11 +3492,7 @@ mod tests {
         extern crate std;
         use std::vec::Vec;
         let avx2 = matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni);
-        let sizes: Vec<usize> = if cfg!(miri) {
-            std::vec![0, 7, 16, 17, 40]
-        } else {
-            (0..=70).chain([255, 256, 1000]).collect()
-        };
+        let sizes = band_sizes();
         let mut seed = 0x0fed_cba9_8765_4321u64;
         let mut ran = 0;
         for &n in &sizes {
@@ -3491,12 +3507,7 @@ mod tests {
                             .wrapping_add(0xff00_0000)
                     })
                     .collect();
-                let mut halves: Vec<u16> = (0..n).map(|i| (i as u16) ^ 0x5a5a).collect();
-                halves.extend(&cs0);
-                let mut acc0: Vec<u32> = halves
-                    .chunks(2)
-                    .map(|p| u32::from(p[0]) | u32::from(p[1]) << 16)
-                    .collect();
+                let (halves, mut acc0) = band_storage(&cs0);
                 // The reference: the level above plus the form of the column sums with the row.
                 let (mut want_acc, mut want_b, mut want_l) = (acc1.clone(), Vec::new(), Vec::new());
                 let (mut run, mut inner) = (0u32, 0u32);
