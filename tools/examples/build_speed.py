@@ -32,6 +32,11 @@ printed as well):
 
 Every method's table is compared with `Sat::build`'s before it is timed (in the server), and
 OpenCV's with the texsat table (here).
+
+On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
+2-vCPU machine of 2026-11-28 a server that the scheduler kept on CPU 0 ran the same code up to
+1.4x slower than one on CPU 1 (median of the best of 5 builds), which made binaries and
+variants differ by more than the changes they were compared for.
 """
 
 import argparse
@@ -122,14 +127,21 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--servers", help="NAME=PATH,... of prebuilt build_speed binaries to time "
                     "instead of building --variants (e.g. two commits' binaries)")
+    ap.add_argument("--cpu", type=int, default=None,
+                    help="run this script, OpenCV and every server on this one CPU (they take "
+                    "turns: one measurement at a time), so that all figures share one core")
     args = ap.parse_args()
 
     sides = [int(s) for s in args.sides.split(",")]
     methods = args.methods.split(",")
     if args.servers:
-        servers = [Server(*kv.split("=", 1)) for kv in args.servers.split(",")]
+        paths = [kv.split("=", 1) for kv in args.servers.split(",")]
     else:
-        servers = [Server(v, build(v)) for v in args.variants.split(",")]
+        paths = [(v, build(v)) for v in args.variants.split(",")]
+    if args.cpu is not None:
+        # After the builds (cargo keeps every CPU); inherited by the servers started below.
+        os.sched_setaffinity(0, {args.cpu})
+    servers = [Server(name, path) for name, path in paths]
     for s in servers:
         unknown = set(methods) - set(s.methods)
         if unknown:
@@ -202,6 +214,7 @@ def main():
     print(f"rounds: {args.rounds} (sides > 2048: {args.rounds_large or args.rounds}); "
           f"wall {wall / 1e9:.1f} s")
     print(f"loadavg before: {load0}; after: {load1}")
+    print("cpus: " + (f"all on CPU {args.cpu}" if args.cpu is not None else "any (no --cpu)"))
     for p in pids:
         a, b = sched0.get(p), sched1.get(p)
         if a and b:
