@@ -1886,7 +1886,15 @@ impl Prefetch {
             ahead,
             lines,
             asked: [0; 2],
-            rate: lines.map(|l| (l << 17).div_ceil(blocks.max(1))),
+            // A shift for a power of two (a row of 2^m texels): no division per row.
+            rate: lines.map(|l| {
+                let b = blocks.max(1);
+                if b.is_power_of_two() {
+                    ((l << 17) + b - 1) >> b.trailing_zeros()
+                } else {
+                    (l << 17).div_ceil(b)
+                }
+            }),
         }
     }
 

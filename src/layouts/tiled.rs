@@ -1669,6 +1669,28 @@ impl<E: Entry, const C: usize> Layout<C> for Tiled<'_, E, C> {
     }
 }
 
+/// `n / d` (`None` for `d = 0`): a shift when `d` is a power of two (the usual block sizes),
+/// so that the row step divides only for other sizes.
+#[inline(always)]
+fn div_by(n: usize, d: usize) -> Option<usize> {
+    if d.is_power_of_two() {
+        Some(n >> d.trailing_zeros())
+    } else {
+        n.checked_div(d)
+    }
+}
+
+/// `n mod d` (`None` for `d = 0`), a mask when `d` is a power of two (as [`div_by`]).
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+#[inline(always)]
+fn rem_by(n: usize, d: usize) -> Option<usize> {
+    if d.is_power_of_two() {
+        Some(n & d.wrapping_sub(1))
+    } else {
+        n.checked_rem(d)
+    }
+}
+
 /// Refuses a row holding a texel wider than `texel_bits` (the field widths are proved for
 /// `texel_bits`), reporting the first such texel's width. Nothing to check when `T` is no wider;
 /// else one OR over the row (vectorized: every texel is at most `2^b - 1` iff their OR is), the
@@ -2248,10 +2270,14 @@ pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     row_len: usize,
     rows_done: usize,
     /// With `simd`: whether the level-0 accumulator row holds column sums in the band form
-    /// (`simd::band_row`), decided at the first row and left (the row turned back) by a row
-    /// of other texels.
+    /// (`simd::band_row`): entered at a row that starts a tile row, left (the row turned
+    /// back) before a row of other texels or one that ends a higher level.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     band: bool,
+    /// With `simd`: whether the geometry, the entries and the CPU allow the band form (levels
+    /// on both axes, no modulus, `simd::band_applies`): asked once, not per row.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    band_fits: bool,
 }
 
 impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
@@ -2290,6 +2316,16 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             rows_done: 0,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             band: false,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            band_fits: geo.ax.levels >= 1
+                && geo.ay.levels >= 1
+                && geo.spec.modulus.is_none()
+                && crate::simd::band_applies::<E, C>(
+                    width,
+                    geo.ax.block(1),
+                    geo.ay.block(1),
+                    geo.texel_bits,
+                ),
         })
     }
 
@@ -2304,6 +2340,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             rows_done,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             band,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            band_fits,
         } = self;
         let row_len = *row_len;
         if *rows_done >= g.height {
@@ -2358,11 +2396,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         // the other path).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
         let (band_row, band_end) = {
-            let fits = g.ax.levels >= 1
-                && g.ay.levels >= 1
-                && g.spec.modulus.is_none()
-                && crate::simd::band_types::<T, E, C>()
-                && crate::simd::band_applies::<E, C>(n, g.ax.block(1), g.ay.block(1), g.texel_bits);
+            let fits = *band_fits && crate::simd::band_types::<T, E, C>();
             let want = q == 0 && fits;
             let end = q == 1 && fits && *band;
             if *band && !want && !end {
@@ -2376,7 +2410,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 clippy::as_conversions,
                 reason = "u32 -> usize is lossless (MAX_DIMENSION)"
             )]
-            let starts = rows_done.checked_rem(g.ay.block(1) as usize) == Some(0);
+            let starts = rem_by(*rows_done, g.ay.block(1) as usize) == Some(0);
             if want && starts {
                 *band = true;
             }
@@ -2426,7 +2460,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         } else {
             0
         };
-        let nb = n.checked_div(t).unwrap_or(0);
+        let nb = div_by(n, t).unwrap_or(0);
         let split = nb
             .checked_add(1)
             .and_then(|b| b.checked_mul(C))
@@ -2531,10 +2565,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 (local.get(..kl).ok_or(short)?, kp)
             } else {
                 // p >= 1: t = b_1 >= 2 divides b_p and b_{p+1}.
-                let (b, big) = (
-                    b.checked_div(t).ok_or(short)?,
-                    big.checked_div(t).ok_or(short)?,
-                );
+                let (b, big) = (div_by(b, t).ok_or(short)?, div_by(big, t).ok_or(short)?);
                 if b == 1 && big == 0 {
                     (bnd.get(C..kb.checked_add(C).ok_or(short)?).ok_or(short)?, 0)
                 } else {
