@@ -1755,7 +1755,7 @@ unsafe fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     // tile]`, all inside the slices (checked above; 16 blocks <= n); the packing kernel writes
     // `7 k / 2` bytes per pair of blocks from `out`, inside `pack.words` (checked above), and
     // not `local[..28 pairs]`; the six slices are distinct borrows.
-    let (mut run, kp) = unsafe {
+    let (run, kp) = unsafe {
         match packed {
             Some((out, k, exact)) => (
                 match (lp.is_null(), exact) {
@@ -1789,27 +1789,57 @@ unsafe fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     // boundary: 16 blocks is a multiple of the tile).
     let i0 = blocks * BLOCK;
     let (mut kb, mut kl) = (i0 / tile, i0 - i0 / tile);
+    tile_walk(
+        i0,
+        n,
+        tile,
+        run,
+        |i| u32::from(t[i]),
+        |i, boundary, f| {
+            let mut v = acc[i].wrapping_add(f);
+            if let Some(l) = &mut lower {
+                v = v.wrapping_add(l[i]);
+                l[i] = 0;
+            }
+            acc[i] = v;
+            if boundary {
+                bnd[kb] = v;
+                kb += 1;
+            } else {
+                local[kl] = v;
+                kl += 1;
+            }
+        },
+    );
+    Some((kb, kl, kp))
+}
+
+/// The portable walk over a row's columns `i0..n` after the vectorized blocks (`i0` a tile
+/// start), tiles of `tile` columns, shared by the row steps' tails: per column its value
+/// `col(i)` (a texel, or a column sum) added to the sum inside its tile; at a tile's last
+/// column that sum joins the running sum `run` and `out(i, true, run)` gets it (a boundary),
+/// elsewhere `out(i, false, the sum inside the tile so far)` (a local sum). Wrapping, as the
+/// kernels. `col(i)` runs before `out(i)`.
+#[inline(always)]
+fn tile_walk(
+    i0: usize,
+    n: usize,
+    tile: usize,
+    mut run: u32,
+    mut col: impl FnMut(usize) -> u32,
+    mut out: impl FnMut(usize, bool, u32),
+) {
     let mut inner = 0u32;
     for i in i0..n {
-        run = run.wrapping_add(u32::from(t[i]));
-        inner = inner.wrapping_add(u32::from(t[i]));
-        let boundary = (i + 1) % tile == 0;
-        let mut v = acc[i].wrapping_add(if boundary { run } else { inner });
-        if let Some(l) = &mut lower {
-            v = v.wrapping_add(l[i]);
-            l[i] = 0;
-        }
-        acc[i] = v;
-        if boundary {
-            bnd[kb] = v;
-            kb += 1;
+        inner = inner.wrapping_add(col(i));
+        if (i + 1) % tile == 0 {
+            run = run.wrapping_add(inner);
             inner = 0;
+            out(i, true, run);
         } else {
-            local[kl] = v;
-            kl += 1;
+            out(i, false, inner);
         }
     }
-    Some((kb, kl, kp))
 }
 
 /// The local sums of a pair of blocks of tiles of 8 (2 x 14): what the packing kernel packs
@@ -2430,28 +2460,29 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     // cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage), writes loc[..14 blocks
     // + 1] (inside local's 2 nl u16, checked above) and bnd[..2 blocks] (<= nb); distinct
     // slices.
-    let mut run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
+    let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
     // The tail, column by column (it starts on a tile boundary).
     let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
-    let mut inner = 0u32;
-    for (i, &x) in t.iter().enumerate().skip(BLOCK * blocks) {
-        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0; kl < nl <= 2 nl u16 of local's
-        // storage; kb < nb.
+    let col = |i: usize| {
+        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0.
         unsafe {
-            let c = cs.add(i).read().wrapping_add(u16::from(x));
+            let c = cs.add(i).read().wrapping_add(u16::from(t[i]));
             cs.add(i).write(c);
-            inner = inner.wrapping_add(u32::from(c));
-            if (i + 1) % 8 == 0 {
-                run = run.wrapping_add(inner);
-                bp.add(kb).write(run);
+            u32::from(c)
+        }
+    };
+    tile_walk(BLOCK * blocks, n, 8, run, col, |_, boundary, v| {
+        // SAFETY: kb < nb; kl < nl <= 2 nl u16 of local's storage (one value per column).
+        unsafe {
+            if boundary {
+                bp.add(kb).write(v);
                 kb += 1;
-                inner = 0;
             } else {
-                loc.add(kl).write(inner as u16);
+                loc.add(kl).write(v as u16);
                 kl += 1;
             }
         }
-    }
+    });
     // The whole steps of 16 local sums packed from 16 bits, when the row starts on a byte.
     let mut kp = 0;
     if let Some(PackTo { words, bit, k, .. }) = pack {
@@ -2536,24 +2567,21 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     // writes the column sums cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage)
     // and acc[..16 blocks] (<= n), writes local[..14 blocks] (<= nl) and bnd[..2 blocks] (<=
     // nb), checked above; distinct slices.
-    let mut run = unsafe { band256::end_row(t.as_ptr(), cs, ap, bp, lp, blocks, ahead) };
+    let run = unsafe { band256::end_row(t.as_ptr(), cs, ap, bp, lp, blocks, ahead) };
     // The tail, column by column (it starts on a tile boundary).
     let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
-    let mut inner = 0u32;
-    for (i, &x) in t.iter().enumerate().skip(BLOCK * blocks) {
-        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0, acc[i]; kb < nb, kl < nl.
+    let col = |i: usize| {
+        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0.
         unsafe {
-            inner = inner.wrapping_add(u32::from(cs.add(i).read()) + u32::from(x));
+            let c = u32::from(cs.add(i).read()) + u32::from(t[i]);
             cs.add(i).write(0);
-            let boundary = (i + 1) % 8 == 0;
-            if boundary {
-                run = run.wrapping_add(inner);
-                inner = 0;
-            }
-            let v = ap
-                .add(i)
-                .read()
-                .wrapping_add(if boundary { run } else { inner });
+            c
+        }
+    };
+    tile_walk(BLOCK * blocks, n, 8, run, col, |i, boundary, f| {
+        // SAFETY: i < n: acc[i]; kb < nb, kl < nl.
+        unsafe {
+            let v = ap.add(i).read().wrapping_add(f);
             ap.add(i).write(v);
             if boundary {
                 bp.add(kb).write(v);
@@ -2563,7 +2591,7 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
                 kl += 1;
             }
         }
-    }
+    });
     Some((kb, kl, 0))
 }
 
@@ -2589,27 +2617,17 @@ pub(crate) fn band_flush<E: Entry, const C: usize>(acc0: &mut [E]) -> bool {
     // SAFETY: AVX2 is available when blocks > 0 (as in band_row); the kernel reads column
     // sums cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n) and writes base[..16 blocks] (<= n),
     // each block's reads before its writes, which reach only column sums read already.
-    let mut run = if blocks > 0 {
+    let run = if blocks > 0 {
         unsafe { band256::flush(base, cs, blocks) }
     } else {
         0
     };
-    let mut inner = 0u32;
-    for i in BLOCK * blocks..n {
-        // SAFETY: i < n: u16 n + i < 2 n and word i inside the storage; the word written
-        // holds column sums at most i, read already.
-        unsafe {
-            inner = inner.wrapping_add(u32::from(cs.add(i).read()));
-            let v = if (i + 1) % 8 == 0 {
-                run = run.wrapping_add(inner);
-                inner = 0;
-                run
-            } else {
-                inner
-            };
-            base.add(i).write(v);
-        }
-    }
+    // SAFETY (both closures): i < n: u16 n + i < 2 n and word i inside the storage; the word
+    // written holds column sums at most i, read already (`col(i)` runs before `out(i)`).
+    let col = |i: usize| unsafe { u32::from(cs.add(i).read()) };
+    tile_walk(BLOCK * blocks, n, 8, run, col, |i, _, v| unsafe {
+        base.add(i).write(v)
+    });
     true
 }
 
