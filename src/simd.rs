@@ -639,8 +639,29 @@ mod avx512vnni {
 
     const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
 
-    /// One `vpdpbusd` per group of 4 texels (unsigned texel bytes times signed 0/1 weights,
-    /// summed per 32-bit lane; each lane at most 16 x 255, far from any saturation).
+    /// The 16 texels at `tp` weighted into 16 lanes by four `vpdpbusd`, one per group of 4
+    /// texels broadcast to every lane (unsigned texel bytes times the lane's signed 0/1
+    /// weights `w[k]` for group `k`, summed per 32-bit lane; each lane at most 16 x 255, far
+    /// from any saturation), in one chain: with [`W`], lane `l` is the prefix sum of texels
+    /// `0..=l`; the tiled kernels pass their own weights.
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F and AVX-512 VNNI; `tp` is valid for reads of 16 bytes.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512vnni")]
+    pub(super) unsafe fn dot16(tp: *const u8, w: &[__m512i; 4]) -> __m512i {
+        // SAFETY: tp[4 k..4 k + 4] for k < 4: inside the 16 bytes (the caller's contract).
+        let g =
+            |k: usize| unsafe { _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned()) };
+        let p = _mm512_dpbusd_epi32(
+            _mm512_dpbusd_epi32(_mm512_setzero_si512(), g(0), w[0]),
+            g(1),
+            w[1],
+        );
+        _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3])
+    }
+
+    /// One `vpdpbusd` per group of 4 texels ([`dot16`]).
     ///
     /// # Safety
     /// As the SSE2 kernel, with AVX-512F and AVX-512 VNNI.
@@ -665,10 +686,7 @@ mod avx512vnni {
         while i + BLOCK <= n {
             // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
             unsafe {
-                let tp = t.add(i);
-                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                let p = dot16(t.add(i), &w);
                 let mut v = _mm512_add_epi32(p, carry);
                 carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
                 if ABOVE {
@@ -2024,10 +2042,7 @@ mod tiled512 {
             // (b nl + 16 <= (blocks - 2) nl + 2 nl: inside local[..blocks nl]), nl lanes for the
             // last block.
             unsafe {
-                let tp = t.add(i);
-                let g = |k: usize| _mm512_set1_epi32(tp.add(4 * k).cast::<i32>().read_unaligned());
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(zero, g(0), w[0]), g(1), w[1]);
-                let p = _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3]);
+                let p = avx512vnni::dot16(t.add(i), &w);
                 // The running sum before the block, kept in the boundary lanes only (zero
                 // in the others): one addition gives every lane its r(x); the block's
                 // total (lane 15, a boundary) joins it by a zero-masked permute.
