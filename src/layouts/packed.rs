@@ -491,6 +491,10 @@ pub(crate) fn pack_fields<E: Entry>(
         let offset = offset + done as u64 * u64::from(len);
         (fields.get(done..).unwrap_or(&[]), offset)
     };
+    if fields.is_empty() {
+        // All packed above (the tiled builder's rows of whole groups): no writer to set up.
+        return true;
+    }
     let (done, offset) = if len <= WORD_BITS {
         pack_groups(words, offset, fields, len)
     } else {

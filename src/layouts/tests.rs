@@ -705,6 +705,12 @@ fn pow2_digits_equal_division_digits() {
                 }
             }
             assert_eq!(a.step(blocks.len() + 1, q), None);
+            // The row step's (q, iy): the lowest non-zero digit's component and index.
+            let want = (0..=blocks.len())
+                .find(|&p| fast.digit[p] != 0)
+                .map(|p| (p, fast.index[p]));
+            assert_eq!(a.lowest(x), want, "{blocks:?} x={x}");
+            assert_eq!(d.lowest(x), want, "{blocks:?} x={x}");
         }
     }
 }

@@ -376,6 +376,23 @@ impl Axis {
         }
     }
 
+    /// The component of the lowest non-zero digit of `x >= 1` and the index of `x` among its
+    /// stored positions: the row step's `(q, iy)` ([`Axis::step`] from level 0 up, stopping
+    /// there: one step for most rows of power-of-two tiles, instead of all of [`Axis::digits`]).
+    /// `None` for `x = 0`.
+    #[inline(always)]
+    pub(super) fn lowest(&self, x: u32) -> Option<(usize, u32)> {
+        let mut q = x;
+        for p in 0..N {
+            let (d, index, next) = self.step(p, q)?;
+            if d != 0 {
+                return Some((p, index));
+            }
+            q = next;
+        }
+        None
+    }
+
     /// Stored positions of component `p` on an axis of `n` texels: the `X` in `1..=n` that are
     /// multiples of `b_p` with a non-zero digit `d_p`.
     #[allow(
@@ -2377,16 +2394,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             reason = "rows_done < h (checked above), so y <= h < 2^31: no wrap, lossless"
         )]
         let y = (*rows_done + 1) as u32;
-        let dy = g.ay.digits(y);
-        let Some(q) = dy
-            .digit
-            .iter()
-            .take(g.ay.components())
-            .position(|&d| d != 0)
-        else {
+        let Some((q, iy)) = g.ay.lowest(y) else {
             return Err(short);
         };
-        let iy = dy.index.get(q).copied().unwrap_or(0);
         // With `simd`, the band form of the level-0 accumulator (`simd::band_row`: column
         // sums) for rows that end no tile row: entered at a row that starts a tile row (the
         // accumulator is zero there). A row that ends a tile row and no level above it (q = 1)
