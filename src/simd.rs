@@ -1965,10 +1965,11 @@ impl Prefetch {
     }
 
     /// Runs `each` on blocks `0..blocks` in order, asking for the lines due by the end of each
-    /// group of 8 blocks before it (the bookkeeping once per group).
+    /// group of 16 blocks before it (the bookkeeping once per group: groups of 8 executed 4 %
+    /// more instructions in a tiled build of 1,024^2, `tools/examples/build_insns.py`).
     #[inline(always)]
     fn for_blocks(&mut self, blocks: usize, mut each: impl FnMut(usize)) {
-        const GROUP: usize = 8;
+        const GROUP: usize = 16;
         let mut from = 0;
         while from < blocks {
             let end = (from + GROUP).min(blocks);
