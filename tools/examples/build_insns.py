@@ -2,7 +2,7 @@
 """Instructions per texel of each build method on the host, counted by Valgrind (issue 13).
 
 Wall times on a shared VM move by 10 to 80 percent between runs (docs/benchmarks.md); the
-instructions a build executes do not move at all. This script runs the build-speed server
+instructions a build executes repeat to within 0.1 %. This script runs the build-speed server
 (`tools/examples/build_speed.rs`, built with `--features simd,parallel` like the `simd`
 variant of `build_speed.py`) under Valgrind's `cachegrind` tool without its cache model, twice
 per (method, side): with `n >= 1` builds and with `n + extra`, and reports the difference over
@@ -14,7 +14,8 @@ server under Valgrind which kernel it runs there and prints it. The counts repea
 
 What the count says: a build that runs from caches (a 1,024^2 table that stays in L3 between
 builds) takes time about in proportion to it; one bound by memory (4,096^2, or any table that
-does not stay in cache) does not, and only `build_speed.py` measures that.
+does not stay in cache) does not, and only `build_speed.py` measures that. The server is built
+by `build_speed.py`'s own `build("simd")`.
 
     apt-get install valgrind
     python3 tools/examples/build_insns.py            # floor,build,stream_into,tiled,modular, 1024^2
@@ -27,19 +28,8 @@ import re
 import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def build_server():
-    base = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-    target = os.path.join(base, "build-speed", "simd")
-    env = dict(os.environ, CARGO_TARGET_DIR=target)
-    env.pop("RUSTFLAGS", None)
-    cmd = ["cargo", "build", "--release", "--locked", "-p", "texsat-tools", "--example",
-           "build_speed", "--features", "simd,parallel"]
-    print(" ".join(cmd), file=sys.stderr)
-    subprocess.run(cmd, cwd=ROOT, env=env, check=True)
-    return os.path.join(target, "release", "examples", "build_speed")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import build_speed  # noqa: E402  (the sibling script: its `build(variant)`)
 
 
 def instructions(server, requests):
@@ -66,7 +56,7 @@ def main():
         sys.exit("--builds and --extra must be at least 1 (the first build also runs the check)")
     if subprocess.run(["valgrind", "--version"], capture_output=True).returncode != 0:
         sys.exit("valgrind not found (apt-get install valgrind)")
-    server = args.server or build_server()
+    server = args.server or build_speed.build("simd")
     native = subprocess.run([server], input="kernel\n", capture_output=True, text=True,
                             check=True).stdout.strip()
     counted = subprocess.run(["valgrind", "-q", "--tool=none", server], input="kernel\n",
