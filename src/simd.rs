@@ -52,12 +52,16 @@
 //!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
 //!    features enable. Calling the kernels (and XGETBV, after CPUID reports OSXSAVE) is the
 //!    only reason for `unsafe` beyond the memory accesses below.
-//! 2. *Memory.* [`pack_u32`] passes its kernel `groups` with `32 groups <= fields.len()` and
-//!    `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and writes
-//!    `words[g k..g k + k]` (AVX-512: 16 words and a masked store of the rest; AVX2: 8 words
-//!    at a time, then the group's last 4 or 8 words, some of them a second time with the same
-//!    value) for `g < groups` only; the AVX2 kernel's last pass of fewer than 8 groups reads
-//!    its last group again for the missing lanes and stores the groups it has only.
+//! 2. *Memory.* [`pack_u32`] passes its AVX-512 kernel `groups` with `32 groups <=
+//!    fields.len()` and `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]`
+//!    and writes `words[g k..g k + k]` (16 words and a masked store of the rest) for `g <
+//!    groups` only. It passes its AVX2 kernel `runs` (of 16 fields, `2 k` bytes) with `16
+//!    runs <= fields.len()` and `2 k runs <= 4 words.len()` bytes; the kernel reads
+//!    `fields[..16 runs]` and writes the first `2 k runs` bytes of `words` only (8 words at a
+//!    time, then a group's last 4 or 8 words, some of them a second time with the same value;
+//!    a last pass of fewer than 8 groups or runs reads its last one again for the missing
+//!    lanes and stores the ones it has only; an odd `k`'s last run word by word, its last
+//!    word's low 16 bits only).
 //!    [`modular_row`] checks `acc.len() >= 256 p` and `words.len() >= 8 k p` (`p` passes of
 //!    256 texels, `p = floor(texels.len() / 256)`) before its kernel reads `texels[256 b..][..256]`
 //!    and reads and writes `acc[256 b..][..256]` (one 8-lane load and store per field) and
@@ -745,22 +749,29 @@ unsafe fn pack_u32_with<E: Entry>(
         return 0;
     }
     let ku = k as usize;
-    let groups = (f.len() / 32).min(words.len() / ku);
-    if groups == 0 {
-        return 0;
-    }
     if kernel == Kernel::Avx2 {
+        // Runs of 16 fields, `2 k` bytes each: the whole groups of 32 and, when 16 to 31
+        // fields are left after them, one run more (a row of 128 texels has 16 tile
+        // boundaries: without it they went field by field).
+        let runs = (f.len() / 16).min(2 * words.len() / ku);
+        if runs == 0 {
+            return 0;
+        }
         // SAFETY: AVX2 is available (the caller's contract: `Kernel::Avx2` runs on this CPU);
-        // `f` holds at least 32 groups values and `words` at least groups k words (above); the
-        // kernel reads f[0..32 groups] and writes words[0..groups k] only.
-        unsafe {
+        // `f` holds at least 16 runs values and `words` at least 4 words.len() >= 2 k runs
+        // bytes (above); the kernel reads f[0..16 runs] and writes the first 2 k runs bytes
+        // of `words` only.
+        return unsafe {
             by_pack_width!(
                 ku,
-                pack256::pack(f.as_ptr(), words.as_mut_ptr(), groups),
+                pack256::pack(f.as_ptr(), words.as_mut_ptr(), runs),
                 return 0
             )
         };
-        return groups * 32;
+    }
+    let groups = (f.len() / 32).min(words.len() / ku);
+    if groups == 0 {
+        return 0;
     }
     // idx[t][j], cnt[t][j]: the field (0..32 in the group) and the shift of term t of word j.
     let Some(table) = PACK_TABLES.get(ku - MIN_PACK_BITS as usize) else {
@@ -1277,9 +1288,10 @@ mod pack256 {
         o
     }
 
-    /// [`pass`] over runs of 16 fields instead of groups of 32, for the groups left after the
-    /// whole passes when they are 4 or fewer (the tiled build's 128 boundaries of a 1,024-texel
-    /// row: 4 groups, which a pass of 8 lanes would take at the cost of 8): `hn <= 8` runs from
+    /// [`pass`] over runs of 16 fields instead of groups of 32, for the runs left after the
+    /// whole passes when they are 8 or fewer (the tiled build's 128 boundaries of a 1,024-texel
+    /// row: 4 groups, which a pass of 8 lanes would take at the cost of 8; the 16 of a
+    /// 128-texel row, which are no whole group), or the odd last run: `hn <= 8` runs from
     /// `f` (run `h` at `f + 16 h`), each lane one run, half the fields of a pass. Sixteen
     /// fields are `16 K` bits, `2 K` bytes, so run `h`'s fields start on byte `2 K h` of `out`
     /// and each run is packed as if from bit 0 (the same constant shifts in every lane) into
@@ -1295,7 +1307,10 @@ mod pack256 {
     /// and `out` for writes of `2 K hn` bytes.
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn runs16<const K: usize>(f: *const u32, out: *mut u8, hn: usize) {
+    unsafe fn runs16<const K: usize, const ONE: bool>(f: *const u32, out: *mut u8, hn: usize) {
+        // One run (`ONE`): a constant, and an instance of its own (each instance has one
+        // caller, so each is inlined: with two callers this function was not, and cost more).
+        let hn = if ONE { 1 } else { hn };
         // Only words 0..ceil(K / 2) are set: field 15 ends at bit 16 K.
         // SAFETY: each (clamped) run holds 16 readable values (the caller's contract).
         let o = unsafe { lanes::<K, false, 16>(f, hn) };
@@ -1346,31 +1361,37 @@ mod pack256 {
         }
     }
 
-    /// The kernel: `groups` groups of 32 `K`-bit fields from `f` into `K` words each at `w`
-    /// (group `g`: `f[32 g..32 g + 32]` into `w[g K..g K + K]`), eight groups per pass, each
-    /// group in a 32-bit lane so that every shift is the same in all lanes; the last pass takes
-    /// the groups left (`pass::<K, false>`), or, when they are 4 or fewer, their runs of 16
-    /// fields in one lane each ([`runs16`]: half the work).
+    /// The kernel: `runs` runs of 16 `K`-bit fields from `f` into `2 K` bytes each from `w`
+    /// (run `r`: `f[16 r..16 r + 16]` into bytes `2 K r..2 K (r + 1)`; a pair of runs is a
+    /// group of 32 fields, `K` words); returns the fields packed, `16 runs` (for `K` = 16 or
+    /// 32, the whole groups only: `32 floor(runs / 2)`). Eight groups per pass, each group in a
+    /// 32-bit lane so that every shift is the same in all lanes; the groups left after the
+    /// whole passes: 5 to 7, a last pass (`pass::<K, false>`); 4 or fewer, their runs one lane
+    /// each ([`runs16`]: half the work of a pass); then, for an odd `runs`, the last run by
+    /// [`runs16`] (a call of its own: one run, constant).
     ///
     /// # Safety
-    /// The CPU has AVX2; `11 <= K <= 32`; `f` is valid for reads of `32 groups` values and `w`
-    /// for writes of `groups K` words.
+    /// The CPU has AVX2; `11 <= K <= 32`; `f` is valid for reads of `16 runs` values and `w`
+    /// for writes of `2 K runs` bytes.
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn pack<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
+    pub(super) unsafe fn pack<const K: usize>(f: *const u32, w: *mut u32, runs: usize) -> usize {
         if K == 16 || K == 32 {
-            // SAFETY: forwarded (the caller's contract).
-            unsafe { whole::<K>(f, w, groups) };
-            return;
+            // SAFETY: forwarded (the caller's contract: 32 floor(runs / 2) values, as many
+            // groups of K words).
+            unsafe { whole::<K>(f, w, runs / 2) };
+            return 32 * (runs / 2);
         }
         if K == 12 || K == 14 {
-            // SAFETY: forwarded (the caller's contract: 32 groups values, 4 K groups bytes),
-            // K is 12 or 14.
-            unsafe { even::<K, false>(f.cast(), w.cast(), 2 * groups) };
-            return;
+            // SAFETY: forwarded (the caller's contract: 16 runs values, 2 K runs bytes), K is
+            // 12 or 14.
+            unsafe { even::<K, false>(f.cast(), w.cast(), runs) };
+            return 16 * runs;
         }
+        let groups = runs / 2;
         let mut g0 = 0;
         // SAFETY: every pass reads groups g0..g0 + gn and writes their words, g0 + gn <=
-        // groups (the caller's contract).
+        // groups; the odd last run reads f[32 groups..16 runs] and writes bytes 4 K groups..2
+        // K runs (the caller's contract).
         unsafe {
             while g0 + 8 <= groups {
                 pass::<K, true>(f.add(32 * g0), w.add(K * g0), 8);
@@ -1379,9 +1400,13 @@ mod pack256 {
             if groups - g0 > 4 {
                 pass::<K, false>(f.add(32 * g0), w.add(K * g0), groups - g0);
             } else if g0 < groups {
-                runs16::<K>(f.add(32 * g0), w.add(K * g0).cast(), 2 * (groups - g0));
+                runs16::<K, false>(f.add(32 * g0), w.add(K * g0).cast(), 2 * (groups - g0));
+            }
+            if runs % 2 == 1 {
+                runs16::<K, true>(f.add(32 * groups), w.add(K * groups).cast(), 1);
             }
         }
+        16 * runs
     }
 }
 
@@ -2862,10 +2887,12 @@ mod tests {
     }
 
     /// `pack_u32` writes, for every width 11 to 32, the words a field-by-field write of the
-    /// low `k` bits gives (`layouts::packed::write_bits`), for whole groups of 32 only, and
-    /// nothing past them; values with their high bits set (only the low `k` stored); counts
-    /// below, at and past whole groups, and past whole passes of 8 groups of the AVX2 kernel
-    /// (a last pass of 1 to 7 groups). Every packing kernel the CPU runs, explicitly (AVX2 on
+    /// low `k` bits gives (`layouts::packed::write_bits`), for whole groups of 32 (AVX-512) or
+    /// runs of 16 (AVX2) only, and nothing past them (for an odd `k` an odd run ends in the
+    /// middle of a word: its upper half kept); values with their high bits set (only the low
+    /// `k` stored); counts below, at and past whole runs and groups, and past whole passes of
+    /// 8 groups of the AVX2 kernel (a last pass of 4 to 7 groups, or 1 to 8 runs, with and
+    /// without an odd run after them). Every packing kernel the CPU runs, explicitly (AVX2 on
     /// an AVX-512 CPU too), then `pack_u32` itself: all the whole groups packed with AVX2 or
     /// AVX-512 (Miri: the kernel the target features enable), 0 without, for another type, or
     /// a width outside 11..=32.
@@ -2874,15 +2901,23 @@ mod tests {
         extern crate std;
         use std::vec::Vec;
         let counts: &[usize] = if cfg!(miri) {
-            &[33, 9 * 32 + 1]
+            &[33, 48, 9 * 32 + 17]
         } else {
             &[
                 0,
+                15,
+                16,
                 31,
                 32,
+                48,
                 64,
                 101,
+                3 * 32 + 16 + 5,
                 4 * 32,
+                4 * 32 + 16,
+                8 * 32 + 16,
+                9 * 32 + 16,
+                12 * 32 + 16,
                 8 * 32,
                 8 * 32 + 31,
                 12 * 32 + 5,
@@ -2915,19 +2950,20 @@ mod tests {
                     let fields: Vec<u32> = (0..n).map(|_| next()).collect();
                     let noise: Vec<u32> = (0..n * k as usize / 32 + 3).map(|_| next()).collect();
                     let mut words = noise.clone();
-                    let (done, expect) = match kernel {
+                    let done = match kernel {
                         // SAFETY: `kernel` is available on this CPU (filtered above).
-                        Some(kr) => (unsafe { pack_u32_with(kr, &mut words, &fields, k) }, {
-                            kr != Kernel::Sse2
-                        }),
-                        None => (pack_u32(&mut words, &fields, k), packs),
+                        Some(kr) => unsafe { pack_u32_with(kr, &mut words, &fields, k) },
+                        None => pack_u32(&mut words, &fields, k),
+                    };
+                    // AVX2 packs runs of 16 (whole groups for the widths that divide 32),
+                    // AVX-512 whole groups of 32, SSE2 nothing.
+                    let expect = match kernel.unwrap_or(Kernel::best()) {
+                        Kernel::Sse2 => 0,
+                        Kernel::Avx2 if k % 16 != 0 => n / 16 * 16,
+                        _ => n / 32 * 32,
                     };
                     let name = kernel.map_or("pack_u32", Kernel::name);
-                    assert_eq!(
-                        done,
-                        if expect { n / 32 * 32 } else { 0 },
-                        "{name} k {k} n {n}"
-                    );
+                    assert_eq!(done, expect, "{name} k {k} n {n}");
                     ran += usize::from(done > 0);
                     let mut want = noise.clone();
                     for (i, &f) in fields.iter().take(done).enumerate() {
