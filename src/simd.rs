@@ -1994,13 +1994,37 @@ impl Prefetch {
     /// more instructions in a tiled build of 1,024^2, `tools/examples/build_insns.py`).
     #[inline(always)]
     fn for_blocks(&mut self, blocks: usize, mut each: impl FnMut(usize)) {
-        const GROUP: usize = 16;
         let mut from = 0;
         while from < blocks {
-            let end = (from + GROUP).min(blocks);
+            let end = (from + Self::GROUP).min(blocks);
             self.ask(end);
             for b in from..end {
                 each(b);
+            }
+            from = end;
+        }
+    }
+
+    /// Blocks per group (a multiple of 4, for [`Prefetch::for_quads`]).
+    const GROUP: usize = 16;
+
+    /// As [`Prefetch::for_blocks`], four blocks at a time: `step(b, true)` for blocks `b..b +
+    /// 4` while a group has four left (every group but the row's last has 16), then `step(b,
+    /// false)` for each block left (fewer than 4, at the row's end).
+    #[inline(always)]
+    fn for_quads(&mut self, blocks: usize, mut step: impl FnMut(usize, bool)) {
+        let mut from = 0;
+        while from < blocks {
+            let end = (from + Self::GROUP).min(blocks);
+            self.ask(end);
+            let mut b = from;
+            while b + 4 <= end {
+                step(b, true);
+                b += 4;
+            }
+            while b < end {
+                step(b, false);
+                b += 1;
             }
             from = end;
         }
@@ -2706,12 +2730,18 @@ mod band256 {
     }
 
     /// [`band_row`]'s kernel over `blocks` blocks of 16 columns; returns the running boundary
-    /// sum after them. Per block: 16 texels widened (`vpmovzxbw`) and added to the column
-    /// sums `cs`, stored back; their prefix within each tile; the two tiles' local sums
-    /// stored as 16-bit values, 7 apart (the second store overwrites the first's lane 7, the
-    /// tile's total; its own lane 7 is the next block's first, or one past the last block's);
-    /// the totals (lanes 7 and 15) added to the running sum, each sum after a tile stored as a
-    /// boundary. The lines of `ahead` asked for as in [`tiled256::kernel`].
+    /// sum after them. Per block ([`column_step`]): 16 texels widened (`vpmovzxbw`) and added
+    /// to the column sums `cs`, stored back; their prefix within each tile; the two tiles'
+    /// local sums stored as 16-bit values, 7 apart (the second store overwrites the first's
+    /// lane 7, the tile's total; its own lane 7 is the next block's first, or one past the
+    /// last block's). The boundaries, four blocks (8 tiles) at a time: the 8 tiles' totals
+    /// (lanes 7 and 15 of each block) gathered by three unpacks and an interleave of the
+    /// halves, widened to 32 bits, their prefix sum plus the running sum stored as 8
+    /// boundaries at once, the running sum the last of them (about 4 instructions per block
+    /// instead of 7 for two extracts, three additions and two stores: 5 % of a tiled build of
+    /// 1,024^2). The blocks after the last four (at the row's end): each tile's total
+    /// extracted and added to the running sum, each sum after a tile stored. The lines of
+    /// `ahead` asked for as in [`tiled256::kernel`].
     ///
     /// # Safety
     /// The CPU has AVX2; `t` valid for reads of `16 blocks` bytes, `cs` for reads and writes
@@ -2727,29 +2757,78 @@ mod band256 {
         ahead: Ahead,
     ) -> u32 {
         let mut prefetch = Prefetch::new(ahead, blocks);
-        let mut run = 0u32;
-        prefetch.for_blocks(blocks, |b| {
-            let i = BLOCK * b;
-            // SAFETY: i + 16 <= 16 blocks: t[i..i + 16] and cs[i..i + 16]; the local
-            // stores write loc[14 b..14 b + 15] (<= 14 blocks + 1), the boundaries bnd[2
-            // b], bnd[2 b + 1] (< 2 blocks): the caller's contract.
+        let seven = _mm256_set1_epi32(7);
+        // The running sum in every lane.
+        let mut run = _mm256_setzero_si256();
+        prefetch.for_quads(blocks, |b, quad| {
+            // SAFETY (both arms): blocks b..b + 4 (quad) or b < blocks: inside the caller's
+            // slices for column_step; the boundaries bnd[2 b..2 b + 8] (quad: b + 4 <=
+            // blocks) or bnd[2 b], bnd[2 b + 1], < 2 blocks (the caller's contract).
             unsafe {
-                let x = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
-                let c = _mm256_add_epi16(x, _mm256_loadu_si256(cs.add(i).cast()));
-                _mm256_storeu_si256(cs.add(i).cast(), c);
-                let p = prefix8(c);
-                let (lo, hi) = (_mm256_castsi256_si128(p), _mm256_extracti128_si256::<1>(p));
-                _mm_storeu_si128(loc.add(14 * b).cast(), lo);
-                _mm_storeu_si128(loc.add(14 * b + 7).cast(), hi);
-                let ta = _mm_extract_epi16::<7>(lo) as u32;
-                let tb = _mm_extract_epi16::<7>(hi) as u32;
-                let first = run.wrapping_add(ta);
-                run = run.wrapping_add(ta.wrapping_add(tb));
-                bnd.add(2 * b).write_unaligned(first);
-                bnd.add(2 * b + 1).write_unaligned(run);
+                if quad {
+                    let p0 = column_step(t, cs, loc, b);
+                    let p1 = column_step(t, cs, loc, b + 1);
+                    let p2 = column_step(t, cs, loc, b + 2);
+                    let p3 = column_step(t, cs, loc, b + 3);
+                    // u16 lanes 4..8 of each half of v: lane 7 of p0, p1, p2, p3 (low half:
+                    // the blocks' first tiles' totals; high half: lane 15, the second tiles').
+                    let v = _mm256_unpackhi_epi32(
+                        _mm256_unpackhi_epi16(p0, p1),
+                        _mm256_unpackhi_epi16(p2, p3),
+                    );
+                    // The 8 tiles in order: p0's two, p1's two, ...
+                    let tiles = _mm_unpackhi_epi16(
+                        _mm256_castsi256_si128(v),
+                        _mm256_extracti128_si256::<1>(v),
+                    );
+                    let w = _mm256_cvtepu16_epi32(tiles);
+                    // Inclusive prefix: within each half, then the low half's total into the
+                    // high half, then the running sum.
+                    let w = _mm256_add_epi32(w, _mm256_slli_si256::<4>(w));
+                    let w = _mm256_add_epi32(w, _mm256_slli_si256::<8>(w));
+                    let low_total =
+                        _mm256_shuffle_epi32::<0xff>(_mm256_permute2x128_si256::<0x08>(w, w));
+                    let w = _mm256_add_epi32(_mm256_add_epi32(w, low_total), run);
+                    _mm256_storeu_si256(bnd.add(2 * b).cast(), w);
+                    run = _mm256_permutevar8x32_epi32(w, seven);
+                } else {
+                    let p = column_step(t, cs, loc, b);
+                    let r = _mm256_cvtsi256_si32(run) as u32;
+                    let ta = _mm256_extract_epi16::<7>(p) as u32;
+                    let tb = _mm256_extract_epi16::<15>(p) as u32;
+                    let first = r.wrapping_add(ta);
+                    let last = first.wrapping_add(tb);
+                    bnd.add(2 * b).write_unaligned(first);
+                    bnd.add(2 * b + 1).write_unaligned(last);
+                    run = _mm256_set1_epi32(last as i32);
+                }
             }
         });
-        run
+        _mm256_cvtsi256_si32(run) as u32
+    }
+
+    /// Block `b` of [`row`]: texels `16 b..16 b + 16` widened and added to the column sums,
+    /// stored back; their prefix within each tile, returned; the two tiles' local sums stored
+    /// as 16-bit values at `loc + 14 b` and `loc + 14 b + 7` (lanes 0..8 of each half; the
+    /// second store overwrites the first's lane 7).
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `t` valid for reads of `16 b + 16` bytes, `cs` for reads and writes
+    /// of `16 b + 16` `u16`, `loc` for writes of `14 b + 15` `u16`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn column_step(t: *const u8, cs: *mut u16, loc: *mut u16, b: usize) -> __m256i {
+        let i = BLOCK * b;
+        // SAFETY: the caller's contract; unaligned loads and stores.
+        unsafe {
+            let x = _mm256_cvtepu8_epi16(_mm_loadu_si128(t.add(i).cast()));
+            let c = _mm256_add_epi16(x, _mm256_loadu_si256(cs.add(i).cast()));
+            _mm256_storeu_si256(cs.add(i).cast(), c);
+            let p = prefix8(c);
+            _mm_storeu_si128(loc.add(14 * b).cast(), _mm256_castsi256_si128(p));
+            _mm_storeu_si128(loc.add(14 * b + 7).cast(), _mm256_extracti128_si256::<1>(p));
+            p
+        }
     }
 
     /// Eight `u16` at `from` widened to `u32` at `to` (one load, then one store).
@@ -3570,7 +3649,7 @@ mod tests {
     /// The row lengths of the band tests: 0 to 70 and 255, 256 and 1,000 (a few under Miri).
     fn band_sizes() -> std::vec::Vec<usize> {
         if cfg!(miri) {
-            std::vec![0, 7, 16, 17, 40]
+            std::vec![0, 7, 16, 17, 40, 112]
         } else {
             (0..=70).chain([255, 256, 1000]).collect()
         }
