@@ -1148,9 +1148,10 @@ mod pack256 {
     /// order, instead of the transposing passes: 16 fields as 16-bit lanes, each masked to its
     /// low `K` bits (from `u32` values, `NARROW = false`: narrowed by `vpackusdw`, no
     /// saturation after the mask, the quarters put back in order by `vpermq`; from `u16`
-    /// values, `NARROW`: one load); pairs joined by `vpmaddwd` with weights `(1, 2^K)` (`f_0 +
-    /// 2^K f_1 < 2^{2K} <= 2^28`); pairs of pairs in each 64-bit lane by a shift (`P_0 +
-    /// 2^{2K} P_1`, the `4 K / 8 = K / 2` bytes of 4 fields); the `K / 2` bytes of each 64-bit
+    /// values, `NARROW`: one load, and no mask without `MASK`, for values the caller knows are
+    /// below `2^K`); pairs joined by `vpmaddwd` with weights `(1, 2^K)` (`f_0 + 2^K f_1 <
+    /// 2^{2K} <= 2^28`); pairs of pairs in each 64-bit lane by a shift (`P_0 + 2^{2K} P_1`, the
+    /// `4 K / 8 = K / 2` bytes of 4 fields); the `K / 2` bytes of each 64-bit
     /// lane moved together (`vpshufb`, per 128-bit half: `K` bytes) and stored as two 16-byte
     /// stores `K` bytes apart. A store's bytes past its `K` are the next fields', rewritten by
     /// the next store in order; the last step stores `hi` as two 8-byte pieces ending on its
@@ -1159,9 +1160,10 @@ mod pack256 {
     ///
     /// # Safety
     /// The CPU has AVX2; `K` is 8, 10, 12 or 14; `f` is valid for reads of `16 steps` values
-    /// (`u16` if `NARROW`, else `u32`) and `out` for writes of `2 K steps` bytes.
+    /// (`u16` if `NARROW`, else `u32`) and `out` for writes of `2 K steps` bytes. (A value of
+    /// `2^K` or more without `MASK` gives wrong bits, never an access out of bounds.)
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn even<const K: usize, const NARROW: bool>(
+    pub(super) unsafe fn even<const K: usize, const NARROW: bool, const MASK: bool>(
         f: *const u8,
         out: *mut u8,
         steps: usize,
@@ -1186,7 +1188,9 @@ mod pack256 {
             // SAFETY: step s reads values 16 s..16 s + 16 <= 16 steps (s < steps, the
             // caller's contract); the intrinsics need AVX2, which this function enables.
             let p = unsafe {
-                if NARROW {
+                if NARROW && !MASK {
+                    _mm256_loadu_si256(f.add(32 * s).cast())
+                } else if NARROW {
                     _mm256_and_si256(_mm256_loadu_si256(f.add(32 * s).cast()), m16)
                 } else {
                     let a = _mm256_and_si256(_mm256_loadu_si256(f.add(64 * s).cast()), m32);
@@ -1195,7 +1199,9 @@ mod pack256 {
                 }
             };
             let d = _mm256_madd_epi16(p, weights);
-            // Per 64-bit lane: P_0 (low half) + P_1 (high half) shifted down to bit 2 K.
+            // Per 64-bit lane: P_0 (low half) + P_1 (high half) shifted down to bit 2 K. (A
+            // multiply of P_1 by 2^32 - 2^{2 K} taken from the lane, three instructions, came
+            // out as two multiplies: the compiler negates the constant.)
             let q = _mm256_or_si256(
                 _mm256_blend_epi32::<0xaa>(d, zero),
                 _mm256_srl_epi64(_mm256_blend_epi32::<0x55>(d, zero), shift),
@@ -1384,7 +1390,7 @@ mod pack256 {
         if K == 12 || K == 14 {
             // SAFETY: forwarded (the caller's contract: 16 runs values, 2 K runs bytes), K is
             // 12 or 14.
-            unsafe { even::<K, false>(f.cast(), w.cast(), runs) };
+            unsafe { even::<K, false, true>(f.cast(), w.cast(), runs) };
             return 16 * runs;
         }
         let groups = runs / 2;
@@ -2570,7 +2576,13 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     });
     // The whole steps of 16 local sums packed from 16 bits, when the row starts on a byte.
     let mut kp = 0;
-    if let Some(PackTo { words, bit, k, .. }) = pack {
+    if let Some(PackTo {
+        words,
+        bit,
+        k,
+        exact,
+    }) = pack
+    {
         let steps = kl / 16;
         let ku = k as usize;
         if matches!(k, 8 | 10 | 12 | 14)
@@ -2584,13 +2596,18 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
                 .cast::<u8>()
                 .wrapping_add(bit as usize / 8);
             // SAFETY: AVX2 (above); loc[..16 steps] readable (16 steps <= kl, written above);
-            // out[..2 k steps] inside words (checked above), not local's storage.
+            // out[..2 k steps] inside words (checked above), not local's storage. Exact local
+            // sums (below 2^k) need no mask (one instruction per 16 fields).
             unsafe {
-                match k {
-                    8 => pack256::even::<8, true>(loc.cast(), out, steps),
-                    10 => pack256::even::<10, true>(loc.cast(), out, steps),
-                    12 => pack256::even::<12, true>(loc.cast(), out, steps),
-                    _ => pack256::even::<14, true>(loc.cast(), out, steps),
+                match (k, exact) {
+                    (8, true) => pack256::even::<8, true, false>(loc.cast(), out, steps),
+                    (10, true) => pack256::even::<10, true, false>(loc.cast(), out, steps),
+                    (12, true) => pack256::even::<12, true, false>(loc.cast(), out, steps),
+                    (_, true) => pack256::even::<14, true, false>(loc.cast(), out, steps),
+                    (8, false) => pack256::even::<8, true, true>(loc.cast(), out, steps),
+                    (10, false) => pack256::even::<10, true, true>(loc.cast(), out, steps),
+                    (12, false) => pack256::even::<12, true, true>(loc.cast(), out, steps),
+                    (_, false) => pack256::even::<14, true, true>(loc.cast(), out, steps),
                 }
             }
             kp = 16 * steps;
@@ -3587,11 +3604,13 @@ mod tests {
                         .map(|i| 0x9e37_79b9u32.rotate_left(i as u32))
                         .collect();
                     let mut words = noise.clone();
+                    // Exact (no mask) where the local sums fit k bits (at most 7 * 7 * 255 =
+                    // 12,495 < 2^14), and once with the mask for k = 14 too.
                     let pack = (k > 0).then(|| PackTo {
                         words: &mut words,
                         bit,
                         k,
-                        exact: true,
+                        exact: k == 14 && bit != 8,
                     });
                     let got = band_row::<u8, u32, 1>(
                         &t,
