@@ -2050,11 +2050,28 @@ impl Prefetch {
                 continue;
             }
             let due = ((self.rate[r] * end + 0xffff) >> 16).min(lines);
-            let base = self.ahead[r].0;
-            for line in asked..due {
-                // A hint (reads and writes nothing, never faults); 16 line < len: inside the
-                // words. SAFETY: SSE is baseline on x86-64; the hint dereferences nothing.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(base.wrapping_add(16 * line).cast()) };
+            // Lines asked..due, four per turn (a loop of one took five instructions per line,
+            // 5 % of a tiled build of 1,024^2), then the rest.
+            let mut at = self.ahead[r].0.wrapping_add(16 * asked);
+            let mut left = due.saturating_sub(asked);
+            let ask = |p: *const u32| {
+                // A hint (reads and writes nothing, never faults); the lines asked for are
+                // asked..due < lines, inside the words (16 line < len). SAFETY: SSE is
+                // baseline on x86-64; the hint dereferences nothing.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast()) };
+            };
+            while left >= 4 {
+                ask(at);
+                ask(at.wrapping_add(16));
+                ask(at.wrapping_add(32));
+                ask(at.wrapping_add(48));
+                at = at.wrapping_add(64);
+                left -= 4;
+            }
+            while left > 0 {
+                ask(at);
+                at = at.wrapping_add(16);
+                left -= 1;
             }
             self.asked[r] = due.max(asked);
         }
