@@ -33,18 +33,6 @@ printed as well):
 Every method's table is compared with `Sat::build`'s before it is timed (in the server), and
 OpenCV's with the texsat table (here).
 
-On a VM that switches between a fast and a slow state (on the machine of 2026-11-28, a tiled
-build of 128^2 hot in cache took 0.9 to 1.0 ns per texel in one second and 1.5 to 1.8 in the
-next, half of the time each, while a flat build whose table goes through memory hardly moved),
-`--probe` times a compute-bound probe before and after every round (`--probe-method` at
-`--probe-side` in the `simd` server if timed, else the first; the median of 5 builds) and prints
-the paired ratios again for the rounds where both probes were within 1.25x of the run's fastest
-probe, or at most `--probe-fast` ns per texel ("fast"), and for the others ("slow"): a compute-bound build (tiled) and a memory-bound one (build) compare
-differently in the two states, and the split shows which state a run's median came from.
-
-    python3 tools/examples/build_speed.py --variants simd --methods floor,build,tiled \
-        --cpu 1 --rounds 41 --probe
-
 On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
 2-vCPU machine of 2026-11-28 a server that the scheduler kept on CPU 0 ran the same code up to
 1.4x slower than one on CPU 1 (median of the best of 5 builds), which made binaries and
@@ -142,18 +130,6 @@ def main():
     ap.add_argument("--cpu", type=int, default=None,
                     help="run this script, OpenCV and every server on this one CPU (they take "
                     "turns: one measurement at a time), so that all figures share one core")
-    ap.add_argument("--probe", action="store_true",
-                    help="time a compute-bound probe before and after every round and split the "
-                    "paired ratios by the machine's state (fast / slow rounds)")
-    ap.add_argument("--probe-method", default="tiled", help="the probe's server method")
-    ap.add_argument("--probe-server", default=None,
-                    help="the server that runs the probe (default: simd if timed, else the first)")
-    ap.add_argument("--probe-fast", type=float, default=None,
-                    help="a round is fast if its probe is at most this many ns per texel "
-                    "(default: 1.25x the run's fastest probe, which a run spent wholly in one "
-                    "state cannot tell apart)")
-    ap.add_argument("--probe-side", type=int, default=128,
-                    help="the probe's side (small: it stays in cache, compute-bound)")
     args = ap.parse_args()
 
     sides = [int(s) for s in args.sides.split(",")]
@@ -220,32 +196,14 @@ def main():
     load0, sched0, wall0 = loadavg(), {p: schedstat(p) for p in pids}, time.monotonic_ns()
     for job in jobs:  # warm-up: page in storage, check every method's output once
         run(job)
-
-    names = [s.variant for s in servers]
-    probe_name = args.probe_server or ("simd" if "simd" in names else names[0])
-    if probe_name not in names:
-        sys.exit(f"--probe-server {probe_name}: not one of {names}")
-    prober = servers[names.index(probe_name)]
-
-    def probe():
-        """The probe's median over 5 builds, ns per texel (its first call also checks it)."""
-        return statistics.median(
-            float(prober.ask(f"{args.probe_method} {args.probe_side}")) for _ in range(5))
-
-    if args.probe:
-        probe()
-    probes = []  # per round: the slower of the probes before and after it
     rng = random.Random(args.seed)
     for r in range(max(args.rounds, args.rounds_large or 0)):
         order = [j for j in jobs if j[2] <= 2048 and r < args.rounds
                  or j[2] > 2048 and r < (args.rounds_large or args.rounds)]
         rng.shuffle(order)
-        before = probe() if args.probe else 0.0
         for job in order:
             s, m, n = job
             samples[(s.variant if s else "opencv", m, n)].append(run(job))
-        if args.probe:
-            probes.append(max(before, probe()))
     wall = time.monotonic_ns() - wall0
     load1, sched1 = loadavg(), {p: schedstat(p) for p in pids}
     for s in servers:
@@ -284,49 +242,26 @@ def main():
             cells += [f"{x:.3f}", f"{x / fl:.2f}" if fl else "", f"{x / cv:.2f}" if cv else ""]
         print(f"| {v} | {m} | " + " | ".join(cells) + " |")
     # Paired ratios: the same round's two figures divided, then the median and quartiles over
-    # the rounds (robust to the machine's drift between rounds); over the rounds in `only` if
-    # given (the probe's split).
-    def paired(a, b, only=None):
+    # the rounds (robust to the machine's drift between rounds).
+    def paired(a, b):
         xs, ys = samples.get(a), samples.get(b)
         if not xs or not ys:
             return None
-        r = sorted(x / y for i, (x, y) in enumerate(zip(xs, ys)) if only is None or i in only)
-        if not r:
-            return None
+        r = sorted(x / y for x, y in zip(xs, ys))
         q = statistics.quantiles(r, n=4) if len(r) >= 2 else [r[0]] * 3
         return q[0], statistics.median(r), q[2]
 
-    def ratio_table(only=None):
-        for v, m in rows:
-            if v == "opencv":
-                continue
-            cells = []
-            for n in sides:
-                for ref in [(v, "floor", n), ("opencv", "cv2.integral", n), (v, "build", n)]:
-                    pr = paired((v, m, n), ref, only)
-                    cells.append(f"{pr[1]:.2f} [{pr[0]:.2f}, {pr[2]:.2f}]" if pr else "")
-            print(f"| {v} | {m} | " + " | ".join(cells) + " |")
-
     print("\npaired ratios, median over rounds [quartiles]; per side: / floor, / cv2.integral, "
           "/ the same variant's build (Sat::build)")
-    ratio_table()
-    if probes:
-        fastest = min(probes)
-        limit = args.probe_fast if args.probe_fast is not None else 1.25 * fastest
-        fast = {i for i, p in enumerate(probes) if p <= limit}
-        slow = set(range(len(probes))) - fast
-        print(f"\nprobe ({args.probe_method} {args.probe_side}^2 on {probe_name}, hot, "
-              f"median of 5, the slower of before and after each round): fastest "
-              f"{fastest:.3f} ns/texel, median {statistics.median(probes):.3f}, slowest "
-              f"{max(probes):.3f}; fast rounds (probe at most {limit:.3f}): {len(fast)}, "
-              f"slow: {len(slow)}")
-        if args.probe_fast is None and max(probes) < 1.25 * fastest:
-            print("(the probe moved by less than 1.25x: the run may have stayed in one state, "
-                  "which the split cannot tell; see --probe-fast)")
-        for name, only in [("fast", fast), ("slow", slow)]:
-            if only:
-                print(f"\npaired ratios over the {len(only)} {name} rounds, as above")
-                ratio_table(only)
+    for v, m in rows:
+        if v == "opencv":
+            continue
+        cells = []
+        for n in sides:
+            for ref in [(v, "floor", n), ("opencv", "cv2.integral", n), (v, "build", n)]:
+                pr = paired((v, m, n), ref)
+                cells.append(f"{pr[1]:.2f} [{pr[0]:.2f}, {pr[2]:.2f}]" if pr else "")
+        print(f"| {v} | {m} | " + " | ".join(cells) + " |")
     if args.servers and len(servers) > 1:
         first = servers[0].variant
         print(f"\npaired ratios to {first}'s same method, median over rounds [quartiles], per side")
@@ -341,7 +276,6 @@ def main():
         with open(args.json, "w") as f:
             json.dump({"kernels": {s.variant: s.kernel for s in servers},
                        "loadavg": [load0, load1],
-                       "probes": probes,
                        "medians": {f"{v}/{m}/{n}": x for (v, m, n), x in med.items()},
                        "samples": {f"{v}/{m}/{n}": x for (v, m, n), x in samples.items()}},
                       f, indent=1)
