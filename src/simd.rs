@@ -85,10 +85,12 @@
 //!    8` (its 16-bit local sums, `14 (n / 16) + 1` with the last block's overhang, and the
 //!    tail's, fit the `2 (n - n / 8)` halves of `local`'s words) before its kernel touches
 //!    block `b < n / 16`: texels `t[16 b..][..16]`, column sums `u16` `n + 16 b..` of `acc0`'s
-//!    `2 n` halves, local sums `14 b..14 b + 15`, boundaries `2 b`, `2 b + 1`. It packs from
-//!    16 bits into the target's words only after checking that the `2 k` bytes per 16 fields
-//!    from byte `bit / 8` lie inside them ([`pack256::even`] writes the last step's bytes
-//!    through a buffer: exactly `2 k steps` bytes); then it widens the rest in place, last
+//!    `2 n` halves, local sums `14 b..14 b + 15`, boundaries `2 b`, `2 b + 1` (for four blocks
+//!    `b..b + 4` at once, `b + 4 <= n / 16`: boundaries `2 b..2 b + 8`, one store). It packs
+//!    from 16 bits into the target's words only after checking that the `2 k` bytes per 16
+//!    fields from byte `bit / 8` lie inside them ([`pack256::even`] writes the last step's
+//!    bytes as two 8-byte pieces ending on its last byte: exactly `2 k steps` bytes); then it
+//!    widens the rest in place, last
 //!    first (word `j` holds halves `2 j` and `2 j + 1`, read already). [`band_flush`] rewrites
 //!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and
 //!    `2 i + 1 - n`, at most `i`, which a block reads before it writes its words.
@@ -708,11 +710,13 @@ mod avx512vnni {
 }
 
 /// Packs fields of `k` bits (`MIN_PACK_BITS <= k <= 32`, the low `k` bits of each value) into
-/// `words` from its bit 0, 32 fields (exactly `k` words) at a time, with AVX-512F or AVX2;
-/// returns the fields packed (whole groups of 32 that fit `words`; 0 for other types, widths,
-/// or CPUs without AVX2). Each word written ends as the word the layouts' portable packing
-/// writes there (`layouts::packed::pack_fields`: field `i` at bit `i k`); no word outside the
-/// groups' `k` words each is written.
+/// `words` from its bit 0, with AVX-512F 32 fields (exactly `k` words) at a time, with AVX2 16
+/// fields (exactly `2 k` bytes) at a time; returns the fields packed (the whole groups of 32,
+/// or with AVX2 the whole runs of 16 except for `k` = 16 and 32, that fit `words`; 0 for other
+/// types, widths, or CPUs without AVX2). Each word written ends as the word the layouts'
+/// portable packing writes there (`layouts::packed::pack_fields`: field `i` at bit `i k`); no
+/// bit past the fields packed is written (for an odd `k` and an odd number of runs, the last
+/// word's upper 16 bits are kept).
 ///
 /// With AVX-512F ([`pack512`]): output word `j` of a group holds bits `32 j .. 32 j + 32`, that
 /// is `f[i] >> s | f[i + 1] << (k - s) | f[i + 2] << (2k - s) | f[i + 3] << (3k - s)` with
@@ -758,9 +762,9 @@ unsafe fn pack_u32_with<E: Entry>(
             return 0;
         }
         // SAFETY: AVX2 is available (the caller's contract: `Kernel::Avx2` runs on this CPU);
-        // `f` holds at least 16 runs values and `words` at least 4 words.len() >= 2 k runs
-        // bytes (above); the kernel reads f[0..16 runs] and writes the first 2 k runs bytes
-        // of `words` only.
+        // `f` holds at least 16 runs values and `words` spans 4 words.len() >= 2 k runs bytes
+        // (above); the kernel reads f[0..16 runs] and writes the first 2 k runs bytes of
+        // `words` only.
         return unsafe {
             by_pack_width!(
                 ku,
@@ -1160,8 +1164,10 @@ mod pack256 {
     ///
     /// # Safety
     /// The CPU has AVX2; `K` is 8, 10, 12 or 14; `f` is valid for reads of `16 steps` values
-    /// (`u16` if `NARROW`, else `u32`) and `out` for writes of `2 K steps` bytes. (A value of
-    /// `2^K` or more without `MASK` gives wrong bits, never an access out of bounds.)
+    /// (`u16` if `NARROW`, else `u32`) and `out` for writes of `2 K steps` bytes. (`MASK`
+    /// matters for `NARROW` only: `u32` values are always masked, as `vpackusdw` needs. A
+    /// `u16` value of `2^K` or more without `MASK` gives wrong bits, never an access out of
+    /// bounds.)
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn even<const K: usize, const NARROW: bool, const MASK: bool>(
         f: *const u8,
@@ -2050,8 +2056,8 @@ impl Prefetch {
                 continue;
             }
             let due = ((self.rate[r] * end + 0xffff) >> 16).min(lines);
-            // Lines asked..due, four per turn (a loop of one took five instructions per line,
-            // 5 % of a tiled build of 1,024^2), then the rest.
+            // Lines asked..due, four per turn (a loop of one took five instructions per line:
+            // 2 % of a tiled build of 1,024^2), then the rest.
             let mut at = self.ahead[r].0.wrapping_add(16 * asked);
             let mut left = due.saturating_sub(asked);
             let ask = |p: *const u32| {
@@ -2525,7 +2531,8 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
 /// added to the column sums (one 16-bit add), their prefix inside each tile (three shifts and
 /// adds within each 128-bit half, which holds one tile), the 14 local sums stored as 16-bit
-/// values, the two tiles' totals extracted into the running boundary sum. Then the local sums
+/// values, the two tiles' totals added into the running boundary sum (four blocks' 8
+/// boundaries by one vector prefix sum, [`band256::row`]). Then the local sums
 /// packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and
 /// 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16), the rest widened into
 /// `local`. The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form
@@ -3005,7 +3012,8 @@ mod tests {
     /// middle of a word: its upper half kept); values with their high bits set (only the low
     /// `k` stored); counts below, at and past whole runs and groups, and past whole passes of
     /// 8 groups of the AVX2 kernel (a last pass of 4 to 7 groups, or 1 to 8 runs, with and
-    /// without an odd run after them). Every packing kernel the CPU runs, explicitly (AVX2 on
+    /// without an odd run after them; under Miri the first count, one group and an odd run,
+    /// for every width). Then a slice of `k` words, which holds 2 of 3 runs: no more packed. Every packing kernel the CPU runs, explicitly (AVX2 on
     /// an AVX-512 CPU too), then `pack_u32` itself: all the whole groups packed with AVX2 or
     /// AVX-512 (Miri: the kernel the target features enable), 0 without, for another type, or
     /// a width outside 11..=32.
@@ -3014,7 +3022,7 @@ mod tests {
         extern crate std;
         use std::vec::Vec;
         let counts: &[usize] = if cfg!(miri) {
-            &[33, 48, 9 * 32 + 17]
+            &[48, 33, 9 * 32 + 17]
         } else {
             &[
                 0,
@@ -3028,7 +3036,9 @@ mod tests {
                 3 * 32 + 16 + 5,
                 4 * 32,
                 4 * 32 + 16,
+                5 * 32 + 16,
                 8 * 32 + 16,
+                13 * 32 + 16,
                 9 * 32 + 16,
                 12 * 32 + 16,
                 8 * 32,
@@ -3094,6 +3104,26 @@ mod tests {
             }
         }
         assert_eq!(ran > 0, packs);
+        // A slice of k words holds one group: of 48 fields, AVX2 packs 2 runs of 16 (AVX-512
+        // its one group of 32), and writes no word past the slice (it ends there).
+        for k in MIN_PACK_BITS..=32 {
+            let fields: Vec<u32> = (0..48).map(|_| next()).collect();
+            let mut words = std::vec![0u32; k as usize];
+            let done = pack_u32(&mut words, &fields, k);
+            assert_eq!(done, if packs { 32 } else { 0 }, "k {k}");
+            let mut want = std::vec![0u32; k as usize];
+            for (i, &f) in fields.iter().take(done).enumerate() {
+                let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+                let at = i as u64 * u64::from(k);
+                assert!(crate::layouts::packed::write_bits(
+                    &mut want,
+                    at,
+                    k,
+                    u64::from(f & m)
+                ));
+            }
+            assert_eq!(words, want, "k {k}");
+        }
         let mut w = [0u32; 64];
         assert_eq!(pack_u32(&mut w, &[1u16; 64], 16), 0);
         assert_eq!(pack_u32(&mut w, &[1u32; 64], MIN_PACK_BITS - 1), 0);
@@ -3556,10 +3586,13 @@ mod tests {
     /// of 8 leaves before its last row), texels all 255 and random. The column sums after the
     /// row (the upper half of `acc0`), the boundaries (the running sum of the tiles' column
     /// totals), the local sums (the prefix of the column sums inside each tile) and their
-    /// counts; with a packing target of 14 and 10 bits from bits 0, 8, 24 (packed from 16
-    /// bits: `kp` a multiple of 16, the fields as `write_bits` writes them, the words past
-    /// them untouched) and 3 (not byte-aligned: nothing packed); then `band_flush` gives the
-    /// level-0 accumulator of the column sums (local sums, boundaries at multiples of 8).
+    /// counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10 and 12 bits from
+    /// bits 16, 0 and 8 (packed from 16 bits: `kp` a multiple of 16, the fields as `write_bits`
+    /// writes them, the words past them untouched) and of 14 bits from bit 3 (not
+    /// byte-aligned: nothing packed); exact (`pack256::even` without its mask) for 14 bits
+    /// except from bit 8, masked for the others, whose local sums pass `2^k` (so a missing
+    /// mask fails); then `band_flush` gives the level-0 accumulator of the column sums (local
+    /// sums, boundaries at multiples of 8).
     #[test]
     fn band_rows_equal_the_reference() {
         extern crate std;

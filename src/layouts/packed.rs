@@ -492,7 +492,8 @@ pub(crate) fn pack_fields<E: Entry>(
         (fields.get(done..).unwrap_or(&[]), offset)
     };
     if fields.is_empty() {
-        // All packed above (the tiled builder's rows of whole groups): no writer to set up.
+        // All packed above (the tiled builder's rows of whole groups or runs): no writer to set
+        // up.
         return true;
     }
     let (done, offset) = if len <= WORD_BITS {

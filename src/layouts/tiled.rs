@@ -2525,11 +2525,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                         usize::try_from(c.offset(0, iy).saturating_add(c.row_bits).div_ceil(32));
                     if let (Ok(from), Ok(to)) = (from, to) {
                         if let Some(w) = words.get(from..to) {
-                            // The component's row. (Also the 256 words after the local sums'
-                            // row, the next row's first 16 lines, was asked for until
-                            // 2026-11-28: the next row asks for them at its start anyway, long
-                            // before it packs; 2 % of the instructions of a tiled build of
-                            // 1,024^2, no time gained.)
+                            // The component's row only: the next row asks for its own lines
+                            // at its start, long before it packs (docs/benchmarks.md, "The
+                            // tiled build's fixed costs and boundaries").
                             *a = (w.as_ptr(), w.len());
                             *r = (from, to);
                         }
