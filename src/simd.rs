@@ -3055,6 +3055,20 @@ mod tests {
             seed ^= seed << 17;
             seed as u32
         };
+        // The reference: each field's low k bits written one by one over `words`.
+        let field_by_field = |mut words: Vec<u32>, fields: &[u32], k: u32| {
+            let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+            for (i, &f) in fields.iter().enumerate() {
+                let at = i as u64 * u64::from(k);
+                assert!(crate::layouts::packed::write_bits(
+                    &mut words,
+                    at,
+                    k,
+                    u64::from(f & m)
+                ));
+            }
+            words
+        };
         // None: `pack_u32`, which packs with AVX2 or AVX-512 (whichever is best).
         let packs = Kernel::best() != Kernel::Sse2;
         let kernels = [Kernel::Sse2, Kernel::Avx2, Kernel::Avx512Vnni]
@@ -3088,17 +3102,7 @@ mod tests {
                     let name = kernel.map_or("pack_u32", Kernel::name);
                     assert_eq!(done, expect, "{name} k {k} n {n}");
                     ran += usize::from(done > 0);
-                    let mut want = noise.clone();
-                    for (i, &f) in fields.iter().take(done).enumerate() {
-                        let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
-                        let at = i as u64 * u64::from(k);
-                        assert!(crate::layouts::packed::write_bits(
-                            &mut want,
-                            at,
-                            k,
-                            u64::from(f & m)
-                        ));
-                    }
+                    let want = field_by_field(noise.clone(), &fields[..done], k);
                     assert_eq!(words, want, "{name} k {k} n {n}");
                 }
             }
@@ -3111,17 +3115,7 @@ mod tests {
             let mut words = std::vec![0u32; k as usize];
             let done = pack_u32(&mut words, &fields, k);
             assert_eq!(done, if packs { 32 } else { 0 }, "k {k}");
-            let mut want = std::vec![0u32; k as usize];
-            for (i, &f) in fields.iter().take(done).enumerate() {
-                let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
-                let at = i as u64 * u64::from(k);
-                assert!(crate::layouts::packed::write_bits(
-                    &mut want,
-                    at,
-                    k,
-                    u64::from(f & m)
-                ));
-            }
+            let want = field_by_field(std::vec![0u32; k as usize], &fields[..done], k);
             assert_eq!(words, want, "k {k}");
         }
         let mut w = [0u32; 64];
