@@ -282,6 +282,15 @@ pub(crate) enum Kernel {
 /// The detected kernel: 0 before the first detection, else `1 + Kernel as u8`.
 static DETECTED: AtomicU8 = AtomicU8::new(0);
 
+#[cfg(test)]
+extern crate std;
+
+#[cfg(test)]
+std::thread_local! {
+    /// The calling test thread's cap on [`Kernel::best`] ([`Kernel::cap`]).
+    static CAP: core::cell::Cell<Option<Kernel>> = const { core::cell::Cell::new(None) };
+}
+
 impl Kernel {
     /// Every kernel, narrowest first.
     #[cfg(test)]
@@ -301,7 +310,7 @@ impl Kernel {
     /// features the build enables. (The tests run every available kernel.)
     #[cfg(test)]
     pub(crate) fn available(self) -> bool {
-        let best = Kernel::best();
+        let best = Kernel::detected();
         match self {
             Kernel::Sse2 => true,
             Kernel::Avx2 => best != Kernel::Sse2,
@@ -309,10 +318,35 @@ impl Kernel {
         }
     }
 
+    /// The kernel the builds run: the widest this CPU runs ([`Kernel::detected`]; in the
+    /// crate's unit tests, at most the calling thread's [`Kernel::cap`], so that they reach
+    /// the narrower kernels' code paths on a CPU with wider ones).
+    #[inline]
+    pub(crate) fn best() -> Kernel {
+        let k = Kernel::detected();
+        #[cfg(test)]
+        if let Some(cap) = CAP.with(|c| c.get()) {
+            if (cap as u8) < (k as u8) {
+                return cap;
+            }
+        }
+        k
+    }
+
+    /// Runs `f` with [`Kernel::best`] at most `self` on this thread (tests only: the other
+    /// test threads keep theirs).
+    #[cfg(test)]
+    pub(crate) fn cap<R>(self, f: impl FnOnce() -> R) -> R {
+        let before = CAP.with(|c| c.replace(Some(self)));
+        let r = f();
+        CAP.with(|c| c.set(before));
+        r
+    }
+
     /// The widest kernel this CPU runs (detected on the first call, then cached: a relaxed
     /// atomic, every thread detects the same).
     #[inline]
-    pub(crate) fn best() -> Kernel {
+    fn detected() -> Kernel {
         match DETECTED.load(Ordering::Relaxed) {
             1 => Kernel::Sse2,
             2 => Kernel::Avx2,

@@ -1061,3 +1061,53 @@ fn tiled_cells4_equal_the_flat_table_on_wide_fields() {
     let [b00, b01] = check::<u8, 1>(&tex, 64, 64, 8, TiledSpec::tiles(8, 8).unwrap());
     assert_eq!((b00, b01), (14, 17));
 }
+
+/// The modular builder under every build kernel this CPU runs (with `simd`; on a CPU with
+/// AVX-512 VNNI the fused AVX2 row, `simd::modular_row`, runs only with the kernel capped at
+/// AVX2): every corner of noise textures equals the summed-area table mod `2^k`, for widths
+/// and `k` with whole passes of 256 texels on rows that start on a word (512 x 21, 520 x 12,
+/// 544 x 20: fused, with a tail after the passes) and without (520 x 21: rows off a word).
+#[test]
+fn modular_rows_under_every_kernel() {
+    fn check(w: usize, h: usize, k: u32) {
+        let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w as u64 * 31 + u64::from(k));
+        let texels: Vec<u8> = (0..w * h)
+            .map(|_| {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                (seed >> 32) as u8
+            })
+            .collect();
+        let tex = Texture::<u8>::new(&texels, w, h).unwrap();
+        let mut words = std::vec![0u32; (w * h * k as usize).div_ceil(32) + 1];
+        let mut row = std::vec![0u32; w + 1];
+        let m = Modular::<u32>::build(&tex, k, &mut words, &mut row).unwrap();
+        let mask = (1u32 << k) - 1;
+        // S(x, y) row by row, and every corner against it.
+        let mut above = std::vec![0u32; w + 1];
+        for y in 1..=h {
+            let mut run = 0u32;
+            for x in 1..=w {
+                run = run.wrapping_add(u32::from(texels[(y - 1) * w + x - 1]));
+                above[x] = above[x].wrapping_add(run);
+                let got = m.corner(x, y, &mut NoCount)[0];
+                assert_eq!(got & mask, above[x] & mask, "{w}x{h} k {k} at ({x}, {y})");
+            }
+        }
+    }
+    let cases = || {
+        for (w, k) in [(512, 21), (520, 12), (544, 20), (520, 21)] {
+            check(w, if cfg!(miri) { 2 } else { 5 }, k);
+        }
+    };
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    for kernel in crate::simd::Kernel::ALL
+        .into_iter()
+        .filter(|k| k.available())
+    {
+        kernel.cap(cases);
+    }
+    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+    cases();
+}

@@ -2195,46 +2195,26 @@ mod row_step_tests {
     /// inside a tile: many kernel blocks and whole groups of packed fields per row.
     #[test]
     fn wide_rows_every_corner() {
-        use crate::NoCount;
-        fn check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
-            let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
-            let texels: Vec<u8> = (0..w * h * C)
-                .map(|_| {
-                    seed ^= seed << 13;
-                    seed ^= seed >> 7;
-                    seed ^= seed << 17;
-                    (seed >> 32) as u8
-                })
-                .collect();
-            let tex = Texture::<u8, C>::new(&texels, w, h).unwrap();
-            let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
-            let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
-            let t = Tiled::<u32, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
-            // S(x, y) row by row.
-            let mut s = std::vec![[0u32; C]; (w + 1) * (h + 1)];
-            for y in 1..=h {
-                for x in 1..=w {
-                    for c in 0..C {
-                        s[y * (w + 1) + x][c] = s[(y - 1) * (w + 1) + x][c]
-                            .wrapping_add(s[y * (w + 1) + x - 1][c])
-                            .wrapping_sub(s[(y - 1) * (w + 1) + x - 1][c])
-                            .wrapping_add(u32::from(texels[((y - 1) * w + x - 1) * C + c]));
-                    }
-                }
-            }
-            let step = if cfg!(miri) { 37 } else { 1 };
-            for y in 0..=h {
-                for x in (0..=w).step_by(step).chain([w]) {
-                    assert_eq!(
-                        t.corner(x, y, &mut NoCount),
-                        s[y * (w + 1) + x],
-                        "{spec:?} {w}x{h} C {C} at ({x}, {y})"
-                    );
-                }
-            }
-        }
         // Under Miri (slow): one row pair, the 8 x 8 tiles and the flat layout.
         let (w, h) = if cfg!(miri) { (1030, 2) } else { (1100, 17) };
+        // With `simd`, once per kernel this CPU runs (the builds take the widest allowed: on a
+        // CPU with AVX-512 VNNI, the AVX2 one runs the band rows, `TiledBuilder::band_step`):
+        // widths 1,100 and 1,095, whose rows of boundaries start off a word every other row
+        // and leave local sums after the kernel's steps of 16.
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        for k in crate::simd::Kernel::ALL
+            .into_iter()
+            .filter(|k| k.available())
+        {
+            k.cap(|| every_spec(w, h));
+        }
+        #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+        every_spec(w, h);
+    }
+
+    /// [`wide_rows_every_corner`]'s layouts and sizes.
+    fn every_spec(w: usize, h: usize) {
+        let check = wide_rows_check::<1>;
         for spec in [
             TiledSpec::tiles(8, 8).unwrap(),
             TiledSpec::tiles(3, 5).unwrap(),
@@ -2247,12 +2227,51 @@ mod row_step_tests {
         .filter(|s| {
             !cfg!(miri) || [TiledSpec::tiles(8, 8).unwrap(), TiledSpec::FLAT_PACKED].contains(s)
         }) {
-            check::<1>(w, h, spec);
+            check(w, h, spec);
             if !cfg!(miri) {
-                check::<1>(w - 5, h, spec);
+                check(w - 5, h, spec);
+                wide_rows_check::<2>(w, h, spec);
             }
-            if !cfg!(miri) {
-                check::<2>(w, h, spec);
+        }
+    }
+
+    /// [`wide_rows_every_corner`]'s check: every corner of a `w x h` layout of `spec` built
+    /// from noise against the summed-area table computed directly.
+    fn wide_rows_check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
+        use crate::NoCount;
+        let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
+        let texels: Vec<u8> = (0..w * h * C)
+            .map(|_| {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                (seed >> 32) as u8
+            })
+            .collect();
+        let tex = Texture::<u8, C>::new(&texels, w, h).unwrap();
+        let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
+        let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
+        let t = Tiled::<u32, C>::build(&tex, spec, &mut words, &mut scratch).unwrap();
+        // S(x, y) row by row.
+        let mut s = std::vec![[0u32; C]; (w + 1) * (h + 1)];
+        for y in 1..=h {
+            for x in 1..=w {
+                for c in 0..C {
+                    s[y * (w + 1) + x][c] = s[(y - 1) * (w + 1) + x][c]
+                        .wrapping_add(s[y * (w + 1) + x - 1][c])
+                        .wrapping_sub(s[(y - 1) * (w + 1) + x - 1][c])
+                        .wrapping_add(u32::from(texels[((y - 1) * w + x - 1) * C + c]));
+                }
+            }
+        }
+        let step = if cfg!(miri) { 37 } else { 1 };
+        for y in 0..=h {
+            for x in (0..=w).step_by(step).chain([w]) {
+                assert_eq!(
+                    t.corner(x, y, &mut NoCount),
+                    s[y * (w + 1) + x],
+                    "{spec:?} {w}x{h} C {C} at ({x}, {y})"
+                );
             }
         }
     }
@@ -2304,9 +2323,69 @@ pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     band_fits: bool,
     /// With `simd`: the band form applies and the x axis has one level of tiles, so a band
-    /// row writes components `(0, 0)` and `(1, 0)` only ([`TiledBuilder::band_step`]).
+    /// row writes components `(0, 0)` and `(1, 0)` only ([`TiledBuilder::band_step`]); their
+    /// constants, looked up and checked once here instead of per row.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    band_one: bool,
+    band_one: Option<BandPlan>,
+}
+
+/// [`TiledBuilder::band_step`]'s constants, from the geometry (`TiledBuilder::new`): the two
+/// components a band row writes, where the row of fields splits, and the checks that hold
+/// for every row (each row's field counts are `n / t` boundaries and `n - n / t` local sums,
+/// which fill the components' rows exactly).
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+#[derive(Debug, Clone, Copy)]
+struct BandPlan {
+    /// Component `(0, 0)`: the local sums.
+    local: Component,
+    /// Component `(1, 0)`: the tile boundaries (one level: the running sums themselves).
+    bnd: Component,
+    /// The boundaries per row, `n / t`, and the local sums, `n - n / t`.
+    nb: usize,
+    nl: usize,
+    /// Where the first scratch row splits: `(n / t + 1) C` (the boundaries after `acc[0]`).
+    split: usize,
+    /// The layout is large enough for prefetch hints (`PREFETCH_MIN_WORDS`).
+    prefetch: bool,
+    /// No modulus: every local sum is below `2^k` (the width proof), packed unmasked.
+    exact: bool,
+    /// The layout's words (`Geometry::words`), for the refusal of short storage.
+    words: usize,
+}
+
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+impl BandPlan {
+    /// The plan for `g` when a band row writes components `(0, 0)` and `(1, 0)` only (one
+    /// level of tiles on x); `None` if any check fails (the general step then runs).
+    fn new<const C: usize>(g: &Geometry) -> Option<BandPlan> {
+        if g.ax.levels != 1 {
+            return None;
+        }
+        let (local, bnd) = (*g.component(0, 0)?, *g.component(1, 0)?);
+        #[allow(
+            clippy::as_conversions,
+            reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+        )]
+        let nb = div_by(g.width, g.ax.block(1) as usize)?;
+        let split = nb.checked_add(1)?.checked_mul(C)?;
+        let fills = |count: usize, c: &Component| {
+            u64::try_from(count)
+                .ok()
+                .and_then(|n| n.checked_mul(u64::from(c.bits)))
+                == Some(c.row_bits)
+        };
+        let nl = g.width.checked_sub(nb)?;
+        (fills(nl, &local) && fills(nb, &bnd)).then_some(BandPlan {
+            local,
+            bnd,
+            nb,
+            nl,
+            split,
+            prefetch: g.words >= PREFETCH_MIN_WORDS,
+            exact: g.spec.modulus.is_none(),
+            words: g.words,
+        })
+    }
 }
 
 impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
@@ -2358,7 +2437,11 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             band_fits,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-            band_one: band_fits && geo.ax.levels == 1,
+            band_one: if band_fits {
+                BandPlan::new::<C>(&geo)
+            } else {
+                None
+            },
         })
     }
 
@@ -2446,9 +2529,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         };
         // A band row of one level of tiles: the short step.
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        if band_row && *band_one {
+        if let (true, Some(plan)) = (band_row, band_one) {
             let acc = accs.get_mut(C..row_len).ok_or(short)?;
-            Self::band_step(words, g, texels, buf, acc, iy, short)?;
+            Self::band_step(words, plan, texels, buf, acc, iy, short)?;
             #[allow(
                 clippy::arithmetic_side_effects,
                 reason = "rows_done < h (checked above)"
@@ -2647,53 +2730,41 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
     /// `simd::band_row`) when the x axis has one level of tiles: it writes components `(0, 0)`
     /// (the local sums, which the band kernel packs) and `(1, 0)` (the boundaries) only. The
     /// same values, fields and refusals as the general step, without its loops over the levels
-    /// below `q` and over the x components, and what they look up and check per row: about
-    /// 325 instructions per band row instead of 430 (the builder's share of a tiled build of
-    /// 1,024^2, callgrind; 9 % of a build of 128^2, `tools/examples/build_insns.py`).
+    /// below `q` and over the x components, and with what they look up and check per row
+    /// looked up and checked once ([`BandPlan`]): about 200 instructions per band row instead
+    /// of 430 (the builder's share of a tiled build of 1,024^2, callgrind; docs/benchmarks.md).
     /// `acc` is acc_0's row (its column sums), `buf` the row of fields.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     fn band_step<T: Texel>(
         words: &mut [u32],
-        g: &Geometry,
+        plan: &BandPlan,
         texels: &[T],
         buf: &mut [E],
         acc: &mut [E],
         iy: u32,
         short: Error,
     ) -> Result<(), Error> {
-        let (Some(local_c), Some(bnd_c)) = (g.component(0, 0), g.component(1, 0)) else {
-            return Err(short);
-        };
-        // The boundaries after acc[0] = 0 ((n / t + 1) C values), then the local sums.
-        #[allow(
-            clippy::as_conversions,
-            reason = "u32 -> usize is lossless (MAX_DIMENSION)"
-        )]
-        let nb = div_by(g.width, g.ax.block(1) as usize).ok_or(short)?;
-        let split = nb
-            .checked_add(1)
-            .and_then(|b| b.checked_mul(C))
-            .ok_or(short)?;
-        let (bnd, local) = buf.split_at_mut_checked(split).ok_or(short)?;
-        let (bnd0, bnd_out) = bnd.split_at_mut_checked(C).ok_or(short)?;
-        bnd0.fill(E::ZERO);
-        // Each component's row: its first bit and the words it spans (inside the layout, which
-        // `words` holds: `check_storage`).
-        let (at0, at1) = (local_c.offset(0, iy), bnd_c.offset(0, iy));
+        // The boundaries after acc[0] (not written here: the general step zeroes it), then
+        // the local sums.
+        let (bnd, local) = buf.split_at_mut_checked(plan.split).ok_or(short)?;
+        let bnd_out = bnd.get_mut(C..).ok_or(short)?;
+        // Each component's row: its first bit and the words it spans.
+        let (at0, at1) = (plan.local.offset(0, iy), plan.bnd.offset(0, iy));
         let span = |at: u64, c: &Component| {
             let from = usize::try_from(at / 32).ok()?;
             let to = usize::try_from(at.saturating_add(c.row_bits).div_ceil(32)).ok()?;
             (from <= to && to <= words.len()).then_some((from, to))
         };
         let too_small = Error::StorageTooSmall {
-            needed: g.words,
+            needed: plan.words,
             got: words.len(),
         };
-        let ((from0, to0), (from1, to1)) =
-            span(at0, local_c).zip(span(at1, bnd_c)).ok_or(too_small)?;
+        let ((from0, to0), (from1, to1)) = span(at0, &plan.local)
+            .zip(span(at1, &plan.bnd))
+            .ok_or(too_small)?;
         // The lines to ask for, as the general step: both components' rows.
         let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
-        if g.words >= PREFETCH_MIN_WORDS {
+        if plan.prefetch {
             if let (Some(w0), Some(w1)) = (words.get(from0..to0), words.get(from1..to1)) {
                 ahead = [(w0.as_ptr(), w0.len()), (w1.as_ptr(), w1.len())];
             }
@@ -2701,37 +2772,47 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let pack = crate::simd::PackTo {
             words: words.get_mut(from0..to0).ok_or(too_small)?,
             bit: at0 % 32,
-            k: local_c.bits,
-            exact: g.spec.modulus.is_none(),
+            k: plan.local.bits,
+            exact: plan.exact,
         };
         let (kb, kl, kp) =
             crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, Some(pack))
                 .ok_or(short)?;
-        // The fields counted as Geometry::new counted them (a mismatch would be a bug here,
-        // refused rather than written across the next row), then the rest packed.
-        let fills = |count: usize, c: &Component| {
-            u64::try_from(count)
-                .ok()
-                .and_then(|n| n.checked_mul(u64::from(c.bits)))
-                == Some(c.row_bits)
-        };
-        if !fills(kl, local_c) || !fills(kb, bnd_c) {
+        // The field counts the plan checked against the components' rows (a mismatch would
+        // be a bug here, refused rather than written across the next row).
+        if kb != plan.nb || kl != plan.nl {
             return Err(short);
         }
+        // The local sums left after the kernel's packing, then the boundaries: from a word
+        // boundary straight to the packer (the rest, if any, field by field).
         let rest = local.get(kp..kl).ok_or(short)?;
         if !rest.is_empty() {
             let from = u64::try_from(kp)
                 .ok()
-                .and_then(|d| d.checked_mul(u64::from(local_c.bits)))
+                .and_then(|d| d.checked_mul(u64::from(plan.local.bits)))
                 .and_then(|b| b.checked_add(at0))
                 .ok_or(short)?;
-            if !pack_fields(words, from, rest, local_c.bits) {
+            if !pack_fields(words, from, rest, plan.local.bits) {
                 return Err(too_small);
             }
         }
         let bnds = bnd_out.get(..kb).ok_or(short)?;
-        if !bnds.is_empty() && !pack_fields(words, at1, bnds, bnd_c.bits) {
-            return Err(too_small);
+        let row = words.get_mut(from1..to1).ok_or(too_small)?;
+        let done = if at1 % 32 == 0 {
+            crate::simd::pack_u32(row, bnds, plan.bnd.bits)
+        } else {
+            0
+        };
+        let rest = bnds.get(done..).ok_or(short)?;
+        if !rest.is_empty() {
+            let from = u64::try_from(done)
+                .ok()
+                .and_then(|d| d.checked_mul(u64::from(plan.bnd.bits)))
+                .and_then(|b| b.checked_add(at1 % 32))
+                .ok_or(short)?;
+            if !pack_fields(row, from, rest, plan.bnd.bits) {
+                return Err(too_small);
+            }
         }
         Ok(())
     }
