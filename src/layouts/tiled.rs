@@ -2731,8 +2731,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
     /// (the local sums, which the band kernel packs) and `(1, 0)` (the boundaries) only. The
     /// same values, fields and refusals as the general step, without its loops over the levels
     /// below `q` and over the x components, and with what they look up and check per row
-    /// looked up and checked once ([`BandPlan`]): about 200 instructions per band row instead
-    /// of 430 (the builder's share of a tiled build of 1,024^2, callgrind; docs/benchmarks.md).
+    /// looked up and checked once ([`BandPlan`]), and the boundaries handed to the packer
+    /// straight from a word boundary: the builder's share of a tiled build of 1,024^2 (its
+    /// own code and `pack_fields`, averaged over every row, callgrind) went from 414
+    /// instructions per row to 315 with the plan (docs/benchmarks.md, sixth session).
     /// `acc` is acc_0's row (its column sums), `buf` the row of fields.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     fn band_step<T: Texel>(
