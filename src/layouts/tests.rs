@@ -18,6 +18,20 @@ fn texture(w: usize, h: usize, seed: u32) -> [u8; 4096] {
     t
 }
 
+/// `n` bytes of xorshift64 noise from `seed` (the wide layout tests' textures, which pass
+/// [`texture`]'s 4,096 texels).
+pub(super) fn noise_bytes(n: usize, seed: u64) -> Vec<u8> {
+    let mut s = 0x2545_f491_4f6c_dd1du64 ^ seed;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 32) as u8
+        })
+        .collect()
+}
+
 /// The coordinates a sweep visits from `lo` to `hi` (inclusive): all of them natively; under
 /// Miri, which interprets about 10^4 times slower, only both ends, their neighbours and the
 /// middle, so the sweeps still meet the empty, the one-cell, the edge and the whole-axis boxes.
@@ -1070,15 +1084,7 @@ fn tiled_cells4_equal_the_flat_table_on_wide_fields() {
 #[test]
 fn modular_rows_under_every_kernel() {
     fn check(w: usize, h: usize, k: u32) {
-        let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w as u64 * 31 + u64::from(k));
-        let texels: Vec<u8> = (0..w * h)
-            .map(|_| {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                (seed >> 32) as u8
-            })
-            .collect();
+        let texels = noise_bytes(w * h, w as u64 * 31 + u64::from(k));
         let tex = Texture::<u8>::new(&texels, w, h).unwrap();
         let mut words = std::vec![0u32; (w * h * k as usize).div_ceil(32) + 1];
         let mut row = std::vec![0u32; w + 1];

@@ -2239,15 +2239,7 @@ mod row_step_tests {
     /// from noise against the summed-area table computed directly.
     fn wide_rows_check<const C: usize>(w: usize, h: usize, spec: TiledSpec) {
         use crate::NoCount;
-        let mut seed = 0x2545_f491_4f6c_dd1du64 ^ (w * h) as u64;
-        let texels: Vec<u8> = (0..w * h * C)
-            .map(|_| {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                (seed >> 32) as u8
-            })
-            .collect();
+        let texels = crate::layouts::tests::noise_bytes(w * h * C, (w * h) as u64);
         let tex = Texture::<u8, C>::new(&texels, w, h).unwrap();
         let mut words = std::vec![0u32; Tiled::<u32, C>::words_needed(spec, w, h, 8).unwrap()];
         let mut scratch = std::vec![0u32; Tiled::<u32, C>::scratch_needed(spec, w).unwrap()];
