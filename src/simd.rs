@@ -42,6 +42,13 @@
 //! Why 16-bit lanes suffice for the in-block prefix: 16 texels of at most 255 sum to at most
 //! 4080 < 2^16.
 //!
+//! Tables of [`STREAM_MIN_BYTES`] (32 MiB) and more, which would not stay in cache anyway, are
+//! written by non-temporal stores (`movntdq`, 16 bytes each): [`build_streamed`] for
+//! `Sat::build` (each row built in a working row on the stack, which stays in L1, and written
+//! to the table in the same pass) and the copy of `RowStreamBuilder::push_row_into`. A
+//! non-temporal store writes its line without first reading it for ownership, which halves a
+//! cold table's memory traffic; such a table is not left in cache after the build.
+//!
 //! # Safety argument
 //!
 //! 1. *Target features.* Each kernel is a `#[target_feature]` function; it is called only as
@@ -98,7 +105,14 @@
 //!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
 //!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
 //!    `read_unaligned` for the 4-byte groups), then finishes the tail `i..n` with checked
-//!    indexing. Every pointer is derived from its slice and stays in bounds.
+//!    indexing. Every pointer is derived from its slice and stays in bounds. The copy's
+//!    stores are non-temporal (`_mm_stream_si128`, which faults on an address off 16 bytes)
+//!    only when [`row_u8_u32`] has checked that the copy starts on 16 bytes: block `b`'s four
+//!    16-byte stores are then at `64 b`, `64 b + 16`, ... from it, all aligned. Each row ends
+//!    with an `sfence`, so its non-temporal stores are ordered before every later store (the
+//!    table is handed out, possibly to another thread, through ordinary release/acquire
+//!    synchronization, which does not order weakly ordered stores by itself). Under Miri,
+//!    which cannot run them (inline assembly in stdarch), plain stores stand in.
 //! 3. *Aliasing.* `above` and `out` are separate slices (`&[u32]`, `&mut [u32]`) except in the
 //!    in-place streaming row, where the kernel gets the single `&mut [u32]` and reads the row
 //!    above through the same pointer it writes: each block reads `row[i..i + 16]` before it
@@ -148,9 +162,9 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
         return false;
     };
     match above {
-        None => row_u8_u32(Kernel::best(), t, &[], out, Above::Zero, None),
+        None => row_u8_u32(Kernel::best(), t, &[], out, Above::Zero, None, false),
         Some(a) => match as_u32(a) {
-            Some(a) => row_u8_u32(Kernel::best(), t, a, out, Above::Slice, None),
+            Some(a) => row_u8_u32(Kernel::best(), t, a, out, Above::Slice, None, false),
             None => return false,
         },
     }
@@ -159,13 +173,14 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
 
 /// [`build_row`] in place: `row` holds the row above on entry (ignored if `first`) and the new
 /// row on exit; with `copy`, the new row is also written there (same length as `row`) in the
-/// same pass.
+/// same pass, by non-temporal stores if `stream` (see [`STREAM_MIN_BYTES`]).
 #[inline]
 pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     row: &mut [E],
     first: bool,
     copy: Option<&mut [E]>,
+    stream: bool,
 ) -> bool {
     let (Some(t), Some(row)) = (as_u8(texels), as_u32_mut::<E, C>(row)) else {
         return false;
@@ -178,7 +193,107 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
         },
     };
     let mode = if first { Above::Zero } else { Above::InPlace };
-    row_u8_u32(Kernel::best(), t, &[], row, mode, copy);
+    row_u8_u32(Kernel::best(), t, &[], row, mode, copy, stream);
+    true
+}
+
+/// The smallest table (in bytes) whose copy stores are non-temporal
+/// ([`RowStreamBuilder::push_row_into`](crate::RowStreamBuilder::push_row_into),
+/// [`build_streamed`]): 32 MiB, past the last-level cache of the machines measured (32 MiB of
+/// L3), so the table would not stay in cache anyway. A non-temporal store writes its line
+/// without reading it first (no read for ownership), which halves a cold table's memory
+/// traffic: on a Zen 4 guest, `Sat::build` of a 4,096^2 table (64 MiB) took 0.75x the time
+/// with them (1.37x the widen-copy floor before, 1.07x after) and `push_row_into` 0.71x; with
+/// the threshold at 4 MiB, a 1,024^2 table took 1.31x and 1.73x the time: a table that fits
+/// the cache is better written through it (docs/benchmarks.md, sixth session).
+pub(crate) const STREAM_MIN_BYTES: usize = 32 << 20;
+
+/// The widest row [`build_streamed`] takes: its working row, on the stack, is 16 KiB, which
+/// stays in a 32 KiB L1 data cache beside the row's texels.
+pub(crate) const STREAM_ROW_MAX: usize = 4096;
+
+/// [`build_streamed`]'s working row's room to move within its buffer: 4 KiB of entries.
+const ALIAS_PAD: usize = 1024;
+
+/// A 128-bit copy store: non-temporal if `nt` (which needs `to` 16-byte aligned), else
+/// unaligned. Under Miri, which cannot run `movntdq` (stdarch writes it as inline assembly),
+/// always the plain store: Miri still checks the address and the bytes written.
+///
+/// # Safety
+/// The CPU has SSE2 (x86-64 baseline); `to` is valid for writes of 16 bytes and, if `nt`,
+/// 16-byte aligned.
+#[inline(always)]
+unsafe fn store_copy(to: *mut u32, v: __m128i, nt: bool) {
+    // SAFETY: the caller's contract.
+    unsafe {
+        if nt && !cfg!(miri) {
+            #[cfg(not(miri))]
+            _mm_stream_si128(to.cast(), v);
+        } else {
+            _mm_storeu_si128(to.cast(), v);
+        }
+    }
+}
+
+/// Orders the non-temporal stores before every later store (`sfence`): they are weakly
+/// ordered, and the table is handed out (possibly to another thread) after the build. Not
+/// under Miri (inline assembly in stdarch; the stores there are plain).
+#[inline]
+fn fence() {
+    #[cfg(not(miri))]
+    // SAFETY: SSE is baseline on x86-64.
+    unsafe {
+        _mm_sfence()
+    };
+}
+
+/// `Sat::build`'s rows with the table written by non-temporal stores: for `u8` texels, `u32`
+/// entries and one channel, a table of at least [`STREAM_MIN_BYTES`] whose rows (`width`
+/// entries, at most [`STREAM_ROW_MAX`], a multiple of 4) start on 16 bytes. Each row is built
+/// in a working row on the stack (the row above stays in L1 instead of being read back from
+/// the table) and written to the table in the same pass (`row(y)` gives texture row `y`).
+/// `false`, with nothing written, where it does not apply; also `false` if `row` has no row `y
+/// < height` (the caller's own loop then writes every row and reports it).
+#[inline(never)]
+pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
+    table: &mut [E],
+    width: usize,
+    row: impl Fn(usize) -> Option<&'t [T]>,
+) -> bool {
+    let Some(out) = as_u32_mut::<E, C>(table) else {
+        return false;
+    };
+    if TypeId::of::<T>() != TypeId::of::<u8>()
+        || width == 0
+        || width > STREAM_ROW_MAX
+        || !width.is_multiple_of(4)
+        || out.len() % width != 0
+        || out.len() < STREAM_MIN_BYTES / 4
+        || !(out.as_ptr() as usize).is_multiple_of(16)
+    {
+        return false;
+    }
+    // The working row starts on a cache line (a row 16 bytes off one, where the stack first
+    // put it, split every 64-byte access in two: `Sat::build` took 1.5x to 1.7x the widen-copy
+    // floor at 4,096^2 instead of 1.1x), 2 KiB from the table's rows modulo 4 KiB (a load from
+    // it then never matches the low 12 address bits of a recent store to the table, which the
+    // CPU would hold up as a possible overlap).
+    let mut buf = [0u32; STREAM_ROW_MAX + ALIAS_PAD];
+    let want = (out.as_ptr() as usize).wrapping_add(2048) & !63;
+    let gap = want.wrapping_sub(buf.as_ptr() as usize) % 4096 / 4;
+    let Some(work) = buf.get_mut(gap..gap.saturating_add(width)) else {
+        return false;
+    };
+    for (y, copy) in out.chunks_exact_mut(width).enumerate() {
+        let Some(t) = row(y).and_then(as_u8) else {
+            return false;
+        };
+        if t.len() != width {
+            return false;
+        }
+        let mode = if y == 0 { Above::Zero } else { Above::InPlace };
+        row_u8_u32(Kernel::best(), t, &[], work, mode, Some(copy), true);
+    }
     true
 }
 
@@ -210,7 +325,8 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 }
 
 /// One row with `kernel` (which must be [`Kernel::available`]); `above` is read only for
-/// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too.
+/// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too, by non-temporal
+/// stores if `stream` and it starts on 16 bytes ([`STREAM_MIN_BYTES`]).
 #[inline]
 fn row_u8_u32(
     kernel: Kernel,
@@ -219,6 +335,7 @@ fn row_u8_u32(
     out: &mut [u32],
     mode: Above,
     mut copy: Option<&mut [u32]>,
+    stream: bool,
 ) {
     let mut n = out.len().min(texels.len());
     if let Above::Slice = mode {
@@ -238,15 +355,20 @@ fn row_u8_u32(
         Above::Slice => above.as_ptr(),
         Above::InPlace => o.cast_const(),
     };
+    // Non-temporal copy stores need the copy 16-byte aligned (each block's stores are then
+    // too: 16 entries, 64 bytes apart).
+    let nt = stream && !o2.is_null() && (o2 as usize).is_multiple_of(16);
     // SAFETY: the CPU has the kernel's features (argument 1: every caller passes an available
     // kernel); `t`, `a` (when read), `o` and `o2` (when written) are valid for `n` elements
-    // (argument 2) and alias only as argument 3 allows.
+    // (argument 2) and alias only as argument 3 allows; `o2` is 16-byte aligned when `nt`.
     let run = unsafe {
         match (mode, o2.is_null()) {
-            (Above::Zero, true) => kernel.run::<false, false>(t, a, o, o2, n),
-            (Above::Zero, false) => kernel.run::<false, true>(t, a, o, o2, n),
-            (Above::Slice | Above::InPlace, true) => kernel.run::<true, false>(t, a, o, o2, n),
-            (Above::Slice | Above::InPlace, false) => kernel.run::<true, true>(t, a, o, o2, n),
+            (Above::Zero, true) => kernel.run::<false, false>(t, a, o, o2, n, false),
+            (Above::Zero, false) => kernel.run::<false, true>(t, a, o, o2, n, nt),
+            (Above::Slice | Above::InPlace, true) => {
+                kernel.run::<true, false>(t, a, o, o2, n, false)
+            }
+            (Above::Slice | Above::InPlace, false) => kernel.run::<true, true>(t, a, o, o2, n, nt),
         }
     };
     // The tail after the last full block, portable: the same two additions per entry.
@@ -359,10 +481,12 @@ impl Kernel {
         }
     }
 
-    /// Runs the kernel over the full blocks of a row.
+    /// Runs the kernel over the full blocks of a row (the copy by non-temporal stores if `nt`,
+    /// then an `sfence`).
     ///
     /// # Safety
-    /// `self` is [`Kernel::available`]; the pointers as the kernels require.
+    /// `self` is [`Kernel::available`]; the pointers as the kernels require (`o2` 16-byte
+    /// aligned if `COPY` and `nt`).
     #[inline]
     unsafe fn run<const ABOVE: bool, const COPY: bool>(
         self,
@@ -371,15 +495,20 @@ impl Kernel {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        nt: bool,
     ) -> u32 {
         // SAFETY: forwarded (the caller's contract).
-        unsafe {
+        let run = unsafe {
             match self {
-                Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n),
-                Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n),
-                Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n),
+                Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n, nt),
+                Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n, nt),
+                Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n, nt),
             }
+        };
+        if COPY && nt {
+            fence();
         }
+        run
     }
 }
 
@@ -481,7 +610,9 @@ mod sse2 {
     ///
     /// # Safety
     /// SSE2 (x86-64 baseline); `t`, `o`, (if `ABOVE`) `a` and (if `COPY`) `o2` valid for `n`
-    /// elements; `a` may equal `o` (each block reads before it writes); `o2` aliases nothing.
+    /// elements; `a` may equal `o` (each block reads before it writes); `o2` aliases nothing;
+    /// if `COPY` and `nt` (the copy by non-temporal stores), `o2` is 16-byte aligned. The
+    /// caller fences after a call with `nt` ([`Kernel::run`]).
     #[target_feature(enable = "sse2")]
     pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
         t: *const u8,
@@ -489,6 +620,7 @@ mod sse2 {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        nt: bool,
     ) -> u32 {
         let zero = _mm_setzero_si128();
         let mut carry = _mm_setzero_si128();
@@ -525,7 +657,7 @@ mod sse2 {
                 for (k, v) in p.iter().enumerate() {
                     _mm_storeu_si128(o.add(i + 4 * k).cast(), *v);
                     if COPY {
-                        _mm_storeu_si128(o2.add(i + 4 * k).cast(), *v);
+                        store_copy(o2.add(i + 4 * k), *v, nt);
                     }
                 }
             }
@@ -621,6 +753,7 @@ mod avx2 {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        nt: bool,
     ) -> u32 {
         let w = Weights::new();
         let last = _mm256_set1_epi32(7);
@@ -643,8 +776,19 @@ mod avx2 {
                 _mm256_storeu_si256(o.add(i).cast(), lo);
                 _mm256_storeu_si256(o.add(i + 8).cast(), hi);
                 if COPY {
-                    _mm256_storeu_si256(o2.add(i).cast(), lo);
-                    _mm256_storeu_si256(o2.add(i + 8).cast(), hi);
+                    if nt {
+                        for (k, v) in [lo, hi].into_iter().enumerate() {
+                            store_copy(o2.add(i + 8 * k), _mm256_castsi256_si128(v), true);
+                            store_copy(
+                                o2.add(i + 8 * k + 4),
+                                _mm256_extracti128_si256::<1>(v),
+                                true,
+                            );
+                        }
+                    } else {
+                        _mm256_storeu_si256(o2.add(i).cast(), lo);
+                        _mm256_storeu_si256(o2.add(i + 8).cast(), hi);
+                    }
                 }
             }
             i += BLOCK;
@@ -712,6 +856,7 @@ mod avx512vnni {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        nt: bool,
     ) -> u32 {
         let w = W.map(|g| {
             let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
@@ -734,7 +879,14 @@ mod avx512vnni {
                 }
                 _mm512_storeu_si512(o.add(i).cast(), v);
                 if COPY {
-                    _mm512_storeu_si512(o2.add(i).cast(), v);
+                    if nt {
+                        store_copy(o2.add(i), _mm512_castsi512_si128(v), true);
+                        store_copy(o2.add(i + 4), _mm512_extracti32x4_epi32::<1>(v), true);
+                        store_copy(o2.add(i + 8), _mm512_extracti32x4_epi32::<2>(v), true);
+                        store_copy(o2.add(i + 12), _mm512_extracti32x4_epi32::<3>(v), true);
+                    } else {
+                        _mm512_storeu_si512(o2.add(i).cast(), v);
+                    }
                 }
             }
             i += BLOCK;
@@ -3524,11 +3676,16 @@ mod tests {
     /// Every kernel this CPU runs (under Miri: those the build enables), every width up to 4
     /// blocks and a tail, texels all 0, all 255, a ramp and random, rows above with large
     /// entries (near u32::MAX, as a width-proved table can hold): separate, in place, in place
-    /// with a copy, and first row, against the reference. Then the same through the dispatching
-    /// entry points.
+    /// with a copy (by plain stores, and by non-temporal ones into a copy on a cache line and
+    /// one 4 bytes off it, which falls back to plain stores; nothing written around the row),
+    /// and first row, against the reference. Then the same through the dispatching entry
+    /// points.
     #[test]
     fn rows_equal_the_portable_rows() {
         const MAX: usize = 4 * BLOCK + 7;
+        /// A copy target on a cache line.
+        #[repr(align(64))]
+        struct Line([u32; MAX + 2]);
         let mut seed = 0x9e37_79b9_7f4a_7c15;
         let mut ran = 0;
         for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
@@ -3562,7 +3719,15 @@ mod tests {
                         } else {
                             Above::Zero
                         };
-                        row_u8_u32(kernel, t, a.unwrap_or(&[]), &mut got[..w], mode, None);
+                        row_u8_u32(
+                            kernel,
+                            t,
+                            a.unwrap_or(&[]),
+                            &mut got[..w],
+                            mode,
+                            None,
+                            false,
+                        );
                         assert_eq!(got[..w], want[..w], "{:?}", what("separate"));
                         assert!(got[w..].iter().all(|&v| v == 7), "wrote past the row");
                         // In place, without and with a copy.
@@ -3576,14 +3741,29 @@ mod tests {
                             Above::Zero
                         };
                         let mut again = inplace;
-                        row_u8_u32(kernel, t, &[], &mut inplace[..w], mode, None);
+                        row_u8_u32(kernel, t, &[], &mut inplace[..w], mode, None, false);
                         assert_eq!(inplace[..w], want[..w], "{:?}", what("in place"));
                         let mut copy = [9u32; MAX];
                         let c = Some(&mut copy[..w]);
-                        row_u8_u32(kernel, t, &[], &mut again[..w], mode, c);
+                        let back = again;
+                        row_u8_u32(kernel, t, &[], &mut again[..w], mode, c, false);
                         assert_eq!(again[..w], want[..w], "{:?}", what("in place + copy"));
                         assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
                         assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
+                        // The copy by non-temporal stores: into a 16-byte aligned copy (the
+                        // stores stream) and one 4 bytes off (they fall back to plain ones);
+                        // nothing before or past the row written.
+                        for off in [0, 1] {
+                            let mut again = back;
+                            let mut line = Line([9; MAX + 2]);
+                            let c = Some(&mut line.0[off..off + w]);
+                            row_u8_u32(kernel, t, &[], &mut again[..w], mode, c, true);
+                            let copy = &line.0[off..off + w];
+                            assert_eq!(again[..w], want[..w], "{:?} {off}", what("streamed"));
+                            assert_eq!(copy, &want[..w], "{:?} {off}", what("streamed copy"));
+                            assert!(line.0[..off].iter().all(|&v| v == 9), "before the row");
+                            assert!(line.0[off + w..].iter().all(|&v| v == 9), "past the row");
+                        }
                         // The dispatching entry points (the best kernel).
                         let what =
                             |how: &str| (Kernel::best().name(), w, pattern, a.is_some(), how.len());
@@ -3599,7 +3779,8 @@ mod tests {
                             t,
                             &mut inplace[..w],
                             first,
-                            None
+                            None,
+                            false
                         ));
                         assert_eq!(inplace[..w], want[..w], "{:?}", what("build_row_in_place"));
                     }

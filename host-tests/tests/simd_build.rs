@@ -211,6 +211,44 @@ fn wide_rows() {
     check(w, h, &t).unwrap();
 }
 
+/// Tables of 32 MiB and more, which `Sat::build` and `RowStreamBuilder::push_row_into` write by
+/// non-temporal stores with `simd` (`Sat::build`: rows of at most 4,096 entries, a multiple of
+/// 4, the table on 16 bytes; docs/benchmarks.md, sixth session): 4,096 x 2,048 and 4,092 x
+/// 2,052 (a tail of 12 after the blocks) take that path, 4,100 x 2,048 does not (too wide), nor
+/// does a table 4 bytes off 16 (`Sat::build` falls back; `push_row_into`'s copy falls back to
+/// plain stores); random texels. Every entry against the reference, through `check`.
+#[test]
+fn large_tables() {
+    let mut rng = texsat_host_tests::rng(0x5717);
+    for (w, h) in [(4096, 2048), (4092, 2052), (4100, 2048)] {
+        let t: Vec<u8> = (0..w * h).map(|_| rng.random_range(0..=255u8)).collect();
+        check(w, h, &t).unwrap();
+    }
+    let (w, h) = (4096, 2048);
+    let t: Vec<u8> = (0..w * h).map(|_| rng.random_range(0..=255u8)).collect();
+    let want = reference(&t, w, h);
+    let texture = Texture::<u8>::new(&t, w, h).unwrap();
+    let mut storage = vec![0xDEAD_BEEFu32; w * h + 4];
+    // The first index whose address is 4 bytes past a multiple of 16.
+    let off = (0..4)
+        .find(|&i| (storage.as_ptr() as usize + 4 * i) % 16 == 4)
+        .unwrap();
+    let built = Sat::build(&texture, &mut storage[off..off + w * h]).unwrap();
+    assert!(built
+        .entries()
+        .iter()
+        .zip(&want)
+        .all(|(&g, &w)| u64::from(g) == w));
+    let mut row = vec![0u32; w];
+    let mut b = RowStreamBuilder::<u32>::new(w, h, 8, &mut row).unwrap();
+    let mut table = vec![0u32; w * h + 4];
+    let table = &mut table[off..off + w * h];
+    for (src, dst) in t.chunks_exact(w).zip(table.chunks_exact_mut(w)) {
+        b.push_row_into(src, dst).unwrap();
+    }
+    assert!(table.iter().zip(&want).all(|(&g, &w)| u64::from(g) == w));
+}
+
 /// `push_row_into` on the portable path (u16 texels, 3 channels, u64 entries): the same rows as
 /// `push_row` and a copy, and a refused `out` (wrong length) leaves `out` and the builder as they
 /// were.

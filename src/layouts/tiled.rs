@@ -1738,7 +1738,7 @@ pub(super) fn check_texel_width<T: Texel>(texels: &[T], texel_bits: u32) -> Resu
 /// applies (`simd`: `u8` texels, `u32` entries, one channel).
 pub(super) fn add_prefix_row<T: Texel, E: Entry, const C: usize>(texels: &[T], row: &mut [E]) {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    if crate::simd::build_row_in_place::<T, E, C>(texels, row, false, None) {
+    if crate::simd::build_row_in_place::<T, E, C>(texels, row, false, None, false) {
         return;
     }
     let mut run = [E::ZERO; C];
