@@ -208,11 +208,13 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
 /// the cache is better written through it (docs/benchmarks.md, sixth session).
 pub(crate) const STREAM_MIN_BYTES: usize = 32 << 20;
 
-/// The widest row [`build_streamed`] takes: its working row, on the stack, is 16 KiB, which
-/// stays in a 32 KiB L1 data cache beside the row's texels.
+/// The widest row [`build_streamed`] takes: its working row is at most 16 KiB (inside a 20 KiB
+/// buffer on the stack, [`ALIAS_PAD`]), which stays in a 32 KiB L1 data cache beside the row's
+/// texels.
 pub(crate) const STREAM_ROW_MAX: usize = 4096;
 
-/// [`build_streamed`]'s working row's room to move within its buffer: 4 KiB of entries.
+/// [`build_streamed`]'s working row's room to move within its buffer: 1,024 entries (4 KiB),
+/// so that the row can start anywhere modulo 4 KiB.
 const ALIAS_PAD: usize = 1024;
 
 /// A 128-bit copy store: non-temporal if `nt` (which needs `to` 16-byte aligned), else
@@ -252,8 +254,9 @@ fn fence() {
 /// entries, at most [`STREAM_ROW_MAX`], a multiple of 4) start on 16 bytes. Each row is built
 /// in a working row on the stack (the row above stays in L1 instead of being read back from
 /// the table) and written to the table in the same pass (`row(y)` gives texture row `y`).
-/// `false`, with nothing written, where it does not apply; also `false` if `row` has no row `y
-/// < height` (the caller's own loop then writes every row and reports it).
+/// `false`, with nothing written, where it does not apply, including when `row` lacks a row `y
+/// < height` of `width` texels (checked for every row before the first is written; the
+/// caller's own loop then reports it).
 #[inline(never)]
 pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
     table: &mut [E],
@@ -273,11 +276,18 @@ pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
     {
         return false;
     }
+    // Every row exists and has `width` texels, so that a `false` below never follows a write.
+    let rows = out.len() / width;
+    if !(0..rows).all(|y| row(y).is_some_and(|t| t.len() == width)) {
+        return false;
+    }
     // The working row starts on a cache line (a row 16 bytes off one, where the stack first
     // put it, split every 64-byte access in two: `Sat::build` took 1.5x to 1.7x the widen-copy
-    // floor at 4,096^2 instead of 1.1x), 2 KiB from the table's rows modulo 4 KiB (a load from
-    // it then never matches the low 12 address bits of a recent store to the table, which the
-    // CPU would hold up as a possible overlap).
+    // floor at 4,096^2 instead of 1.1x), 2 KiB from the table's first row modulo 4 KiB (a load
+    // from it then never matches the low 12 address bits of a recent store to the table, which
+    // the CPU would hold up as a possible overlap). Every row keeps that distance when `4
+    // width` is a multiple of 4 KiB (1,024, 2,048, 4,096); otherwise it moves by `4 width` mod
+    // 4 KiB per row, and only some rows keep clear of the aliasing.
     let mut buf = [0u32; STREAM_ROW_MAX + ALIAS_PAD];
     let want = (out.as_ptr() as usize).wrapping_add(2048) & !63;
     let gap = want.wrapping_sub(buf.as_ptr() as usize) % 4096 / 4;
@@ -285,12 +295,8 @@ pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
         return false;
     };
     for (y, copy) in out.chunks_exact_mut(width).enumerate() {
-        let Some(t) = row(y).and_then(as_u8) else {
-            return false;
-        };
-        if t.len() != width {
-            return false;
-        }
+        // Checked above: every row is there, `width` texels of `u8`.
+        let t = row(y).and_then(as_u8).unwrap_or(&[]);
         let mode = if y == 0 { Above::Zero } else { Above::InPlace };
         row_u8_u32(Kernel::best(), t, &[], work, mode, Some(copy), true);
     }
@@ -545,13 +551,15 @@ fn detect() -> Kernel {
 
 /// Whether the CPU also has AVX-512BW and AVX-512 VBMI (for `tiled512::kernel8_packed`), on
 /// top of [`Kernel::Avx512Vnni`]: CPUID leaf 7 EBX bit 30 and ECX bit 1 (the registers' state
-/// as for AVX-512F). Detected once, then cached as [`Kernel::best`] is.
+/// as for AVX-512F). Detected once, then cached as [`Kernel::detected`] is (from the CPU's
+/// kernel, not a test thread's capped [`Kernel::best`], so that the cached answer does not
+/// depend on which test asked first; the packing kernel runs only with the AVX-512 kernel).
 pub(crate) fn vbmi() -> bool {
     match VBMI.load(Ordering::Relaxed) {
         1 => false,
         2 => true,
         _ => {
-            let v = Kernel::best() == Kernel::Avx512Vnni && detect_vbmi();
+            let v = Kernel::detected() == Kernel::Avx512Vnni && detect_vbmi();
             VBMI.store(1 + u8::from(v), Ordering::Relaxed);
             v
         }
@@ -3171,6 +3179,70 @@ mod band256 {
 mod tests {
     extern crate std;
     use super::*;
+
+    /// `build_streamed` takes exactly the tables it documents (`u8` texels, one channel, `u32`
+    /// entries, at least 32 MiB, rows of at most 4,096 entries and a multiple of 4, storage on
+    /// 16 bytes, every row present) and builds them as the portable checked build does; it
+    /// declines the rest with nothing written.
+    #[test]
+    #[cfg_attr(miri, ignore = "tables of 32 MiB: too slow under Miri")]
+    fn build_streamed_takes_large_tables_only() {
+        use crate::{Sat, Texture};
+        let texels: std::vec::Vec<u8> = (0..4094u32 * 2100)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8)
+            .collect();
+        // (width, height, entries off 16 bytes, row missing, taken)
+        let cases = [
+            (4096, 2048, 0, false, true),
+            (4092, 2052, 0, false, true),
+            (1024, 8192, 0, false, true),
+            (4100, 2048, 0, false, false),
+            (4096, 2047, 0, false, false),
+            (4094, 2100, 0, false, false),
+            (4096, 2048, 1, false, false),
+            (4096, 2048, 0, true, false),
+        ];
+        for (w, h, off, missing, taken) in cases {
+            let t = &texels[..w * h];
+            let mut whole = std::vec![0xDEAD_BEEFu32; w * h + 8];
+            let base = (0..4)
+                .find(|&i| (whole.as_ptr() as usize + 4 * i).is_multiple_of(16))
+                .unwrap()
+                + off;
+            let table = &mut whole[base..base + w * h];
+            let row = |y: usize| (!(missing && y == h - 1)).then(|| &t[y * w..][..w]);
+            let got = build_streamed::<u8, u32, 1>(table, w, row);
+            assert_eq!(
+                got, taken,
+                "{w} x {h}, {off} entries off, missing {missing}"
+            );
+            if taken {
+                let mut want = std::vec![0u32; w * h];
+                let texture = Texture::<u8>::new(t, w, h).unwrap();
+                Sat::build_checked(&texture, &mut want).unwrap();
+                assert!(whole[base..base + w * h] == want[..], "{w} x {h}");
+                whole[base..base + w * h].fill(0xDEAD_BEEF);
+            }
+            assert!(
+                whole.iter().all(|&v| v == 0xDEAD_BEEF),
+                "{w} x {h}: written outside the table or where declined"
+            );
+        }
+        // Other texel, entry and channel types.
+        let mut table = std::vec![0u32; 4096 * 2048];
+        let t16 = std::vec![1u16; 4096];
+        assert!(!build_streamed::<u16, u32, 1>(&mut table, 4096, |_| Some(
+            &t16[..]
+        )));
+        assert!(!build_streamed::<u8, u32, 2>(&mut table, 4096, |_| Some(
+            &texels[..4096]
+        )));
+        let mut t64 = std::vec![0u64; 4096 * 1024];
+        assert!(!build_streamed::<u8, u64, 1>(&mut t64, 4096, |_| Some(
+            &texels[..4096]
+        )));
+        assert!(table.iter().all(|&v| v == 0) && t64.iter().all(|&v| v == 0));
+    }
 
     /// `band_applies` takes a tiling only where a tile's sum fits 16 bits: 8 x 32 tiles of `u8`
     /// texels (65,280) and 8 x 64 of 7-bit ones (65,024), not 8 x 33 (67,320) nor 8 x 36, whose

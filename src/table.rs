@@ -163,9 +163,10 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     /// proving from the texel width alone that no entry can overflow `E`
     /// ([`width::check_entry_worst_case`]). Nothing is written if the proof fails.
     ///
-    /// With the `simd` feature, a table of `u8` texels into `u32` entries of 32 MiB and more
-    /// (rows of at most 4,096 entries, a multiple of 4, the storage on 16 bytes) is written by
-    /// non-temporal stores, with each row built in a 16 KiB working row on the stack: such a
+    /// With the `simd` feature, a table of `u8` texels of one channel into `u32` entries of 32
+    /// MiB and more (rows of at most 4,096 entries, a multiple of 4, the storage on 16 bytes)
+    /// is written by non-temporal stores, with each row built in a working row of at most 16
+    /// KiB (in a 20 KiB buffer on the stack): such a
     /// table would not stay in cache anyway, and the stores skip reading each line before
     /// writing it (0.75x the time at 4,096^2 on a Zen 4 guest, docs/benchmarks.md). The table
     /// is then not in cache after the build.
@@ -967,6 +968,10 @@ pub struct RowStreamBuilder<'a, E: Entry, const C: usize = 1> {
     height: usize,
     texel_bits: u32,
     rows_done: usize,
+    /// Whether `push_row_into` writes `out` by non-temporal stores: a table of at least
+    /// `simd::STREAM_MIN_BYTES` (decided once, in `new`).
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    stream: bool,
 }
 
 /// One row of the build in place: `row` holds the row above on entry (ignored for the first row)
@@ -1053,6 +1058,13 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             return Err(Error::StorageTooSmall { needed, got });
         };
         Ok(RowStreamBuilder {
+            // A table past the caches (its bytes saturating: a product past `usize` is past
+            // the threshold too).
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            stream: needed
+                .saturating_mul(height)
+                .saturating_mul(core::mem::size_of::<E>())
+                >= crate::simd::STREAM_MIN_BYTES,
             row,
             width,
             height,
@@ -1099,6 +1111,12 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
     /// (`width * C` entries, for instance the row's place in a table), in the same pass over the
     /// row: the same entries as `push_row` followed by `out.copy_from_slice(row)`, without the
     /// second pass. Nothing is written to `out` if the row is refused.
+    ///
+    /// With the `simd` feature, for a table of 32 MiB and more (`width * C * height` entries,
+    /// `u8` texels of one channel into `u32` entries), `out` is written by non-temporal stores
+    /// where it starts on 16 bytes, as [`Sat::build`] writes such a table: the row is not left
+    /// in cache (0.71x the time at 4,096^2 on a Zen 4 guest, docs/benchmarks.md); the entries
+    /// are the same.
     pub fn push_row_into<T: Texel>(&mut self, texels: &[T], out: &mut [E]) -> Result<(), Error> {
         if self.rows_done >= self.height {
             return Err(Error::TooManyRows);
@@ -1117,15 +1135,8 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
         }
         let overflow = entry_overflow::<E>();
         let first = self.rows_done == 0;
-        // A table past the caches is written by non-temporal stores (with `simd`; its bytes
-        // saturating: a product past `usize` is past the threshold too).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        let stream = self
-            .row
-            .len()
-            .saturating_mul(self.height)
-            .saturating_mul(core::mem::size_of::<E>())
-            >= crate::simd::STREAM_MIN_BYTES;
+        let stream = self.stream;
         #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
         let stream = false;
         if T::BITS <= self.texel_bits {

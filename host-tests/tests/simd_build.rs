@@ -239,14 +239,23 @@ fn large_tables() {
         .iter()
         .zip(&want)
         .all(|(&g, &w)| u64::from(g) == w));
+    // Nothing written around the table.
+    let around = |s: &[u32]| {
+        s[..off]
+            .iter()
+            .chain(&s[off + w * h..])
+            .all(|&v| v == 0xDEAD_BEEF)
+    };
+    assert!(around(&storage));
     let mut row = vec![0u32; w];
     let mut b = RowStreamBuilder::<u32>::new(w, h, 8, &mut row).unwrap();
-    let mut table = vec![0u32; w * h + 4];
-    let table = &mut table[off..off + w * h];
+    let mut whole = vec![0xDEAD_BEEFu32; w * h + 4];
+    let table = &mut whole[off..off + w * h];
     for (src, dst) in t.chunks_exact(w).zip(table.chunks_exact_mut(w)) {
         b.push_row_into(src, dst).unwrap();
     }
     assert!(table.iter().zip(&want).all(|(&g, &w)| u64::from(g) == w));
+    assert!(around(&whole));
 }
 
 /// `push_row_into` on the portable path (u16 texels, 3 channels, u64 entries): the same rows as
