@@ -20,9 +20,9 @@
 //! [`pack_u32`]: the packing of `u32` fields of 11 to 32 bits into 32-bit words that the
 //! modular and tiled builders do per row (the portable packer, width-specialized scalar code,
 //! costs about a cycle per field; the AVX2 kernel, eight groups of 32 fields transposed into
-//! lanes, about a third to a half of it); and, with AVX2 only, [`modular_row`]: the modular
+//! lanes, about a third to a half of it); and, with AVX2 (on AVX-512 CPUs too), [`modular_row`]: the modular
 //! builder's whole row (prefix sums, working row and packing) in one pass per 256 texels, the
-//! working row kept transposed; and, with AVX2 only, [`band_row`]: the tiled builder's rows
+//! working row kept transposed; and, with AVX2 (on AVX-512 CPUs too), [`band_row`]: the tiled builder's rows
 //! inside a tile row (tiles 8 wide, a layout without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
 //! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]);
@@ -540,7 +540,9 @@ fn detect() -> Kernel {
     let l7 = __cpuid_count(7, 0);
     let ymm = xcr0 & 0b110 == 0b110;
     let zmm = xcr0 & 0b1110_0110 == 0b1110_0110;
-    if zmm && bit(l7.ebx, 16) && bit(l7.ecx, 11) {
+    // The AVX-512 kernel's detection includes AVX2's (the ZMM state includes the YMM state),
+    // since the builds then run AVX2 kernels too (`modular_row`, `band_row`).
+    if zmm && bit(l7.ebx, 16) && bit(l7.ecx, 11) && bit(l7.ebx, 5) {
         Kernel::Avx512Vnni
     } else if ymm && bit(l7.ebx, 5) {
         Kernel::Avx2
@@ -1617,16 +1619,18 @@ mod pack256 {
 }
 
 /// Whether [`modular_row`] takes the rows of a modular build of `u8` texels into `u32` entries,
-/// one channel, `width` texels per row, `k`-bit fields: with AVX2 (and not AVX-512 VNNI, whose
-/// separate row kernel and packer are faster), `k` in `MIN_PACK_BITS..=32`, at least one pass of
-/// 256 texels, and every row starting on a word (`width k` a multiple of 32). The builder asks
+/// one channel, `width` texels per row, `k`-bit fields: with AVX2, on an AVX-512 CPU too (on a
+/// Zen 4 guest the fused row took 0.55x to 0.60x the time of the AVX-512 row kernel and packer
+/// at 4,096^2, 0.76x at 1,024^2: docs/benchmarks.md, seventh session); `k` in
+/// `MIN_PACK_BITS..=32`, at least one pass of 256 texels, and every row starting on a word
+/// (`width k` a multiple of 32). The builder asks
 /// once: its working row is then stored transposed in blocks of 256 (see [`modular_row`]) for
 /// the whole build.
 pub(crate) fn modular_fused<T: Texel, E: Entry, const C: usize>(width: usize, k: u32) -> bool {
     T::BITS == 8
         && E::BITS == 32
         && C == 1
-        && Kernel::best() == Kernel::Avx2
+        && matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni)
         && (MIN_PACK_BITS..=32).contains(&k)
         && width >= MODULAR_PASS
         && width.checked_mul(k as usize).is_some_and(|b| b % 32 == 0)
@@ -1672,7 +1676,8 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
         return None;
     }
     let (tp, ap, wp) = (t.as_ptr(), a.as_mut_ptr(), words.as_mut_ptr());
-    // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2); `t` holds 256
+    // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2 or AVX-512 VNNI,
+    // whose detection includes AVX2's); `t` holds 256
     // passes texels, `a` 256 passes values and `words` 8 k passes words (checked above): what
     // the kernel reads and writes.
     let run = unsafe { by_pack_width!(ku, modular256::row(tp, ap, wp, passes), return None) };
@@ -2681,8 +2686,10 @@ mod tiled256 {
 
 /// Whether the band rows ([`band_row`], [`band_flush`]) can take a tiled build's rows that end
 /// no tile row, entries `E`, `C` channels (with texels of [`band_types`]): `u32` entries, one
-/// channel; with AVX2 and not AVX-512 VNNI (whose row kernel packs in its pass); tiles 8
-/// texels wide (`tile_w`); a row of at least one block of 16 texels; and the sum of a whole
+/// channel; with AVX2, on an AVX-512 CPU too, beside the AVX-512 row kernel for the rows that
+/// end a tile row (on a Zen 4 guest the tiled build of 1,024^2 took 0.80x the time with the
+/// band rows, 4,096^2 about the same: docs/benchmarks.md, seventh session); tiles 8 texels wide
+/// (`tile_w`); a row of at least one block of 16 texels; and the sum of a whole
 /// tile, `tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1`. The band rows keep the column
 /// sums and their prefix inside a tile, up to the tile's total (lane 7 of each half, the
 /// boundary's increment), as 16-bit values: a tile row's rows before its last are fewer than
@@ -2703,7 +2710,7 @@ pub(crate) fn band_applies<E: Entry, const C: usize>(
     };
     E::BITS == 32
         && C == 1
-        && Kernel::best() == Kernel::Avx2
+        && matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni)
         && tile_w == 8
         && texel_max
             .checked_mul(u64::from(tile_w) * u64::from(tile_h))
@@ -3248,10 +3255,16 @@ mod tests {
     /// texels (65,280) and 8 x 64 of 7-bit ones (65,024), not 8 x 33 (67,320) nor 8 x 36, whose
     /// local sums (7 x 35 x 255 = 62,475) fit 16 bits but its tile rows' totals do not; not 16-bit
     /// texels, tiles other than 8 wide, rows shorter than a block, or other entries; only with AVX2
-    /// as the best kernel.
+    /// or AVX-512 as the best kernel (capped to each kernel the CPU has).
     #[test]
     fn band_applies_bounds_a_tiles_sum() {
-        let avx2 = Kernel::best() == Kernel::Avx2;
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
+            kernel.cap(band_applies_bounds_under_the_cap);
+        }
+    }
+
+    fn band_applies_bounds_under_the_cap() {
+        let avx2 = Kernel::best() != Kernel::Sse2;
         assert_eq!(band_applies::<u32, 1>(16, 8, 32, 8), avx2);
         assert_eq!(band_applies::<u32, 1>(1024, 8, 64, 7), avx2);
         assert!(!band_applies::<u32, 1>(16, 8, 33, 8));

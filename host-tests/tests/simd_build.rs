@@ -287,8 +287,8 @@ fn push_row_into_equals_push_row_and_a_copy() {
     assert_eq!(a.finish().unwrap(), b.finish().unwrap());
 }
 
-/// Modular builds of widths that take the fused AVX2 row (`simd` on an AVX2 CPU without
-/// AVX-512 VNNI: at least 256 texels, `w k` a multiple of 32; passes of 256 and a tail) and
+/// Modular builds of widths that take the fused AVX2 row (`simd` on an AVX2 or AVX-512 CPU: at
+/// least 256 texels, `w k` a multiple of 32; passes of 256 and a tail) and
 /// of widths beside them that do not: every corner against the reference modulo `2^k`, into
 /// dirty words and a dirty working row; texels all 255 and random.
 #[test]

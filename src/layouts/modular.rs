@@ -388,7 +388,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
     /// (at least `w * C` entries, cleared here) is its working state between rows, in an order
     /// of its own (see [`Modular::build`]).
     ///
-    /// With the `simd` feature on an x86-64 CPU with AVX2 (and not AVX-512 VNNI), `u8` rows of
+    /// With the `simd` feature on an x86-64 CPU with AVX2 (AVX-512 CPUs included), `u8` rows of
     /// one channel at least 256 texels wide, `k` from 11 to 32 and `w k` a multiple of 32 take a
     /// fused row: the prefix sums, the working row and the packing in one pass per 256 texels
     /// (`simd::modular_row`; 1.06x to 1.23x the flat build's time, `docs/benchmarks.md`).

@@ -2290,7 +2290,7 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// of component `(p, q)`: 32 fields at a time, each output word written once, in order (see
 /// the module's "Storage order").
 ///
-/// With `simd` on an AVX2 CPU without AVX-512 VNNI (tiles 8 wide, `u8` texels into `u32`
+/// With `simd` on an AVX2 CPU, AVX-512 CPUs included (tiles 8 wide, `u8` texels into `u32`
 /// entries, one channel, no modulus, a whole tile's sum below 2^16), the rows inside a tile
 /// row keep acc_0 as the tile row's 16-bit column sums instead (`simd::band_row`): acc_0's
 /// local sum at `X` is the prefix of the column sums inside the tile, and a boundary the
