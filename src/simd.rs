@@ -1639,6 +1639,11 @@ pub(crate) fn modular_fused<T: Texel, E: Entry, const C: usize>(width: usize, k:
 /// Texels per pass of [`modular_row`]: 8 groups of 32.
 pub(crate) const MODULAR_PASS: usize = 256;
 
+/// How many passes ahead [`modular_row`] asks for the words it will write (with `prefetch`):
+/// 3, about 2 KiB at `k` = 21. Two and four passes ran as fast on a Zen 4 guest; eight no
+/// faster than none.
+const MODULAR_AHEAD: usize = 3;
+
 /// One row of the modular build, fused (AVX2): for the first `p = floor(n / 256)` passes of 256
 /// texels, `acc[x] += r(x)` (wrapping; `r(x)` the row's prefix sum `t_0 + ... + t_x`) and the low
 /// `k` bits of the new `acc[x]` packed into `words` from its bit 0 (field `x` at bit `x k`, as
@@ -1659,11 +1664,19 @@ pub(crate) const MODULAR_PASS: usize = 256;
 /// the constant shifts of the AVX2 packer (`pack256`); the `k` words of each group transposed
 /// back and stored. It replaces the row kernel's pass, the packer's pass over the row, and the
 /// packer's transposes of the values on their way in.
+///
+/// With `prefetch` (a layout past the caches: the builder passes it for one of at least
+/// [`STREAM_MIN_BYTES`]), each pass also asks for the lines of the words [`MODULAR_AHEAD`]
+/// passes on (`prefetcht0`), so that its stores do not wait on each line's read: on a Zen 4
+/// guest a modular build of 4,096^2 (`k` = 21, 44 MB) took 0.88x to 0.90x the time with them,
+/// one of 1,024^2 (2.75 MB, in the L3) 1.03x, hence the threshold (docs/benchmarks.md, seventh
+/// session).
 pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     acc: &mut [E],
     words: &mut [u32],
     k: u32,
+    prefetch: bool,
 ) -> Option<(usize, u32)> {
     if !modular_fused::<T, E, C>(texels.len(), k) {
         return None;
@@ -1680,7 +1693,13 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     // whose detection includes AVX2's); `t` holds 256
     // passes texels, `a` 256 passes values and `words` 8 k passes words (checked above): what
     // the kernel reads and writes.
-    let run = unsafe { by_pack_width!(ku, modular256::row(tp, ap, wp, passes), return None) };
+    let run = unsafe {
+        by_pack_width!(
+            ku,
+            modular256::row(tp, ap, wp, passes, prefetch),
+            return None
+        )
+    };
     Some((passes * MODULAR_PASS, run))
 }
 
@@ -1788,8 +1807,8 @@ mod modular256 {
         }
     }
 
-    /// [`modular_row`]'s kernel over `passes` passes of 256 texels; returns the running sum
-    /// after them.
+    /// [`modular_row`]'s kernel over `passes` passes of 256 texels (with `prefetch`, the
+    /// hints for the words [`MODULAR_AHEAD`] passes on); returns the running sum after them.
     ///
     /// # Safety
     /// The CPU has AVX2; `11 <= K <= 32`; `t` is valid for reads of `256 passes` bytes, `acc`
@@ -1801,6 +1820,7 @@ mod modular256 {
         acc: *mut u32,
         w: *mut u32,
         passes: usize,
+        prefetch: bool,
     ) -> u32 {
         let m = _mm256_set1_epi32(if K >= 32 {
             -1
@@ -1845,6 +1865,18 @@ mod modular256 {
             steps!(16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
             // SAFETY: wp + K g holds K writable words for g < 8 (the pass's 8 K words).
             unsafe { pack256::store_words::<K, true>(wp, 8, &o) };
+            if prefetch {
+                // The words of the pass `MODULAR_AHEAD` passes on (past the row's end: the next
+                // row's, or none; a hint only, never dereferenced, so the pointer may point
+                // anywhere), one hint per 64 bytes.
+                let ahead = wp.wrapping_add(8 * K * MODULAR_AHEAD).cast::<i8>();
+                let mut b = 0;
+                while b < 32 * K {
+                    // A prefetch accesses no memory and never faults.
+                    _mm_prefetch::<_MM_HINT_T0>(ahead.wrapping_add(b));
+                    b += 64;
+                }
+            }
         }
         _mm256_cvtsi256_si32(carry) as u32
     }
@@ -4158,7 +4190,14 @@ mod tests {
                         // SAFETY: AVX2 is available (checked above); the slices hold 256
                         // passes texels and values and 8 k passes words.
                         unsafe {
-                            by_pack_width!(ku, modular256::row(tp, ap, wp, passes), unreachable!())
+                            // With the prefetch hints for an odd count of passes (the
+                            // same values either way).
+                            let pf = passes % 2 == 1;
+                            by_pack_width!(
+                                ku,
+                                modular256::row(tp, ap, wp, passes, pf),
+                                unreachable!()
+                            )
                         }
                     };
                     let mut want_words = noise.clone();

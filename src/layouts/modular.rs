@@ -381,6 +381,10 @@ pub struct ModularBuilder<'a, 's, E: Entry, const C: usize = 1> {
     /// that `row` holds that function's transposed order.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     fused: bool,
+    /// Whether the fused rows ask for the words ahead of their stores: a layout of at least
+    /// `simd::STREAM_MIN_BYTES`, past the caches (see `simd::modular_row`).
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    prefetch: bool,
 }
 
 impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
@@ -427,6 +431,8 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             rows_done: 0,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             fused: false,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            prefetch: sizes.words.saturating_mul(4) >= crate::simd::STREAM_MIN_BYTES,
         })
     }
 
@@ -513,10 +519,9 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         // `modular_fused`: width k is a multiple of 32, so every row starts on a word.
         let first = usize::try_from(offset.checked_div(u64::from(WORD_BITS)).unwrap_or(0))
             .unwrap_or(usize::MAX);
-        let fused = self
-            .words
-            .get_mut(first..)
-            .and_then(|w| crate::simd::modular_row::<T, E, C>(texels, self.row, w, self.k));
+        let fused = self.words.get_mut(first..).and_then(|w| {
+            crate::simd::modular_row::<T, E, C>(texels, self.row, w, self.k, self.prefetch)
+        });
         let Some((done, run)) = fused else {
             crate::simd::modular_untranspose(self.row);
             self.fused = false;
