@@ -54,7 +54,9 @@
 //! 1. *Target features.* Each kernel is a `#[target_feature]` function; it is called only as
 //!    [`Kernel::best`], the widest kernel whose features CPUID reports and whose registers the
 //!    operating system saves (XCR0), per the Intel SDM's detection procedure (SSE2 is part of
-//!    the x86-64 baseline); the tiled packing kernel (AVX-512BW and VBMI as well) only when
+//!    the x86-64 baseline; the AVX-512 kernel's detection includes AVX2's, so the AVX2 code
+//!    also runs under it: the band rows and the fused modular row); the tiled packing kernel
+//!    (AVX-512BW and VBMI as well) only when
 //!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
 //!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
 //!    features enable. Calling the kernels (and XGETBV, after CPUID reports OSXSAVE) is the
