@@ -15,15 +15,16 @@
 //! and the modular builder's rows; the tiled builder's row step ([`tiled_row`]: the row's sums,
 //! the fold of the level below and the split into local sums and tile boundaries in one pass,
 //! with AVX-512 VNNI for tiles of 2 to 16 texels or AVX2 for tiles of 8; with AVX-512BW and
-//! VBMI as well, the local sums of tiles of 8 packed in the same pass). Everything else (and
+//! VBMI as well, the local sums of tiles of 8 packed in the same pass, for the rows the band
+//! rows below do not take). Everything else (and
 //! [`crate::Sat::build_checked`]) takes the portable path. Also, with AVX-512 or AVX2,
 //! [`pack_u32`]: the packing of `u32` fields of 11 to 32 bits into 32-bit words that the
 //! modular and tiled builders do per row (the portable packer, width-specialized scalar code,
 //! costs about a cycle per field; the AVX2 kernel, eight groups of 32 fields transposed into
-//! lanes, about a third to a half of it); and, with AVX2 (on AVX-512 CPUs too), [`modular_row`]: the modular
-//! builder's whole row (prefix sums, working row and packing) in one pass per 256 texels, the
-//! working row kept transposed; and, with AVX2 (on AVX-512 CPUs too), [`band_row`]: the tiled builder's rows
-//! inside a tile row (tiles 8 wide, a layout without a modulus whose tiles' sums fit 16 bits),
+//! lanes, about a third to a half of it); and, with AVX2 (on AVX-512 CPUs too),
+//! [`modular_row`]: the modular builder's whole row (prefix sums, working row and packing) in
+//! one pass per 256 texels, the working row kept transposed; and, with AVX2 (on AVX-512 CPUs
+//! too), [`band_row`]: the tiled builder's rows inside a tile row (tiles 8 wide, a layout without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
 //! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]);
 //! [`band_flush`] turns the column sums back into the accumulator. The kernel is the widest
@@ -258,7 +259,8 @@ fn fence() {
 /// the table) and written to the table in the same pass (`row(y)` gives texture row `y`).
 /// `false`, with nothing written, where it does not apply, including when `row` lacks a row `y
 /// < height` of `width` texels (checked for every row before the first is written; the
-/// caller's own loop then reports it).
+/// caller's own loop then reports it). `row` is called twice per row and must give the same
+/// row each time (the caller passes `Texture::row`).
 #[inline(never)]
 pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
     table: &mut [E],
@@ -605,7 +607,8 @@ unsafe fn xgetbv0() -> u64 {
 fn detect() -> Kernel {
     if cfg!(all(
         target_feature = "avx512f",
-        target_feature = "avx512vnni"
+        target_feature = "avx512vnni",
+        target_feature = "avx2"
     )) {
         Kernel::Avx512Vnni
     } else if cfg!(target_feature = "avx2") {
@@ -2720,10 +2723,11 @@ mod tiled256 {
 
 /// Whether the band rows ([`band_row`], [`band_flush`]) can take a tiled build's rows that end
 /// no tile row, entries `E`, `C` channels (with texels of [`band_types`]): `u32` entries, one
-/// channel; with AVX2, on an AVX-512 CPU too, beside the AVX-512 row kernel for the rows that
-/// end a tile row (on a Zen 4 guest the tiled build of 1,024^2 took 0.80x the time with the
-/// band rows, 4,096^2 about the same: docs/benchmarks.md, seventh session); tiles 8 texels wide
-/// (`tile_w`); a row of at least one block of 16 texels; and the sum of a whole
+/// channel; with AVX2, on an AVX-512 CPU too (there the rows that end a tile row take
+/// [`band_end_row`], AVX2 as well, and only the rows that end a level above the tiles the
+/// AVX-512 row kernel; the boundaries go to the widest packer; on a Zen 4 guest the tiled
+/// build of 1,024^2 took 0.80x the time with the band rows, 4,096^2 about the same:
+/// docs/benchmarks.md, seventh session); tiles 8 texels wide (`tile_w`); a row of at least one block of 16 texels; and the sum of a whole
 /// tile, `tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1`. The band rows keep the column
 /// sums and their prefix inside a tile, up to the tile's total (lane 7 of each half, the
 /// boundary's increment), as 16-bit values: a tile row's rows before its last are fewer than
@@ -3223,8 +3227,9 @@ mod tests {
 
     /// `build_streamed` takes exactly the tables it documents (`u8` texels, one channel, `u32`
     /// entries, at least 32 MiB, rows of at most 4,096 entries and a multiple of 4, storage on
-    /// 16 bytes, every row present) and builds them as the portable checked build does; it
-    /// declines the rest with nothing written.
+    /// 16 bytes, every row present and whole) and builds them as the portable checked build
+    /// does, each case under another kernel cap (SSE2, AVX2, AVX-512 in turn, those the CPU
+    /// runs); it declines the rest with nothing written.
     #[test]
     #[cfg_attr(miri, ignore = "tables of 32 MiB: too slow under Miri")]
     fn build_streamed_takes_large_tables_only() {
@@ -3232,18 +3237,24 @@ mod tests {
         let texels: std::vec::Vec<u8> = (0..4094u32 * 2100)
             .map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8)
             .collect();
-        // (width, height, entries off 16 bytes, row missing, taken)
+        // (width, height, entries off 16 bytes, last row: 0 there, 1 missing, 2 short, taken)
         let cases = [
-            (4096, 2048, 0, false, true),
-            (4092, 2052, 0, false, true),
-            (1024, 8192, 0, false, true),
-            (4100, 2048, 0, false, false),
-            (4096, 2047, 0, false, false),
-            (4094, 2100, 0, false, false),
-            (4096, 2048, 1, false, false),
-            (4096, 2048, 0, true, false),
+            (4096, 2048, 0, 0, true),
+            (4092, 2052, 0, 0, true),
+            (1024, 8192, 0, 0, true),
+            (4100, 2048, 0, 0, false),
+            (4096, 2047, 0, 0, false),
+            (4094, 2100, 0, 0, false),
+            (4096, 2048, 1, 0, false),
+            (4096, 2048, 0, 1, false),
+            (4096, 2048, 0, 2, false),
         ];
-        for (w, h, off, missing, taken) in cases {
+        // Each case under another kernel cap, so that every kernel the CPU runs streams.
+        for (c, (w, h, off, last, taken)) in cases.into_iter().enumerate() {
+            let kernel = Kernel::ALL[c % 3];
+            if !kernel.available() {
+                continue;
+            }
             let t = &texels[..w * h];
             let mut whole = std::vec![0xDEAD_BEEFu32; w * h + 8];
             let base = (0..4)
@@ -3251,12 +3262,14 @@ mod tests {
                 .unwrap()
                 + off;
             let table = &mut whole[base..base + w * h];
-            let row = |y: usize| (!(missing && y == h - 1)).then(|| &t[y * w..][..w]);
-            let got = build_streamed::<u8, u32, 1>(table, w, row);
-            assert_eq!(
-                got, taken,
-                "{w} x {h}, {off} entries off, missing {missing}"
-            );
+            let row = |y: usize| match (y == h - 1, last) {
+                (true, 1) => None,
+                (true, 2) => Some(&t[y * w..][..w - 4]),
+                _ => Some(&t[y * w..][..w]),
+            };
+            let got = kernel.cap(|| build_streamed::<u8, u32, 1>(table, w, row));
+            let what = (w, h, off, last, kernel);
+            assert_eq!(got, taken, "{what:?}");
             if taken {
                 let mut want = std::vec![0u32; w * h];
                 let texture = Texture::<u8>::new(t, w, h).unwrap();

@@ -395,7 +395,9 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
     /// With the `simd` feature on an x86-64 CPU with AVX2 (AVX-512 CPUs included), `u8` rows of
     /// one channel at least 256 texels wide, `k` from 11 to 32 and `w k` a multiple of 32 take a
     /// fused row: the prefix sums, the working row and the packing in one pass per 256 texels
-    /// (`simd::modular_row`; 1.06x to 1.23x the flat build's time, `docs/benchmarks.md`).
+    /// (`simd::modular_row`; on a CPU with AVX2 only 1.06x to 1.23x the flat build's time, on
+    /// a Zen 4 guest 0.81x to 0.97x at 1,024^2 and 1.24x to 1.36x at 4,096^2,
+    /// `docs/benchmarks.md`).
     pub fn new(
         width: usize,
         height: usize,

@@ -2197,8 +2197,8 @@ mod row_step_tests {
     fn wide_rows_every_corner() {
         // Under Miri (slow): one row pair, the 8 x 8 tiles and the flat layout.
         let (w, h) = if cfg!(miri) { (1030, 2) } else { (1100, 17) };
-        // With `simd`, once per kernel this CPU runs (the builds take the widest allowed: on a
-        // CPU with AVX-512 VNNI, the AVX2 one runs the band rows, `TiledBuilder::band_step`):
+        // With `simd`, once per kernel this CPU runs (the builds take the widest allowed; the
+        // band rows, `TiledBuilder::band_step`, under the AVX2 and the AVX-512 kernel alike):
         // widths 1,100 and 1,095, whose rows of boundaries start off a word every other row
         // and leave local sums after the kernel's steps of 16.
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
