@@ -24,7 +24,8 @@
 //! lanes, about a third to a half of it); and, with AVX2 (on AVX-512 CPUs too),
 //! [`modular_row`]: the modular builder's whole row (prefix sums, working row and packing) in
 //! one pass per 256 texels, the working row kept transposed; and, with AVX2 (on AVX-512 CPUs
-//! too), [`band_row`]: the tiled builder's rows inside a tile row (tiles 8 wide, a layout without a modulus whose tiles' sums fit 16 bits),
+//! too), [`band_row`]: the tiled builder's rows inside a tile row (tiles 8 wide, a layout
+//! without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
 //! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]);
 //! [`band_flush`] turns the column sums back into the accumulator. The kernel is the widest
@@ -211,6 +212,13 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
 /// the cache is better written through it (docs/benchmarks.md, sixth session).
 pub(crate) const STREAM_MIN_BYTES: usize = 32 << 20;
 
+/// Whether a table or layout of `bytes` is past the caches ([`STREAM_MIN_BYTES`]): the one
+/// test behind the streamed builds and the modular row's prefetch hints.
+#[inline]
+pub(crate) const fn past_the_caches(bytes: usize) -> bool {
+    bytes >= STREAM_MIN_BYTES
+}
+
 /// The widest row [`build_streamed`] takes: its working row is at most 16 KiB (inside a 20 KiB
 /// buffer on the stack, [`ALIAS_PAD`]), which stays in a 32 KiB L1 data cache beside the row's
 /// texels.
@@ -275,7 +283,7 @@ pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
         || width > STREAM_ROW_MAX
         || !width.is_multiple_of(4)
         || out.len() % width != 0
-        || out.len() < STREAM_MIN_BYTES / 4
+        || !past_the_caches(out.len().saturating_mul(4))
         || !(out.as_ptr() as usize).is_multiple_of(16)
     {
         return false;
@@ -1628,9 +1636,8 @@ mod pack256 {
 /// Zen 4 guest the fused row took 0.55x to 0.60x the time of the AVX-512 row kernel and packer
 /// at 4,096^2, 0.76x at 1,024^2: docs/benchmarks.md, seventh session); `k` in
 /// `MIN_PACK_BITS..=32`, at least one pass of 256 texels, and every row starting on a word
-/// (`width k` a multiple of 32). The builder asks
-/// once: its working row is then stored transposed in blocks of 256 (see [`modular_row`]) for
-/// the whole build.
+/// (`width k` a multiple of 32). The builder asks once: its working row is then stored
+/// transposed in blocks of 256 (see [`modular_row`]) for the whole build.
 pub(crate) fn modular_fused<T: Texel, E: Entry, const C: usize>(width: usize, k: u32) -> bool {
     T::BITS == 8
         && E::BITS == 32
@@ -1695,9 +1702,8 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     }
     let (tp, ap, wp) = (t.as_ptr(), a.as_mut_ptr(), words.as_mut_ptr());
     // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2 or AVX-512 VNNI,
-    // whose detection includes AVX2's); `t` holds 256
-    // passes texels, `a` 256 passes values and `words` 8 k passes words (checked above): what
-    // the kernel reads and writes.
+    // whose detection includes AVX2's); `t` holds 256 passes texels, `a` 256 passes values and
+    // `words` 8 k passes words (checked above): what the kernel reads and writes.
     let run = unsafe {
         by_pack_width!(
             ku,
@@ -2727,8 +2733,8 @@ mod tiled256 {
 /// [`band_end_row`], AVX2 as well, and only the rows that end a level above the tiles the
 /// AVX-512 row kernel; the boundaries go to the widest packer; on a Zen 4 guest the tiled
 /// build of 1,024^2 took 0.80x the time with the band rows, 4,096^2 about the same:
-/// docs/benchmarks.md, seventh session); tiles 8 texels wide (`tile_w`); a row of at least one block of 16 texels; and the sum of a whole
-/// tile, `tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1`. The band rows keep the column
+/// docs/benchmarks.md, seventh session); tiles 8 texels wide (`tile_w`); a row of at least
+/// one block of 16 texels; and the sum of a whole tile, `tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1`. The band rows keep the column
 /// sums and their prefix inside a tile, up to the tile's total (lane 7 of each half, the
 /// boundary's increment), as 16-bit values: a tile row's rows before its last are fewer than
 /// `tile_h`, so every such value is at most that bound. The local sums' field width is not

@@ -1061,10 +1061,11 @@ impl<'a, E: Entry, const C: usize> RowStreamBuilder<'a, E, C> {
             // A table past the caches (its bytes saturating: a product past `usize` is past
             // the threshold too).
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-            stream: needed
-                .saturating_mul(height)
-                .saturating_mul(core::mem::size_of::<E>())
-                >= crate::simd::STREAM_MIN_BYTES,
+            stream: crate::simd::past_the_caches(
+                needed
+                    .saturating_mul(height)
+                    .saturating_mul(core::mem::size_of::<E>()),
+            ),
             row,
             width,
             height,

@@ -434,7 +434,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             fused: false,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-            prefetch: sizes.words.saturating_mul(4) >= crate::simd::STREAM_MIN_BYTES,
+            prefetch: crate::simd::past_the_caches(sizes.words.saturating_mul(4)),
         })
     }
 

@@ -1078,8 +1078,8 @@ fn tiled_cells4_equal_the_flat_table_on_wide_fields() {
 
 /// The modular builder under every build kernel this CPU runs (with `simd`: the fused AVX2 row,
 /// `simd::modular_row`, under the AVX2 and AVX-512 kernels, the row kernel and packer under
-/// SSE2 and wherever the fused row does not apply): every corner of noise textures equals the summed-area table mod `2^k`, for widths
-/// and `k` with whole passes of 256 texels on rows that start on a word (512 x 21, 520 x 12,
+/// SSE2 and wherever the fused row does not apply): every corner of noise textures equals the
+/// summed-area table mod `2^k`, for widths and `k` with whole passes of 256 texels on rows that start on a word (512 x 21, 520 x 12,
 /// 544 x 20: fused, with a tail after the passes) and without (520 x 21: rows off a word).
 #[test]
 fn modular_rows_under_every_kernel() {
