@@ -94,7 +94,7 @@ pair() {
   if [ "$sa" -ne 0 ] || [ "$sb" -ne 0 ]; then failed=1; fi
 }
 pair "" "-C target-feature=+avx2"
-pair "-C target-feature=+avx512f,+avx512vnni" "-C target-feature=+avx512f,+avx512vnni,+avx512bw,+avx512vbmi"
+pair "-C target-feature=+avx512f,+avx512vl,+avx512vnni" "-C target-feature=+avx512f,+avx512vl,+avx512vnni,+avx512bw,+avx512vbmi"
 if [ "$failed" -ne 0 ]; then
   echo "miri: the simd kernels FAILED under Miri (logs above)"
   exit 1

@@ -33,9 +33,9 @@
 //! once at run time from CPUID and XGETBV (no `std` needed), as OpenCV and the standard
 //! library's `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
-//! * AVX-512 VNNI (`avx512f` + `avx512vnni`): the 16 prefix sums of a block are four `vpdpbusd`
-//!   dot products of a broadcast group of 4 texels with a constant triangle of 0/1 weights,
-//!   straight into 32-bit lanes: no shifts, no widening.
+//! * AVX-512 VNNI (`avx512f` + `avx512vl` + `avx512vnni`): the 8 prefix sums of each half
+//!   block are two 256-bit `vpdpbusd` dot products of a broadcast group of 4 texels with a
+//!   constant triangle of 0/1 weights, straight into 32-bit lanes: no shifts, no widening.
 //! * AVX2: the same dot products, per 8 texels: two broadcast groups of 4 texels times 0/1
 //!   weights by `vpmaddubsw` (16-bit pairs), added, then `vpmaddwd` with ones (32-bit lanes);
 //!   only the two 8-lane totals take a lane-crossing permute.
@@ -405,6 +405,17 @@ fn row_u8_u32(
     }
 }
 
+/// `vpermd` indices that broadcast lane 7 (an 8-lane total) into every lane, opaque to the
+/// compiler: LLVM turns a permute by a constant splat index into two shuffles (`vpshufd` and
+/// `vpermq`); the kernels' one `vpermd` per 8 lanes measured 0.9x the time of that pair for a
+/// row in L1 (the AVX2 build kernel; docs/benchmarks.md, eighth session). `black_box` is only
+/// a hint: at worst the pair comes back, with the same values.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn lane7() -> __m256i {
+    core::hint::black_box(_mm256_set1_epi32(7))
+}
+
 /// Lanes a kernel handles per step.
 const BLOCK: usize = 16;
 
@@ -535,8 +546,9 @@ pub fn kernel_name() -> &'static str {
     Kernel::best().name()
 }
 
-/// CPUID leaf 1 ECX: OSXSAVE (27) and AVX (28); leaf 7 EBX: AVX2 (5), AVX-512F (16); leaf 7
-/// ECX: AVX-512 VNNI (11). XCR0: SSE and AVX state (bits 1, 2) for AVX2; also opmask and the
+/// CPUID leaf 1 ECX: OSXSAVE (27) and AVX (28); leaf 7 EBX: AVX2 (5), AVX-512F (16),
+/// AVX-512 VL (31, for the 256-bit `vpdpbusd` of the build kernel); leaf 7 ECX: AVX-512 VNNI
+/// (11). XCR0: SSE and AVX state (bits 1, 2) for AVX2; also opmask and the
 /// upper ZMM state (5, 6, 7) for AVX-512. (Intel SDM vol. 1 §13.3 and §15.2, "Detection of
 /// AVX-512 instructions".)
 #[cfg(not(miri))]
@@ -554,7 +566,7 @@ fn detect() -> Kernel {
     let zmm = xcr0 & 0b1110_0110 == 0b1110_0110;
     // The AVX-512 kernel's detection includes AVX2's (the ZMM state includes the YMM state),
     // since the builds then run AVX2 kernels too (`modular_row`, `band_row`).
-    if zmm && bit(l7.ebx, 16) && bit(l7.ecx, 11) && bit(l7.ebx, 5) {
+    if zmm && bit(l7.ebx, 16) && bit(l7.ebx, 31) && bit(l7.ecx, 11) && bit(l7.ebx, 5) {
         Kernel::Avx512Vnni
     } else if ymm && bit(l7.ebx, 5) {
         Kernel::Avx2
@@ -615,6 +627,7 @@ unsafe fn xgetbv0() -> u64 {
 fn detect() -> Kernel {
     if cfg!(all(
         target_feature = "avx512f",
+        target_feature = "avx512vl",
         target_feature = "avx512vnni",
         target_feature = "avx2"
     )) {
@@ -779,7 +792,7 @@ mod avx2 {
         nt: bool,
     ) -> u32 {
         let w = Weights::new();
-        let last = _mm256_set1_epi32(7);
+        let last = lane7();
         let mut carry = _mm256_setzero_si256();
         let mut i = 0;
         while i + BLOCK <= n {
@@ -823,34 +836,10 @@ mod avx2 {
 mod avx512vnni {
     use super::*;
 
-    /// The 0/1 weights of texel group `g` (texels `4g..4g + 4` of the block): byte `j` of lane
-    /// `k` is 1 when texel `4g + j` is at or before texel `k`, so
-    /// `sum_g dot(group g, weights g)` in lane `k` is the inclusive prefix sum up to `k`.
-    const fn weights(g: usize) -> [i32; 16] {
-        let mut w = [0i32; 16];
-        let mut k = 0;
-        while k < 16 {
-            let mut lane = 0u32;
-            let mut j = 0;
-            while j < 4 {
-                if 4 * g + j <= k {
-                    lane |= 1 << (8 * j);
-                }
-                j += 1;
-            }
-            w[k] = lane as i32;
-            k += 1;
-        }
-        w
-    }
-
-    const W: [[i32; 16]; 4] = [weights(0), weights(1), weights(2), weights(3)];
-
     /// The 16 texels at `tp` weighted into 16 lanes by four `vpdpbusd`, one per group of 4
     /// texels broadcast to every lane (unsigned texel bytes times the lane's signed 0/1
     /// weights `w[k]` for group `k`, summed per 32-bit lane; each lane at most 16 x 255, far
-    /// from any saturation), in one chain: with [`W`], lane `l` is the prefix sum of texels
-    /// `0..=l`; the tiled kernels pass their own weights.
+    /// from any saturation), in one chain; the weights are the tiled kernels' ([`TileTable`]).
     ///
     /// # Safety
     /// The CPU has AVX-512F and AVX-512 VNNI; `tp` is valid for reads of 16 bytes.
@@ -868,11 +857,41 @@ mod avx512vnni {
         _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3])
     }
 
-    /// One `vpdpbusd` per group of 4 texels ([`dot16`]).
+    /// The 0/1 weights of group `g` (0 or 1: texels `4g..4g + 4`) of a half block of 8
+    /// texels: byte `j` of lane `k` is 1 when texel `4g + j` is at or before texel `k`, so
+    /// `dot(group 0, W8[0]) + dot(group 1, W8[1])` in lane `k` is the inclusive prefix sum of
+    /// the half block up to `k`.
+    const fn weights8(g: usize) -> [i32; 8] {
+        let mut w = [0i32; 8];
+        let mut k = 0;
+        while k < 8 {
+            let mut lane = 0u32;
+            let mut j = 0;
+            while j < 4 {
+                if 4 * g + j <= k {
+                    lane |= 1 << (8 * j);
+                }
+                j += 1;
+            }
+            w[k] = lane as i32;
+            k += 1;
+        }
+        w
+    }
+
+    const W8: [[i32; 8]; 2] = [weights8(0), weights8(1)];
+
+    /// Per half block of 8 texels, two 256-bit `vpdpbusd` (AVX-512 VL): each group of 4
+    /// texels broadcast to the 8 lanes, times [`W8`] (unsigned texel bytes times signed 0/1
+    /// weights, summed per 32-bit lane: at most 8 x 255, far from any saturation), gives the
+    /// half block's 8 prefix sums; its total (lane 7) is broadcast by one `vpermd` into the
+    /// running sum. Half as many multiplies as the 512-bit form's four `vpdpbusd` per 16
+    /// lanes ([`dot16`]), most of whose lanes' weights are zero: on a Zen 4 guest, 0.78x the
+    /// time per row in L1 (docs/benchmarks.md, eighth session).
     ///
     /// # Safety
-    /// As the SSE2 kernel, with AVX-512F and AVX-512 VNNI.
-    #[target_feature(enable = "avx512f,avx512vnni")]
+    /// As the SSE2 kernel, with AVX2, AVX-512F, AVX-512 VL and AVX-512 VNNI.
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512vnni")]
     pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
         t: *const u8,
         a: *const u32,
@@ -881,40 +900,45 @@ mod avx512vnni {
         n: usize,
         nt: bool,
     ) -> u32 {
-        let w = W.map(|g| {
-            let [a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15] = g;
-            _mm512_setr_epi32(
-                a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15,
+        // SAFETY: each row of W8 is 8 i32, 32 bytes.
+        let (w0, w1) = unsafe {
+            (
+                _mm256_loadu_si256(W8[0].as_ptr().cast()),
+                _mm256_loadu_si256(W8[1].as_ptr().cast()),
             )
-        });
-        let last = _mm512_set1_epi32(15);
-        let zero = _mm512_setzero_si512();
+        };
+        let last = lane7();
+        let zero = _mm256_setzero_si256();
         let mut carry = zero;
         let mut i = 0;
         while i + BLOCK <= n {
-            // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
-            unsafe {
-                let p = dot16(t.add(i), &w);
-                let mut v = _mm512_add_epi32(p, carry);
-                carry = _mm512_add_epi32(carry, _mm512_permutexvar_epi32(last, p));
-                if ABOVE {
-                    v = _mm512_add_epi32(v, _mm512_loadu_si512(a.add(i).cast()));
-                }
-                _mm512_storeu_si512(o.add(i).cast(), v);
-                if COPY {
-                    if nt {
-                        store_copy(o2.add(i), _mm512_castsi512_si128(v), true);
-                        store_copy(o2.add(i + 4), _mm512_extracti32x4_epi32::<1>(v), true);
-                        store_copy(o2.add(i + 8), _mm512_extracti32x4_epi32::<2>(v), true);
-                        store_copy(o2.add(i + 12), _mm512_extracti32x4_epi32::<3>(v), true);
-                    } else {
-                        _mm512_storeu_si512(o2.add(i).cast(), v);
+            for j in [i, i + 8] {
+                // SAFETY: j + 8 <= i + 16 <= n (the caller's bounds); unaligned loads and
+                // stores; the 4-byte groups at j and j + 4.
+                unsafe {
+                    let g = |k: usize| {
+                        _mm256_set1_epi32(t.add(j + 4 * k).cast::<i32>().read_unaligned())
+                    };
+                    let p = _mm256_dpbusd_epi32(_mm256_dpbusd_epi32(zero, g(0), w0), g(1), w1);
+                    let mut v = _mm256_add_epi32(p, carry);
+                    carry = _mm256_add_epi32(carry, _mm256_permutevar8x32_epi32(p, last));
+                    if ABOVE {
+                        v = _mm256_add_epi32(v, _mm256_loadu_si256(a.add(j).cast()));
+                    }
+                    _mm256_storeu_si256(o.add(j).cast(), v);
+                    if COPY {
+                        if nt {
+                            store_copy(o2.add(j), _mm256_castsi256_si128(v), true);
+                            store_copy(o2.add(j + 4), _mm256_extracti128_si256::<1>(v), true);
+                        } else {
+                            _mm256_storeu_si256(o2.add(j).cast(), v);
+                        }
                     }
                 }
             }
             i += BLOCK;
         }
-        _mm512_cvtsi512_si32(carry) as u32
+        _mm256_cvtsi256_si32(carry) as u32
     }
 }
 
@@ -1838,7 +1862,7 @@ mod modular256 {
         } else {
             ((1u32 << K) - 1) as i32
         });
-        let seven = _mm256_set1_epi32(7);
+        let seven = lane7();
         let mut carry = _mm256_setzero_si256();
         for p in 0..passes {
             // SAFETY: p < passes: the pass's 256 texels, 256 values and 8 K words are inside
@@ -2167,8 +2191,8 @@ const PAIR: usize = 28;
 /// (texels `j <= l`; plus the running sum before the block); else a local sum, which takes the
 /// texels of its tile before it, `l + 1 - r <= j <= l`.
 struct TileTable {
-    /// `vpdpbusd` weights, as the build kernel's (`avx512vnni::W`): byte `j` of lane `l` of
-    /// group `g` is 1 when texel `4 g + j` counts in lane `l`.
+    /// `vpdpbusd` weights ([`avx512vnni::dot16`]): byte `j` of lane `l` of group `g` is 1 when
+    /// texel `4 g + j` counts in lane `l`.
     w: [[i32; 16]; 4],
     /// The boundary lanes (bit `l`).
     bmask: u16,
@@ -2654,7 +2678,7 @@ mod tiled256 {
         ahead: Ahead,
     ) -> u32 {
         let mut prefetch = Prefetch::new(ahead, blocks);
-        let seven = _mm256_set1_epi32(7);
+        let seven = lane7();
         let zero = _mm256_setzero_si256();
         let w = avx2::Weights::new();
         let mut carry = zero;
@@ -3043,7 +3067,7 @@ mod band256 {
         ahead: Ahead,
     ) -> u32 {
         let mut prefetch = Prefetch::new(ahead, blocks);
-        let seven = _mm256_set1_epi32(7);
+        let seven = lane7();
         // The running sum in every lane.
         let mut run = _mm256_setzero_si256();
         prefetch.for_quads(blocks, |b, quad| {
@@ -3142,7 +3166,7 @@ mod band256 {
     /// sum of a later block.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn flush(out: *mut u32, cs: *const u16, blocks: usize) -> u32 {
-        let seven = _mm256_set1_epi32(7);
+        let seven = lane7();
         let mut carry = _mm256_setzero_si256();
         for b in 0..blocks {
             let i = BLOCK * b;
@@ -3197,7 +3221,7 @@ mod band256 {
         ahead: Ahead,
     ) -> u32 {
         let mut prefetch = Prefetch::new(ahead, blocks);
-        let seven = _mm256_set1_epi32(7);
+        let seven = lane7();
         let zero = _mm256_setzero_si256();
         let mut carry = zero;
         prefetch.for_blocks(blocks, |b| {
