@@ -44,12 +44,15 @@
 //! Why 16-bit lanes suffice for the in-block prefix: 16 texels of at most 255 sum to at most
 //! 4080 < 2^16.
 //!
-//! Tables of [`STREAM_MIN_BYTES`] (32 MiB) and more, which would not stay in cache anyway, are
-//! written by non-temporal stores (`movntdq`, 16 bytes each): [`build_streamed`] for
-//! `Sat::build` (each row built in a working row on the stack, which stays in L1, and written
-//! to the table in the same pass) and the copy of `RowStreamBuilder::push_row_into`. A
-//! non-temporal store writes its line without first reading it for ownership, which halves a
-//! cold table's memory traffic; such a table is not left in cache after the build.
+//! `Sat::build` of a table of [`WORKING_ROW_MIN_BYTES`] (1 MiB) and more builds each row in a
+//! working row on the stack, which stays in L1, and writes it to the table in the same pass
+//! ([`build_via_working_row`]): the next row reads the row above from L1, not from table lines
+//! whose reads for ownership may still be on their way from memory. Tables of
+//! [`STREAM_MIN_BYTES`] (32 MiB) and more, which would not stay in cache anyway, are written by
+//! non-temporal stores (`movntdq`, 16 bytes each): those rows of `Sat::build` and the copy of
+//! `RowStreamBuilder::push_row_into`. A non-temporal store writes its line without first
+//! reading it for ownership, which halves a cold table's memory traffic; such a table is not
+//! left in cache after the build.
 //!
 //! # Safety argument
 //!
@@ -203,13 +206,13 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
 
 /// The smallest table (in bytes) whose copy stores are non-temporal
 /// ([`RowStreamBuilder::push_row_into`](crate::RowStreamBuilder::push_row_into),
-/// [`build_streamed`]): 32 MiB, past the last-level cache of the machines measured (32 MiB of
-/// L3), so the table would not stay in cache anyway. A non-temporal store writes its line
-/// without reading it first (no read for ownership), which halves a cold table's memory
-/// traffic: on a Zen 4 guest, `Sat::build` of a 4,096^2 table (64 MiB) took 0.75x the time
-/// with them (1.37x the widen-copy floor before, 1.07x after) and `push_row_into` 0.71x; with
-/// the threshold at 4 MiB, a 1,024^2 table took 1.31x and 1.73x the time: a table that fits
-/// the cache is better written through it (docs/benchmarks.md, sixth session).
+/// [`build_via_working_row`]): 32 MiB, past the last-level cache of the machines measured
+/// (32 MiB of L3), so the table would not stay in cache anyway. A non-temporal store writes
+/// its line without reading it first (no read for ownership), which halves a cold table's
+/// memory traffic: on a Zen 4 guest, `Sat::build` of a 4,096^2 table (64 MiB) took 0.75x the
+/// time with them (1.37x the widen-copy floor before, 1.07x after) and `push_row_into` 0.71x;
+/// with the threshold at 4 MiB, a 1,024^2 table took 1.31x and 1.73x the time: a table that
+/// fits the cache is better written through it (docs/benchmarks.md, sixth session).
 pub(crate) const STREAM_MIN_BYTES: usize = 32 << 20;
 
 /// Whether a table or layout of `bytes` is past the caches ([`STREAM_MIN_BYTES`]): the one
@@ -219,13 +222,24 @@ pub(crate) const fn past_the_caches(bytes: usize) -> bool {
     bytes >= STREAM_MIN_BYTES
 }
 
-/// The widest row [`build_streamed`] takes: its working row is at most 16 KiB (inside a 20 KiB
-/// buffer on the stack, [`ALIAS_PAD`]), which stays in a 32 KiB L1 data cache beside the row's
-/// texels.
+/// The smallest table (in bytes) that `Sat::build` builds through a working row
+/// ([`build_via_working_row`]): 1 MiB, an L2 cache of the machines measured. Built straight
+/// into the table, each row reads the row above from the table, whose lines were just stored
+/// to: in a cold table their reads for ownership may still be in flight, and the loads wait
+/// for them. On a Zen 4 guest, cold (96 MiB touched between builds), `Sat::build` of 1,024^2
+/// took 0.32 to 0.37 ns per texel straight and 0.23 to 0.27 through the working row (the
+/// widen-copy floor 0.24 to 0.25), 2,048^2 0.31 against 0.25; with the table in cache the two
+/// were even at 1,024^2, and at 256^2 (256 KiB, in L2) the working row's extra store took
+/// 1.1x the time (docs/benchmarks.md, eighth session).
+pub(crate) const WORKING_ROW_MIN_BYTES: usize = 1 << 20;
+
+/// The widest row [`build_via_working_row`] takes: its working row is at most 16 KiB (inside a
+/// 20 KiB buffer on the stack, [`ALIAS_PAD`]), which stays in a 32 KiB L1 data cache beside
+/// the row's texels.
 pub(crate) const STREAM_ROW_MAX: usize = 4096;
 
-/// [`build_streamed`]'s working row's room to move within its buffer: 1,024 entries (4 KiB),
-/// so that the row can start anywhere modulo 4 KiB.
+/// [`build_via_working_row`]'s working row's room to move within its buffer: 1,024 entries
+/// (4 KiB), so that the row can start anywhere modulo 4 KiB.
 const ALIAS_PAD: usize = 1024;
 
 /// A 128-bit copy store: non-temporal if `nt` (which needs `to` 16-byte aligned), else
@@ -260,17 +274,19 @@ fn fence() {
     };
 }
 
-/// `Sat::build`'s rows with the table written by non-temporal stores: for `u8` texels, `u32`
-/// entries and one channel, a table of at least [`STREAM_MIN_BYTES`] whose rows (`width`
-/// entries, at most [`STREAM_ROW_MAX`], a multiple of 4) start on 16 bytes. Each row is built
-/// in a working row on the stack (the row above stays in L1 instead of being read back from
-/// the table) and written to the table in the same pass (`row(y)` gives texture row `y`).
-/// `false`, with nothing written, where it does not apply, including when `row` lacks a row `y
-/// < height` of `width` texels (checked for every row before the first is written; the
-/// caller's own loop then reports it). `row` is called twice per row and must give the same
-/// row each time (the caller passes `Texture::row`).
+/// `Sat::build`'s rows through a working row: for `u8` texels, `u32` entries and one channel,
+/// a table of at least [`WORKING_ROW_MIN_BYTES`] whose rows are at most [`STREAM_ROW_MAX`]
+/// entries. Each row is built in a working row on the stack (the row above stays in L1
+/// instead of being read back from the table) and written to the table in the same pass
+/// (`row(y)` gives texture row `y`); by non-temporal stores for a table of at least
+/// [`STREAM_MIN_BYTES`], each row that starts on 16 bytes (every row when the table does and
+/// `width` is a multiple of 4; the others by plain stores). `false`, with nothing written,
+/// where it does not apply, including when `row` lacks a row `y < height` of `width` texels
+/// (checked for every row before the first is written; the caller's own loop then reports
+/// it). `row` is called twice per row and must give the same row each time (the caller passes
+/// `Texture::row`).
 #[inline(never)]
-pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
+pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>(
     table: &mut [E],
     width: usize,
     row: impl Fn(usize) -> Option<&'t [T]>,
@@ -278,13 +294,12 @@ pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
     let Some(out) = as_u32_mut::<E, C>(table) else {
         return false;
     };
+    let bytes = out.len().saturating_mul(4);
     if TypeId::of::<T>() != TypeId::of::<u8>()
         || width == 0
         || width > STREAM_ROW_MAX
-        || !width.is_multiple_of(4)
         || out.len() % width != 0
-        || !past_the_caches(out.len().saturating_mul(4))
-        || !(out.as_ptr() as usize).is_multiple_of(16)
+        || bytes < WORKING_ROW_MIN_BYTES
     {
         return false;
     }
@@ -306,11 +321,12 @@ pub(crate) fn build_streamed<'t, T: Texel + 't, E: Entry, const C: usize>(
     let Some(work) = buf.get_mut(gap..gap.saturating_add(width)) else {
         return false;
     };
+    let stream = past_the_caches(bytes);
     for (y, copy) in out.chunks_exact_mut(width).enumerate() {
         // Checked above: every row is there, `width` texels of `u8`.
         let t = row(y).and_then(as_u8).unwrap_or(&[]);
         let mode = if y == 0 { Above::Zero } else { Above::InPlace };
-        row_u8_u32(Kernel::best(), t, &[], work, mode, Some(copy), true);
+        row_u8_u32(Kernel::best(), t, &[], work, mode, Some(copy), stream);
     }
     true
 }
@@ -3255,31 +3271,38 @@ mod tests {
     extern crate std;
     use super::*;
 
-    /// `build_streamed` takes exactly the tables it documents (`u8` texels, one channel, `u32`
-    /// entries, at least 32 MiB, rows of at most 4,096 entries and a multiple of 4, storage on
-    /// 16 bytes, every row present and whole) and builds them as the portable checked build
-    /// does, each case under another kernel cap (SSE2, AVX2, AVX-512 in turn, those the CPU
-    /// runs); it declines the rest with nothing written.
+    /// `build_via_working_row` takes exactly the tables it documents (`u8` texels, one
+    /// channel, `u32` entries, at least 1 MiB, rows of at most 4,096 entries, every row present
+    /// and whole; streamed from 32 MiB, by plain stores below, or for the rows off 16 bytes)
+    /// and builds them as the portable checked build does, each case under another kernel cap
+    /// (SSE2, AVX2, AVX-512 in turn, those the CPU runs); it declines the rest with nothing
+    /// written.
     #[test]
-    #[cfg_attr(miri, ignore = "tables of 32 MiB: too slow under Miri")]
-    fn build_streamed_takes_large_tables_only() {
+    #[cfg_attr(miri, ignore = "tables of 1 to 34 MiB: too slow under Miri")]
+    fn build_via_working_row_takes_tables_of_a_mib_and_more() {
         use crate::{Sat, Texture};
         let texels: std::vec::Vec<u8> = (0..4094u32 * 2100)
             .map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8)
             .collect();
         // (width, height, entries off 16 bytes, last row: 0 there, 1 missing, 2 short, taken)
         let cases = [
+            // Streamed: every row on 16 bytes, or every other row (4,094 entries).
             (4096, 2048, 0, 0, true),
             (4092, 2052, 0, 0, true),
             (1024, 8192, 0, 0, true),
+            (4094, 2100, 0, 0, true),
+            // Past 32 MiB but off 16 bytes, and under 32 MiB: plain stores.
+            (4096, 2048, 1, 0, true),
+            (4096, 2047, 0, 0, true),
+            (1024, 256, 0, 0, true),
+            (1023, 257, 3, 0, true),
+            // Under 1 MiB, rows too wide, a row missing or short.
+            (1024, 255, 0, 0, false),
             (4100, 2048, 0, 0, false),
-            (4096, 2047, 0, 0, false),
-            (4094, 2100, 0, 0, false),
-            (4096, 2048, 1, 0, false),
             (4096, 2048, 0, 1, false),
             (4096, 2048, 0, 2, false),
         ];
-        // Each case under another kernel cap, so that every kernel the CPU runs streams.
+        // Each case under another kernel cap, so that every kernel the CPU runs copies.
         for (c, (w, h, off, last, taken)) in cases.into_iter().enumerate() {
             let kernel = Kernel::ALL[c % 3];
             if !kernel.available() {
@@ -3297,7 +3320,7 @@ mod tests {
                 (true, 2) => Some(&t[y * w..][..w - 4]),
                 _ => Some(&t[y * w..][..w]),
             };
-            let got = kernel.cap(|| build_streamed::<u8, u32, 1>(table, w, row));
+            let got = kernel.cap(|| build_via_working_row::<u8, u32, 1>(table, w, row));
             let what = (w, h, off, last, kernel);
             assert_eq!(got, taken, "{what:?}");
             if taken {
@@ -3315,16 +3338,20 @@ mod tests {
         // Other texel, entry and channel types.
         let mut table = std::vec![0u32; 4096 * 2048];
         let t16 = std::vec![1u16; 4096];
-        assert!(!build_streamed::<u16, u32, 1>(&mut table, 4096, |_| Some(
-            &t16[..]
-        )));
-        assert!(!build_streamed::<u8, u32, 2>(&mut table, 4096, |_| Some(
-            &texels[..4096]
-        )));
+        assert!(!build_via_working_row::<u16, u32, 1>(
+            &mut table,
+            4096,
+            |_| Some(&t16[..])
+        ));
+        assert!(!build_via_working_row::<u8, u32, 2>(
+            &mut table,
+            4096,
+            |_| Some(&texels[..4096])
+        ));
         let mut t64 = std::vec![0u64; 4096 * 1024];
-        assert!(!build_streamed::<u8, u64, 1>(&mut t64, 4096, |_| Some(
-            &texels[..4096]
-        )));
+        assert!(!build_via_working_row::<u8, u64, 1>(&mut t64, 4096, |_| {
+            Some(&texels[..4096])
+        }));
         assert!(table.iter().all(|&v| v == 0) && t64.iter().all(|&v| v == 0));
     }
 

@@ -163,13 +163,15 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
     /// proving from the texel width alone that no entry can overflow `E`
     /// ([`width::check_entry_worst_case`]). Nothing is written if the proof fails.
     ///
-    /// With the `simd` feature, a table of `u8` texels of one channel into `u32` entries of 32
-    /// MiB and more (rows of at most 4,096 entries, a multiple of 4, the storage on 16 bytes)
-    /// is written by non-temporal stores, with each row built in a working row of at most 16
-    /// KiB (in a 20 KiB buffer on the stack): such a
-    /// table would not stay in cache anyway, and the stores skip reading each line before
-    /// writing it (0.75x the time at 4,096^2 on a Zen 4 guest, docs/benchmarks.md). The table
-    /// is then not in cache after the build.
+    /// With the `simd` feature, a table of `u8` texels of one channel into `u32` entries of 1
+    /// MiB and more (rows of at most 4,096 entries) is built row by row in a working row of at
+    /// most 16 KiB (in a 20 KiB buffer on the stack), each row copied to the table in the same
+    /// pass: the next row reads the row above from L1, not from table lines still on their way
+    /// from memory (cold, 1,024^2 took 0.7x to 0.8x the time on a Zen 4 guest). From 32 MiB
+    /// the copies are non-temporal stores (in each row that starts on 16 bytes): such a table
+    /// would not stay in cache anyway, and the stores skip reading each line before writing it
+    /// (0.75x the time at 4,096^2). Such a table is then not in cache after the build
+    /// (docs/benchmarks.md).
     pub fn build<T: Texel>(
         texture: &Texture<'_, T, C>,
         storage: &'a mut [E],
@@ -217,10 +219,13 @@ impl<'a, E: Entry, const C: usize> Sat<'a, E, C> {
         if row_len == 0 {
             return Err(Error::EmptyTexture);
         }
-        // With `simd`, a table past the caches: rows built in a working row in L1 and written
-        // by non-temporal stores (`simd::build_streamed`; nothing written where it declines).
+        // With `simd`, a table of 1 MiB and more: rows built in a working row in L1 and written
+        // to the table in the same pass, past the caches by non-temporal stores
+        // (`simd::build_via_working_row`; nothing written where it declines).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        if !CHECKED && crate::simd::build_streamed::<T, E, C>(table, row_len, |y| texture.row(y)) {
+        if !CHECKED
+            && crate::simd::build_via_working_row::<T, E, C>(table, row_len, |y| texture.row(y))
+        {
             let table: &'a [E] = storage.get(..needed).unwrap_or(&[]);
             return Self::from_parts(table, w, h, T::BITS);
         }
