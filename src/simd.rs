@@ -4,8 +4,8 @@
 //! The portable build ([`crate::table`]) keeps one running sum along the row, a chain of
 //! dependent additions that no compiler vectorizes: about one entry per cycle. Here a row is cut
 //! into blocks of 16 texels; each block's inclusive prefix sums are computed in registers,
-//! independently of the other blocks, and only the block total joins the running sum (one vector
-//! addition per 16 entries on the dependency chain). Each entry is then `prefix + running sum +
+//! independently of the other blocks, and only the block's totals join the running sum (one or
+//! two vector additions per 16 entries on the dependency chain). Each entry is then `prefix + running sum +
 //! entry above`: the same value as the portable build's `r(i, j) + entry(i, j - 1)` (integer
 //! addition is associative and, under the width proof, nothing wraps), so tables are identical
 //! bit for bit (tests below compare them exhaustively on small sizes; host-tests by proptest).
@@ -64,8 +64,11 @@
 //!    (AVX-512BW and VBMI as well) only when
 //!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
 //!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
-//!    features enable. Calling the kernels (and XGETBV, after CPUID reports OSXSAVE) is the
-//!    only reason for `unsafe` beyond the memory accesses below.
+//!    features enable. The AVX-512 build kernel's 256-bit `vpdpbusd` needs AVX-512 VL, which
+//!    its detection includes (CPUID leaf 7 EBX bit 31). The one helper with its own target
+//!    feature, [`lane7`] (AVX2), is called only from functions that enable AVX2 (the compiler
+//!    refuses other callers without `unsafe`). Calling the kernels (and XGETBV, after CPUID
+//!    reports OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its AVX-512 kernel `groups` with `32 groups <=
 //!    fields.len()` and `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]`
 //!    and writes `words[g k..g k + k]` (16 words and a masked store of the rest) for `g <
@@ -115,17 +118,18 @@
 //!    indexing. Every pointer is derived from its slice and stays in bounds. The copy's
 //!    stores are non-temporal (`_mm_stream_si128`, which faults on an address off 16 bytes)
 //!    only when [`row_u8_u32`] has checked that the copy starts on 16 bytes: block `b`'s four
-//!    16-byte stores are then at `64 b`, `64 b + 16`, ... from it, all aligned. Each row ends
-//!    with an `sfence`, so its non-temporal stores are ordered before every later store (the
+//!    16-byte stores are then at `64 b`, `64 b + 16`, ... from it, all aligned. Each row whose
+//!    copy took non-temporal stores ends with an `sfence`, so they are ordered before every
+//!    later store (the
 //!    table is handed out, possibly to another thread, through ordinary release/acquire
 //!    synchronization, which does not order weakly ordered stores by itself). Under Miri,
 //!    which cannot run them (inline assembly in stdarch), plain stores stand in.
 //! 3. *Aliasing.* `above` and `out` are separate slices (`&[u32]`, `&mut [u32]`) except in the
-//!    in-place streaming row, where the kernel gets the single `&mut [u32]` and reads the row
-//!    above through the same pointer it writes: each block reads `row[i..i + 16]` before it
-//!    writes those same entries, and no block reads what another wrote. The optional copy of
-//!    the streamed row is a third, separate `&mut [u32]` (at least `n` long). No reference is
-//!    created from the raw pointers.
+//!    in-place working row, where the kernel gets the single `&mut [u32]` and reads the row
+//!    above through the same pointer it writes: each step (a block of 16, or with AVX-512 half
+//!    a block) reads `row[j..j + s]` before it writes those same entries, and no step reads
+//!    what another wrote. The optional copy of the working row is a third, separate `&mut
+//!    [u32]` (at least `n` long). No reference is created from the raw pointers.
 //! 4. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]` and `&mut [E]` to `&mut [u32]` only after
 //!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length. The band
 //!    rows read and write `u32` words as pairs of `u16` halves through raw pointers derived
@@ -236,7 +240,7 @@ pub(crate) const WORKING_ROW_MIN_BYTES: usize = 1 << 20;
 /// The widest row [`build_via_working_row`] takes: its working row is at most 16 KiB (inside a
 /// 20 KiB buffer on the stack, [`ALIAS_PAD`]), which stays in a 32 KiB L1 data cache beside
 /// the row's texels.
-pub(crate) const STREAM_ROW_MAX: usize = 4096;
+pub(crate) const WORKING_ROW_MAX: usize = 4096;
 
 /// [`build_via_working_row`]'s working row's room to move within its buffer: 1,024 entries
 /// (4 KiB), so that the row can start anywhere modulo 4 KiB.
@@ -251,6 +255,8 @@ const ALIAS_PAD: usize = 1024;
 /// 16-byte aligned.
 #[inline(always)]
 unsafe fn store_copy(to: *mut u32, v: __m128i, nt: bool) {
+    // Under Miri too, where the store is plain: the address a non-temporal store would need.
+    debug_assert!(!nt || (to as usize).is_multiple_of(16));
     // SAFETY: the caller's contract.
     unsafe {
         if nt && !cfg!(miri) {
@@ -275,7 +281,7 @@ fn fence() {
 }
 
 /// `Sat::build`'s rows through a working row: for `u8` texels, `u32` entries and one channel,
-/// a table of at least [`WORKING_ROW_MIN_BYTES`] whose rows are at most [`STREAM_ROW_MAX`]
+/// a table of at least [`WORKING_ROW_MIN_BYTES`] whose rows are at most [`WORKING_ROW_MAX`]
 /// entries. Each row is built in a working row on the stack (the row above stays in L1
 /// instead of being read back from the table) and written to the table in the same pass
 /// (`row(y)` gives texture row `y`); by non-temporal stores for a table of at least
@@ -297,7 +303,7 @@ pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>
     let bytes = out.len().saturating_mul(4);
     if TypeId::of::<T>() != TypeId::of::<u8>()
         || width == 0
-        || width > STREAM_ROW_MAX
+        || width > WORKING_ROW_MAX
         || out.len() % width != 0
         || bytes < WORKING_ROW_MIN_BYTES
     {
@@ -315,7 +321,7 @@ pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>
     // the CPU would hold up as a possible overlap). Every row keeps that distance when `4
     // width` is a multiple of 4 KiB (1,024, 2,048, 4,096); otherwise it moves by `4 width` mod
     // 4 KiB per row, and only some rows keep clear of the aliasing.
-    let mut buf = [0u32; STREAM_ROW_MAX + ALIAS_PAD];
+    let mut buf = [0u32; WORKING_ROW_MAX + ALIAS_PAD];
     let want = (out.as_ptr() as usize).wrapping_add(2048) & !63;
     let gap = want.wrapping_sub(buf.as_ptr() as usize) % 4096 / 4;
     let Some(work) = buf.get_mut(gap..gap.saturating_add(width)) else {
@@ -442,7 +448,7 @@ pub(crate) enum Kernel {
     Sse2,
     /// AVX2.
     Avx2,
-    /// AVX-512F with AVX-512 VNNI.
+    /// AVX-512F with AVX-512 VL and AVX-512 VNNI.
     Avx512Vnni,
 }
 
@@ -746,7 +752,8 @@ mod avx2 {
     /// The weights of [`chunk`], and the ones that join its 16-bit pairs, in registers.
     #[derive(Clone, Copy)]
     pub(super) struct Weights {
-        w: [__m256i; 2],
+        /// Quads 0 and 4 (also the AVX-512 kernel's `vpdpbusd` weights).
+        pub(super) w: [__m256i; 2],
         ones: __m256i,
     }
 
@@ -873,33 +880,11 @@ mod avx512vnni {
         _mm512_dpbusd_epi32(_mm512_dpbusd_epi32(p, g(2), w[2]), g(3), w[3])
     }
 
-    /// The 0/1 weights of group `g` (0 or 1: texels `4g..4g + 4`) of a half block of 8
-    /// texels: byte `j` of lane `k` is 1 when texel `4g + j` is at or before texel `k`, so
-    /// `dot(group 0, W8[0]) + dot(group 1, W8[1])` in lane `k` is the inclusive prefix sum of
-    /// the half block up to `k`.
-    const fn weights8(g: usize) -> [i32; 8] {
-        let mut w = [0i32; 8];
-        let mut k = 0;
-        while k < 8 {
-            let mut lane = 0u32;
-            let mut j = 0;
-            while j < 4 {
-                if 4 * g + j <= k {
-                    lane |= 1 << (8 * j);
-                }
-                j += 1;
-            }
-            w[k] = lane as i32;
-            k += 1;
-        }
-        w
-    }
-
-    const W8: [[i32; 8]; 2] = [weights8(0), weights8(1)];
-
     /// Per half block of 8 texels, two 256-bit `vpdpbusd` (AVX-512 VL): each group of 4
-    /// texels broadcast to the 8 lanes, times [`W8`] (unsigned texel bytes times signed 0/1
-    /// weights, summed per 32-bit lane: at most 8 x 255, far from any saturation), gives the
+    /// texels broadcast to the 8 lanes, times the AVX2 kernel's 0/1 weights (`avx2::Weights`:
+    /// byte `b` of lane `j` of quad `q` is 1 when texel `q + b` is at or before texel `j`;
+    /// unsigned texel bytes times signed weights, summed per 32-bit lane: at most 8 x 255, far
+    /// from any saturation), gives the
     /// half block's 8 prefix sums; its total (lane 7) is broadcast by one `vpermd` into the
     /// running sum. Half as many multiplies as the 512-bit form's four `vpdpbusd` per 16
     /// lanes ([`dot16`]), most of whose lanes' weights are zero: on a Zen 4 guest, 0.78x the
@@ -916,13 +901,7 @@ mod avx512vnni {
         n: usize,
         nt: bool,
     ) -> u32 {
-        // SAFETY: each row of W8 is 8 i32, 32 bytes.
-        let (w0, w1) = unsafe {
-            (
-                _mm256_loadu_si256(W8[0].as_ptr().cast()),
-                _mm256_loadu_si256(W8[1].as_ptr().cast()),
-            )
-        };
+        let [w0, w1] = avx2::Weights::new().w;
         let last = lane7();
         let zero = _mm256_setzero_si256();
         let mut carry = zero;
@@ -3272,11 +3251,12 @@ mod tests {
     use super::*;
 
     /// `build_via_working_row` takes exactly the tables it documents (`u8` texels, one
-    /// channel, `u32` entries, at least 1 MiB, rows of at most 4,096 entries, every row present
-    /// and whole; streamed from 32 MiB, by plain stores below, or for the rows off 16 bytes)
-    /// and builds them as the portable checked build does, each case under another kernel cap
-    /// (SSE2, AVX2, AVX-512 in turn, those the CPU runs); it declines the rest with nothing
-    /// written.
+    /// channel, `u32` entries, whole rows, at least 1 MiB, rows of at most 4,096 entries, every
+    /// row present and whole; streamed from 32 MiB, by plain stores below, or for the rows off
+    /// 16 bytes) and builds them as the portable checked build does, each case under another
+    /// kernel cap (SSE2, AVX2, AVX-512 in turn; the widest the CPU runs for a kernel it lacks,
+    /// so that no case is skipped); it declines the rest with nothing written. (Whether a copy
+    /// was streamed cannot be seen from the table: the values are the same.)
     #[test]
     #[cfg_attr(miri, ignore = "tables of 1 to 34 MiB: too slow under Miri")]
     fn build_via_working_row_takes_tables_of_a_mib_and_more() {
@@ -3284,30 +3264,31 @@ mod tests {
         let texels: std::vec::Vec<u8> = (0..4094u32 * 2100)
             .map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8)
             .collect();
-        // (width, height, entries off 16 bytes, last row: 0 there, 1 missing, 2 short, taken)
+        // (width, height, entries off 16 bytes, last row: 0 there, 1 missing, 2 short, taken);
+        // case `c` under kernel `c mod 3` (SSE2, AVX2, AVX-512; else the widest the CPU runs).
         let cases = [
-            // Streamed: every row on 16 bytes, or every other row (4,094 entries).
+            // Streamed: every row on 16 bytes, or every other row (4,094 entries, a tail of 14).
             (4096, 2048, 0, 0, true),
             (4092, 2052, 0, 0, true),
-            (1024, 8192, 0, 0, true),
             (4094, 2100, 0, 0, true),
+            (1024, 8192, 0, 0, true),
             // Past 32 MiB but off 16 bytes, and under 32 MiB: plain stores.
             (4096, 2048, 1, 0, true),
+            (1023, 257, 3, 0, true),
             (4096, 2047, 0, 0, true),
             (1024, 256, 0, 0, true),
-            (1023, 257, 3, 0, true),
+            (4096, 64, 0, 0, true),
             // Under 1 MiB, rows too wide, a row missing or short.
             (1024, 255, 0, 0, false),
             (4100, 2048, 0, 0, false),
+            (4097, 64, 0, 0, false),
             (4096, 2048, 0, 1, false),
             (4096, 2048, 0, 2, false),
         ];
-        // Each case under another kernel cap, so that every kernel the CPU runs copies.
         for (c, (w, h, off, last, taken)) in cases.into_iter().enumerate() {
-            let kernel = Kernel::ALL[c % 3];
-            if !kernel.available() {
-                continue;
-            }
+            let kernel = Some(Kernel::ALL[c % 3])
+                .filter(|k| k.available())
+                .unwrap_or_else(Kernel::detected);
             let t = &texels[..w * h];
             let mut whole = std::vec![0xDEAD_BEEFu32; w * h + 8];
             let base = (0..4)
@@ -3352,7 +3333,15 @@ mod tests {
         assert!(!build_via_working_row::<u8, u64, 1>(&mut t64, 4096, |_| {
             Some(&texels[..4096])
         }));
+        // A table that is not whole rows (one entry past 64 rows of 4,096).
+        let mut ragged = std::vec![0u32; 4096 * 64 + 1];
+        assert!(!build_via_working_row::<u8, u32, 1>(
+            &mut ragged,
+            4096,
+            |_| Some(&texels[..4096])
+        ));
         assert!(table.iter().all(|&v| v == 0) && t64.iter().all(|&v| v == 0));
+        assert!(ragged.iter().all(|&v| v == 0));
     }
 
     /// `band_applies` takes a tiling only where a tile's sum fits 16 bits: 8 x 32 tiles of `u8`

@@ -212,11 +212,12 @@ fn wide_rows() {
 }
 
 /// Tables of 32 MiB and more, which `Sat::build` and `RowStreamBuilder::push_row_into` write by
-/// non-temporal stores with `simd` (`Sat::build`: rows of at most 4,096 entries, a multiple of
-/// 4, the table on 16 bytes; docs/benchmarks.md, sixth session): 4,096 x 2,048 and 4,092 x
-/// 2,052 (a tail of 12 after the blocks) take that path, 4,100 x 2,048 does not (too wide), nor
-/// does a table 4 bytes off 16 (`Sat::build` falls back; `push_row_into`'s copy falls back to
-/// plain stores); random texels. Every entry against the reference, through `check`.
+/// non-temporal stores with `simd` (`Sat::build`: through its working row, rows of at most
+/// 4,096 entries, each row whose copy starts on 16 bytes; docs/benchmarks.md, sixth and eighth
+/// sessions): 4,096 x 2,048 and 4,092 x 2,052 (a tail of 12 after the blocks) take that path,
+/// 4,100 x 2,048 does not (too wide: the row-by-row build); a table 4 bytes off 16 takes the
+/// working row with plain stores (and `push_row_into`'s copy plain stores); random texels.
+/// Every entry against the reference, through `check`.
 #[test]
 fn large_tables() {
     let mut rng = texsat_host_tests::rng(0x5717);
