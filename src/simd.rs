@@ -884,11 +884,10 @@ mod avx512vnni {
     /// texels broadcast to the 8 lanes, times the AVX2 kernel's 0/1 weights (`avx2::Weights`:
     /// byte `b` of lane `j` of quad `q` is 1 when texel `q + b` is at or before texel `j`;
     /// unsigned texel bytes times signed weights, summed per 32-bit lane: at most 8 x 255, far
-    /// from any saturation), gives the
-    /// half block's 8 prefix sums; its total (lane 7) is broadcast by one `vpermd` into the
-    /// running sum. Half as many multiplies as the 512-bit form's four `vpdpbusd` per 16
-    /// lanes ([`dot16`]), most of whose lanes' weights are zero: on a Zen 4 guest, 0.78x the
-    /// time per row in L1 (docs/benchmarks.md, eighth session).
+    /// from any saturation), gives the half block's 8 prefix sums; its total (lane 7) is
+    /// broadcast by one `vpermd` into the running sum. Half as many multiplies as the 512-bit
+    /// form's four `vpdpbusd` per 16 lanes ([`dot16`]), most of whose lanes' weights are zero:
+    /// on a Zen 4 guest, 0.78x the time per row in L1 (docs/benchmarks.md, eighth session).
     ///
     /// # Safety
     /// As the SSE2 kernel, with AVX2, AVX-512F, AVX-512 VL and AVX-512 VNNI.
