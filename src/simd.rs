@@ -825,34 +825,50 @@ mod avx2 {
                 let hi8 = chunk(t.add(i + 8), w);
                 let ta = _mm256_permutevar8x32_epi32(lo8, last);
                 let tb = _mm256_permutevar8x32_epi32(hi8, last);
-                let mut lo = _mm256_add_epi32(lo8, carry);
-                let mut hi = _mm256_add_epi32(hi8, _mm256_add_epi32(carry, ta));
+                let lo = _mm256_add_epi32(lo8, carry);
+                let hi = _mm256_add_epi32(hi8, _mm256_add_epi32(carry, ta));
                 carry = _mm256_add_epi32(carry, _mm256_add_epi32(ta, tb));
-                if ABOVE {
-                    lo = _mm256_add_epi32(lo, _mm256_loadu_si256(a.add(i).cast()));
-                    hi = _mm256_add_epi32(hi, _mm256_loadu_si256(a.add(i + 8).cast()));
-                }
-                _mm256_storeu_si256(o.add(i).cast(), lo);
-                _mm256_storeu_si256(o.add(i + 8).cast(), hi);
-                if COPY {
-                    if nt {
-                        for (k, v) in [lo, hi].into_iter().enumerate() {
-                            store_copy(o2.add(i + 8 * k), _mm256_castsi256_si128(v), true);
-                            store_copy(
-                                o2.add(i + 8 * k + 4),
-                                _mm256_extracti128_si256::<1>(v),
-                                true,
-                            );
-                        }
-                    } else {
-                        _mm256_storeu_si256(o2.add(i).cast(), lo);
-                        _mm256_storeu_si256(o2.add(i + 8).cast(), hi);
-                    }
-                }
+                put8::<ABOVE, COPY>(a, o, o2, i, lo, nt);
+                put8::<ABOVE, COPY>(a, o, o2, i + 8, hi, nt);
             }
             i += BLOCK;
         }
         _mm256_cvtsi256_si32(carry) as u32
+    }
+
+    /// The 8 entries at `j`, shared by the AVX2 and AVX-512 kernels: `v` (prefix sums and
+    /// running sum) plus the row above `a[j..j + 8]` if `ABOVE`, stored to `o[j..j + 8]` and,
+    /// if `COPY`, to `o2[j..j + 8]`: by two non-temporal 16-byte stores if `nt`, else one
+    /// unaligned store. The row above is read before `o` is written (`a` may be `o`).
+    ///
+    /// # Safety
+    /// AVX2; `o`, `a` (if `ABOVE`) and `o2` (if `COPY`) valid for 8 entries from `j`; `o2 + j`
+    /// 16-byte aligned if `COPY` and `nt`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn put8<const ABOVE: bool, const COPY: bool>(
+        a: *const u32,
+        o: *mut u32,
+        o2: *mut u32,
+        j: usize,
+        mut v: __m256i,
+        nt: bool,
+    ) {
+        // SAFETY: the caller's contract; unaligned loads and stores.
+        unsafe {
+            if ABOVE {
+                v = _mm256_add_epi32(v, _mm256_loadu_si256(a.add(j).cast()));
+            }
+            _mm256_storeu_si256(o.add(j).cast(), v);
+            if COPY {
+                if nt {
+                    store_copy(o2.add(j), _mm256_castsi256_si128(v), true);
+                    store_copy(o2.add(j + 4), _mm256_extracti128_si256::<1>(v), true);
+                } else {
+                    _mm256_storeu_si256(o2.add(j).cast(), v);
+                }
+            }
+        }
     }
 }
 
@@ -914,20 +930,9 @@ mod avx512vnni {
                         _mm256_set1_epi32(t.add(j + 4 * k).cast::<i32>().read_unaligned())
                     };
                     let p = _mm256_dpbusd_epi32(_mm256_dpbusd_epi32(zero, g(0), w0), g(1), w1);
-                    let mut v = _mm256_add_epi32(p, carry);
+                    let v = _mm256_add_epi32(p, carry);
                     carry = _mm256_add_epi32(carry, _mm256_permutevar8x32_epi32(p, last));
-                    if ABOVE {
-                        v = _mm256_add_epi32(v, _mm256_loadu_si256(a.add(j).cast()));
-                    }
-                    _mm256_storeu_si256(o.add(j).cast(), v);
-                    if COPY {
-                        if nt {
-                            store_copy(o2.add(j), _mm256_castsi256_si128(v), true);
-                            store_copy(o2.add(j + 4), _mm256_extracti128_si256::<1>(v), true);
-                        } else {
-                            _mm256_storeu_si256(o2.add(j).cast(), v);
-                        }
-                    }
+                    avx2::put8::<ABOVE, COPY>(a, o, o2, j, v, nt);
                 }
             }
             i += BLOCK;
