@@ -399,7 +399,7 @@ impl_tent_acc!(i128, u128, 127, false, e => Some(e.to_i128()), div_round_shift);
 fn normaliser_too_wide(a_bits: u32, b_bits: u32, bits_available: u32) -> Error {
     #[allow(
         clippy::arithmetic_side_effects,
-        reason = "bits of a u128 are at most 128: the sum is at most 512"
+        reason = "bits of u64 values (`bits_of_u64`) are at most 64: the sum is at most 256"
     )]
     let bits_needed = 2 * a_bits + 2 * b_bits;
     Error::TooWide {
