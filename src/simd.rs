@@ -111,14 +111,17 @@
 //!    first (word `j` holds halves `2 j` and `2 j + 1`, read already). [`band_flush`] rewrites
 //!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and
 //!    `2 i + 1 - n`, at most `i`, which a block reads before it writes its words.
-//!    [`row_u8_u32`] takes slices and passes the kernels `n = min(len)` over all of
-//!    them. A kernel touches `texels[i..i + 16]`, `above[i..i + 16]` and `out[i..i + 16]` only
-//!    while `i + 16 <= n`, through unaligned loads and stores (`loadu`/`storeu`, or
-//!    `read_unaligned` for the 4-byte groups), then finishes the tail `i..n` with checked
-//!    indexing. Every pointer is derived from its slice and stays in bounds. The copy's
-//!    stores are non-temporal (`_mm_stream_si128`, which faults on an address off 16 bytes)
-//!    only when [`row_u8_u32`] has checked that the copy starts on 16 bytes: block `b`'s four
-//!    16-byte stores are then at `64 b`, `64 b + 16`, ... from it, all aligned. Each row whose
+//!    [`row_u8_u32`] takes slices, `n = min(len)` over all of them; it does the head (the
+//!    `h < 8` entries before `out` reaches 32 bytes) with checked indexing and passes the
+//!    kernels each slice from `h` on, `n - h` entries. A kernel touches `texels[i..i + 16]`,
+//!    `above[i..i + 16]` and `out[i..i + 16]` only while `i + 16 <= n - h`, through unaligned
+//!    loads and stores (`loadu`/`storeu`, or `read_unaligned` for the 4-byte groups), then the
+//!    tail is finished with checked indexing. Every pointer is derived from its slice and
+//!    stays in bounds. The copy's stores are non-temporal (`_mm_stream_si128`, which faults on
+//!    an address off 16 bytes) only when [`row_u8_u32`] has checked that the copy starts on 16
+//!    bytes, and then `h` is a multiple of 4: block `b`'s four 16-byte stores are at `16 h +
+//!    64 b`, `16 h + 64 b + 16`, ... bytes from it, all aligned, and so are the head's and the
+//!    tail's whole 4 entries (`copy_run`, `chunks_exact(4)` from the aligned start). Each row whose
 //!    copy took non-temporal stores ends with an `sfence`, so they are ordered before every
 //!    later store (the
 //!    table is handed out, possibly to another thread, through ordinary release/acquire
@@ -367,6 +370,18 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 /// One row with `kernel` (which must be [`Kernel::available`]); `above` is read only for
 /// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too, by non-temporal
 /// stores if `stream` and it starts on 16 bytes ([`STREAM_MIN_BYTES`]).
+///
+/// A working row (the row above in place, [`Above::InPlace`], or none yet, [`Above::Zero`]):
+/// the entries before `out` reaches 32 bytes (up to 7, the head) go the portable way, as the
+/// tail after the last block does, and the kernel starts after them with their running sum,
+/// so that its 32-byte loads and stores of the working row never straddle two cache lines.
+/// The builders' working rows are the caller's storage, anywhere on 4 bytes: on a Zen 4
+/// guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into` take 1.4x to 1.5x the
+/// flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own time at 500^2
+/// (docs/benchmarks.md, ninth session). A head that would move a non-temporal copy off 16
+/// bytes is not taken. Rows built into a table ([`Above::Slice`], `Sat::build` below
+/// [`WORKING_ROW_MIN_BYTES`]) take no head: there the row above shares the row's alignment,
+/// and with the head a table of rows 16 bytes off 32 took 1.08x to 1.13x the time.
 #[inline]
 fn row_u8_u32(
     kernel: Kernel,
@@ -384,36 +399,72 @@ fn row_u8_u32(
     if let Some(c) = &copy {
         n = n.min(c.len());
     }
-    let t = texels.as_ptr();
-    let o = out.as_mut_ptr();
+    // Non-temporal copy stores need the copy 16-byte aligned (each block's stores are then
+    // too: 16 entries, 64 bytes apart).
+    let nt = stream
+        && copy
+            .as_ref()
+            .is_some_and(|c| (c.as_ptr() as usize).is_multiple_of(16));
+    // The head: entries to 32 bytes in `out` (a multiple of 4 with a non-temporal copy, which
+    // then stays on 16 bytes), at most the row.
+    let to_line = match mode {
+        Above::Slice => 0,
+        Above::Zero | Above::InPlace => (32 - (out.as_ptr() as usize) % 32) % 32 / 4,
+    };
+    let head = if nt && !to_line.is_multiple_of(4) {
+        0
+    } else {
+        to_line.min(n)
+    };
+    let start = row_portable(texels, above, out, mode, 0..head, 0);
+    copy_run(out, copy.as_deref_mut(), 0..head, nt);
+    let m = n - head;
+    let t = texels[head..].as_ptr();
+    let o = out[head..].as_mut_ptr();
     let o2: *mut u32 = match &mut copy {
-        Some(c) => c.as_mut_ptr(),
+        Some(c) => c[head..].as_mut_ptr(),
         None => core::ptr::null_mut(),
     };
     let a: *const u32 = match mode {
         Above::Zero => core::ptr::null(),
-        Above::Slice => above.as_ptr(),
+        Above::Slice => above[head..].as_ptr(),
         Above::InPlace => o.cast_const(),
     };
-    // Non-temporal copy stores need the copy 16-byte aligned (each block's stores are then
-    // too: 16 entries, 64 bytes apart).
-    let nt = stream && !o2.is_null() && (o2 as usize).is_multiple_of(16);
     // SAFETY: the CPU has the kernel's features (argument 1: every caller passes an available
-    // kernel); `t`, `a` (when read), `o` and `o2` (when written) are valid for `n` elements
-    // (argument 2) and alias only as argument 3 allows; `o2` is 16-byte aligned when `nt`.
+    // kernel); `t`, `a` (when read), `o` and `o2` (when written) are valid for `m` elements
+    // (argument 2: each is its slice from `head`, and `head + m = n` is within every slice)
+    // and alias only as argument 3 allows; `o2` is 16-byte aligned when `nt` (the copy was,
+    // and `head` is then a multiple of 4 entries).
     let run = unsafe {
         match (mode, o2.is_null()) {
-            (Above::Zero, true) => kernel.run::<false, false>(t, a, o, o2, n, false),
-            (Above::Zero, false) => kernel.run::<false, true>(t, a, o, o2, n, nt),
+            (Above::Zero, true) => kernel.run::<false, false>(t, a, o, o2, m, start, false),
+            (Above::Zero, false) => kernel.run::<false, true>(t, a, o, o2, m, start, nt),
             (Above::Slice | Above::InPlace, true) => {
-                kernel.run::<true, false>(t, a, o, o2, n, false)
+                kernel.run::<true, false>(t, a, o, o2, m, start, false)
             }
-            (Above::Slice | Above::InPlace, false) => kernel.run::<true, true>(t, a, o, o2, n, nt),
+            (Above::Slice | Above::InPlace, false) => {
+                kernel.run::<true, true>(t, a, o, o2, m, start, nt)
+            }
         }
     };
     // The tail after the last full block, portable: the same two additions per entry.
-    let mut r = run;
-    for i in n - n % BLOCK..n {
+    let tail = n - m % BLOCK..n;
+    row_portable(texels, above, out, mode, tail.clone(), run);
+    copy_run(out, copy, tail, nt);
+}
+
+/// [`row_u8_u32`]'s entries `range` the portable way (the head and the tail), from the running
+/// sum `r`; returns the running sum after them. The indices are within the slices (the caller's
+/// `n`), checked.
+fn row_portable(
+    texels: &[u8],
+    above: &[u32],
+    out: &mut [u32],
+    mode: Above,
+    range: core::ops::Range<usize>,
+    mut r: u32,
+) -> u32 {
+    for i in range {
         r = r.wrapping_add(u32::from(texels[i]));
         let up = match mode {
             Above::Zero => 0,
@@ -421,10 +472,28 @@ fn row_u8_u32(
             Above::InPlace => out[i],
         };
         out[i] = r.wrapping_add(up);
-        if let Some(c) = &mut copy {
-            c[i] = out[i];
-        }
     }
+    r
+}
+
+/// `copy[range] = out[range]` for [`row_u8_u32`]'s head and tail: with `nt` (the copy from
+/// `range.start` on 16 bytes) each whole 4 entries by a non-temporal store like the kernel's,
+/// the rest plain. A plain store into a line that non-temporal stores also write reads the
+/// line first and splits the line's write: with the plain head and tail of the first form,
+/// `push_row_into` of a working row 16 bytes off 32 took 1.34x the flat build's time instead
+/// of 1.0x (docs/benchmarks.md, ninth session).
+fn copy_run(out: &[u32], copy: Option<&mut [u32]>, range: core::ops::Range<usize>, nt: bool) {
+    let (Some(c), Some(o)) = (copy.and_then(|c| c.get_mut(range.clone())), out.get(range)) else {
+        return;
+    };
+    let mut cs = c.chunks_exact_mut(4);
+    let mut os = o.chunks_exact(4);
+    for (c4, o4) in (&mut cs).zip(&mut os) {
+        // SAFETY: SSE2 (x86-64 baseline); 4 entries each (chunks_exact); the copy's chunk on
+        // 16 bytes when `nt` (it starts on 16 and each chunk is 16 bytes).
+        unsafe { store_copy(c4.as_mut_ptr(), _mm_loadu_si128(o4.as_ptr().cast()), nt) };
+    }
+    cs.into_remainder().copy_from_slice(os.remainder());
 }
 
 /// `vpermd` indices that broadcast lane 7 (an 8-lane total) into every lane, opaque to the
@@ -539,6 +608,10 @@ impl Kernel {
     /// `self` is [`Kernel::available`]; the pointers as the kernels require (`o2` 16-byte
     /// aligned if `COPY` and `nt`).
     #[inline]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the kernels' arguments, forwarded"
+    )]
     unsafe fn run<const ABOVE: bool, const COPY: bool>(
         self,
         t: *const u8,
@@ -546,14 +619,15 @@ impl Kernel {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        start: u32,
         nt: bool,
     ) -> u32 {
         // SAFETY: forwarded (the caller's contract).
         let run = unsafe {
             match self {
-                Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n, nt),
-                Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n, nt),
-                Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n, nt),
+                Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n, start, nt),
+                Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n, start, nt),
+                Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n, start, nt),
             }
         };
         if COPY && nt {
@@ -678,10 +752,11 @@ mod sse2 {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        start: u32,
         nt: bool,
     ) -> u32 {
         let zero = _mm_setzero_si128();
-        let mut carry = _mm_setzero_si128();
+        let mut carry = _mm_set1_epi32(start as i32);
         let mut i = 0;
         while i + BLOCK <= n {
             // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
@@ -812,11 +887,12 @@ mod avx2 {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        start: u32,
         nt: bool,
     ) -> u32 {
         let w = Weights::new();
         let last = lane7();
-        let mut carry = _mm256_setzero_si256();
+        let mut carry = _mm256_set1_epi32(start as i32);
         let mut i = 0;
         while i + BLOCK <= n {
             // SAFETY: i + 16 <= n (the caller's bounds); unaligned loads and stores.
@@ -914,12 +990,13 @@ mod avx512vnni {
         o: *mut u32,
         o2: *mut u32,
         n: usize,
+        start: u32,
         nt: bool,
     ) -> u32 {
         let [w0, w1] = avx2::Weights::new().w;
         let last = lane7();
         let zero = _mm256_setzero_si256();
-        let mut carry = zero;
+        let mut carry = _mm256_set1_epi32(start as i32);
         let mut i = 0;
         while i + BLOCK <= n {
             for j in [i, i + 8] {
@@ -3858,16 +3935,19 @@ mod tests {
     /// Every kernel this CPU runs (under Miri: those the build enables), every width up to 4
     /// blocks and a tail, texels all 0, all 255, a ramp and random, rows above with large
     /// entries (near u32::MAX, as a width-proved table can hold): separate, in place, in place
-    /// with a copy (by plain stores, and by non-temporal ones into a copy on a cache line and
-    /// one 4 bytes off it, which falls back to plain stores; nothing written around the row),
-    /// and first row, against the reference. Then the same through the dispatching entry
+    /// with a copy (by plain stores, and by non-temporal ones into a copy on a cache line, one
+    /// 16 bytes past it and one 4 bytes off it, which falls back to plain stores; nothing
+    /// written around the row), and first row, against the reference; each row 0 to 7 entries
+    /// past a cache line, so that every head `row_u8_u32` takes before 32 bytes (and a head it
+    /// declines for the non-temporal copy) runs. Then the same through the dispatching entry
     /// points.
     #[test]
     fn rows_equal_the_portable_rows() {
         const MAX: usize = 4 * BLOCK + 7;
-        /// A copy target on a cache line.
+        /// A row or copy target on a cache line.
         #[repr(align(64))]
-        struct Line([u32; MAX + 2]);
+        #[derive(Clone, Copy)]
+        struct Line([u32; MAX + 8]);
         let mut seed = 0x9e37_79b9_7f4a_7c15;
         let mut ran = 0;
         for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
@@ -3890,12 +3970,15 @@ mod tests {
                         *a = base + 255 * i as u32;
                     }
                     let above = &above[..w];
+                    // The row `shift` entries past a cache line: every head (the entries
+                    // before 32 bytes, `row_u8_u32`) from 0 to 7 over the widths.
+                    let shift = (w + pattern) % 8;
                     for a in [None, Some(above)] {
                         let what = |how: &str| (kernel.name(), w, pattern, a.is_some(), how.len());
                         let mut want = [0u32; MAX];
                         reference(t, a, &mut want[..w]);
                         // Separate rows.
-                        let mut got = [7u32; MAX];
+                        let mut got = Line([7u32; MAX + 8]);
                         let mode = if a.is_some() {
                             Above::Slice
                         } else {
@@ -3905,44 +3988,55 @@ mod tests {
                             kernel,
                             t,
                             a.unwrap_or(&[]),
-                            &mut got[..w],
+                            &mut got.0[shift..shift + w],
                             mode,
                             None,
                             false,
                         );
-                        assert_eq!(got[..w], want[..w], "{:?}", what("separate"));
+                        let got = &got.0[shift..];
+                        assert_eq!(got[..w], want[..w], "{:?} {shift}", what("separate"));
                         assert!(got[w..].iter().all(|&v| v == 7), "wrote past the row");
                         // In place, without and with a copy.
-                        let mut inplace = [7u32; MAX];
+                        let mut inplace = Line([7u32; MAX + 8]);
                         if let Some(a) = a {
-                            inplace[..w].copy_from_slice(a);
+                            inplace.0[shift..shift + w].copy_from_slice(a);
                         }
+                        let mut inplace = inplace.0;
                         let mode = if a.is_some() {
                             Above::InPlace
                         } else {
                             Above::Zero
                         };
                         let mut again = inplace;
-                        row_u8_u32(kernel, t, &[], &mut inplace[..w], mode, None, false);
-                        assert_eq!(inplace[..w], want[..w], "{:?}", what("in place"));
+                        let row = shift..shift + w;
+                        row_u8_u32(kernel, t, &[], &mut inplace[row.clone()], mode, None, false);
+                        assert_eq!(inplace[row.clone()], want[..w], "{:?}", what("in place"));
                         let mut copy = [9u32; MAX];
                         let c = Some(&mut copy[..w]);
                         let back = again;
-                        row_u8_u32(kernel, t, &[], &mut again[..w], mode, c, false);
-                        assert_eq!(again[..w], want[..w], "{:?}", what("in place + copy"));
+                        row_u8_u32(kernel, t, &[], &mut again[row.clone()], mode, c, false);
+                        assert_eq!(
+                            again[row.clone()],
+                            want[..w],
+                            "{:?}",
+                            what("in place + copy")
+                        );
                         assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
                         assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
-                        // The copy by non-temporal stores: into a 16-byte aligned copy (the
-                        // stores stream) and one 4 bytes off (they fall back to plain ones);
-                        // nothing before or past the row written.
-                        for off in [0, 1] {
+                        // The copy by non-temporal stores: into a copy on 16 bytes (the stores
+                        // stream, the head and the tail's whole 4 entries too; a head that
+                        // would move them off 16 bytes is not taken), 16 bytes past a line,
+                        // and one 4 bytes off (they fall back to plain ones); nothing before
+                        // or past the row written.
+                        for off in [0, 4, 1] {
                             let mut again = back;
-                            let mut line = Line([9; MAX + 2]);
+                            let mut line = Line([9; MAX + 8]);
                             let c = Some(&mut line.0[off..off + w]);
-                            row_u8_u32(kernel, t, &[], &mut again[..w], mode, c, true);
+                            row_u8_u32(kernel, t, &[], &mut again[row.clone()], mode, c, true);
                             let copy = &line.0[off..off + w];
-                            assert_eq!(again[..w], want[..w], "{:?} {off}", what("streamed"));
-                            assert_eq!(copy, &want[..w], "{:?} {off}", what("streamed copy"));
+                            let how = what("streamed");
+                            assert_eq!(again[row.clone()], want[..w], "{how:?} {off} {shift}");
+                            assert_eq!(copy, &want[..w], "{how:?} copy {off} {shift}");
                             assert!(line.0[..off].iter().all(|&v| v == 9), "before the row");
                             assert!(line.0[off + w..].iter().all(|&v| v == 9), "past the row");
                         }
