@@ -396,7 +396,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
     /// one channel at least 256 texels wide, `k` from 11 to 32 and `w k` a multiple of 32 take a
     /// fused row: the prefix sums, the working row and the packing in one pass per 256 texels
     /// (`simd::modular_row`; on a CPU with AVX2 only 1.06x to 1.23x the flat build's time, on
-    /// a Zen 4 guest 0.81x to 0.97x at 1,024^2 and 1.24x to 1.36x at 4,096^2,
+    /// a Zen 4 guest 0.85x to 1.09x at 1,024^2 and 1.23x to 1.32x at 4,096^2, ninth session,
     /// `docs/benchmarks.md`).
     pub fn new(
         width: usize,
