@@ -112,16 +112,18 @@
 //!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and
 //!    `2 i + 1 - n`, at most `i`, which a block reads before it writes its words.
 //!    [`row_u8_u32`] takes slices, `n = min(len)` over all of them; it does the head (the
-//!    `h < 8` entries before `out` reaches 32 bytes) with checked indexing and passes the
-//!    kernels each slice from `h` on, `n - h` entries. A kernel touches `texels[i..i + 16]`,
-//!    `above[i..i + 16]` and `out[i..i + 16]` only while `i + 16 <= n - h`, through unaligned
-//!    loads and stores (`loadu`/`storeu`, or `read_unaligned` for the 4-byte groups), then the
-//!    tail is finished with checked indexing. Every pointer is derived from its slice and
-//!    stays in bounds. The copy's stores are non-temporal (`_mm_stream_si128`, which faults on
-//!    an address off 16 bytes) only when [`row_u8_u32`] has checked that the copy starts on 16
-//!    bytes, and then `h` is a multiple of 4: block `b`'s four 16-byte stores are at `16 h +
-//!    64 b`, `16 h + 64 b + 16`, ... bytes from it, all aligned, and so are the head's and the
-//!    tail's whole 4 entries (`copy_run`, `chunks_exact(4)` from the aligned start). Each row whose
+//!    `h` entries before `out` reaches 32 bytes: `h < 8`, `h <= n`, and `h = 0` for rows built
+//!    into a table, for rows that end before 32 bytes, and where a non-temporal copy would
+//!    leave 16 bytes) with checked indexing and passes the kernels each slice from `h` on,
+//!    `n - h` entries. A kernel touches entries `i..i + 16` of those slices only while `i + 16
+//!    <= n - h`, through unaligned loads and stores (`loadu`/`storeu`, or `read_unaligned` for
+//!    the 4-byte groups), then the tail is finished with checked indexing. Every pointer is
+//!    derived from its slice and stays in bounds. The copy's stores are non-temporal
+//!    (`_mm_stream_si128`, which faults on an address off 16 bytes) only when [`row_u8_u32`]
+//!    has checked that the copy starts on 16 bytes, and then `h` is 0 or 4: block `b`'s four
+//!    16-byte stores are at `4 h + 64 b`, `4 h + 64 b + 16`, ... bytes from it, all aligned;
+//!    the head's and the tail's whole 4 entries are stored non-temporally only where
+//!    `copy_run` finds them on 16 bytes. Each row whose
 //!    copy took non-temporal stores ends with an `sfence`, so they are ordered before every
 //!    later store (the
 //!    table is handed out, possibly to another thread, through ordinary release/acquire
@@ -379,9 +381,10 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 /// guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into` take 1.4x to 1.5x the
 /// flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own time at 500^2
 /// (docs/benchmarks.md, ninth session). A head that would move a non-temporal copy off 16
-/// bytes is not taken. Rows built into a table ([`Above::Slice`], `Sat::build` below
-/// [`WORKING_ROW_MIN_BYTES`]) take no head: there the row above shares the row's alignment,
-/// and with the head a table of rows 16 bytes off 32 took 1.08x to 1.13x the time.
+/// bytes is not taken. Rows built into a table after its first ([`Above::Slice`], `Sat::build`
+/// below [`WORKING_ROW_MIN_BYTES`]) take no head: with it, a table of rows 16 bytes off 32
+/// (512 x 480) took 1.08x to 1.13x the time. All the row's non-temporal stores (the kernel's
+/// and `copy_run`'s) are followed by one `sfence`.
 #[inline]
 fn row_u8_u32(
     kernel: Kernel,
@@ -411,10 +414,12 @@ fn row_u8_u32(
         Above::Slice => 0,
         Above::Zero | Above::InPlace => (32 - (out.as_ptr() as usize) % 32) % 32 / 4,
     };
-    let head = if nt && !to_line.is_multiple_of(4) {
+    // Not when the row ends before 32 bytes (no block could run) or when it would move a
+    // non-temporal copy off 16 bytes: the head is then 0, 4 with a non-temporal copy.
+    let head = if to_line > n || (nt && !to_line.is_multiple_of(4)) {
         0
     } else {
-        to_line.min(n)
+        to_line
     };
     let start = row_portable(texels, above, out, mode, 0..head, 0);
     copy_run(out, copy.as_deref_mut(), 0..head, nt);
@@ -451,6 +456,10 @@ fn row_u8_u32(
     let tail = n - m % BLOCK..n;
     row_portable(texels, above, out, mode, tail.clone(), run);
     copy_run(out, copy, tail, nt);
+    // After the row's last non-temporal store (the kernel's, or the head's and tail's).
+    if nt {
+        fence();
+    }
 }
 
 /// [`row_u8_u32`]'s entries `range` the portable way (the head and the tail), from the running
@@ -476,21 +485,25 @@ fn row_portable(
     r
 }
 
-/// `copy[range] = out[range]` for [`row_u8_u32`]'s head and tail: with `nt` (the copy from
-/// `range.start` on 16 bytes) each whole 4 entries by a non-temporal store like the kernel's,
-/// the rest plain. A plain store into a line that non-temporal stores also write reads the
-/// line first and splits the line's write: with the plain head and tail of the first form,
-/// `push_row_into` of a working row 16 bytes off 32 took 1.34x the flat build's time instead
-/// of 1.0x (docs/benchmarks.md, ninth session).
+/// `copy[range] = out[range]` for [`row_u8_u32`]'s head and tail: with `nt`, where the copy
+/// from `range.start` is on 16 bytes, each whole 4 entries by a non-temporal store like the
+/// kernel's (the caller fences after the row), the rest plain. A plain store into a line that
+/// non-temporal stores also write reads the line first and splits the line's write: with a
+/// plain head and tail, `push_row_into` with a working row 16 bytes off 32 took 1.13x to 1.36x
+/// the flat build's time instead of 1.0x (docs/benchmarks.md, ninth session). `range` lies
+/// within both slices (the caller's `n`).
 fn copy_run(out: &[u32], copy: Option<&mut [u32]>, range: core::ops::Range<usize>, nt: bool) {
-    let (Some(c), Some(o)) = (copy.and_then(|c| c.get_mut(range.clone())), out.get(range)) else {
+    let Some(copy) = copy else {
         return;
     };
+    let (c, o) = (&mut copy[range.clone()], &out[range]);
+    let nt = nt && (c.as_ptr() as usize).is_multiple_of(16);
     let mut cs = c.chunks_exact_mut(4);
     let mut os = o.chunks_exact(4);
     for (c4, o4) in (&mut cs).zip(&mut os) {
-        // SAFETY: SSE2 (x86-64 baseline); 4 entries each (chunks_exact); the copy's chunk on
-        // 16 bytes when `nt` (it starts on 16 and each chunk is 16 bytes).
+        // SAFETY: SSE2 (x86-64 baseline); 4 entries each (chunks_exact); with `nt` the chunk is
+        // on 16 bytes (the copy from the range's start is, checked above, and each chunk is 16
+        // bytes).
         unsafe { store_copy(c4.as_mut_ptr(), _mm_loadu_si128(o4.as_ptr().cast()), nt) };
     }
     cs.into_remainder().copy_from_slice(os.remainder());
@@ -601,8 +614,8 @@ impl Kernel {
         }
     }
 
-    /// Runs the kernel over the full blocks of a row (the copy by non-temporal stores if `nt`,
-    /// then an `sfence`).
+    /// Runs the kernel over the full blocks of a row (the copy by non-temporal stores if `nt`;
+    /// the caller fences after the row's last one, [`row_u8_u32`]).
     ///
     /// # Safety
     /// `self` is [`Kernel::available`]; the pointers as the kernels require (`o2` 16-byte
@@ -623,17 +636,13 @@ impl Kernel {
         nt: bool,
     ) -> u32 {
         // SAFETY: forwarded (the caller's contract).
-        let run = unsafe {
+        unsafe {
             match self {
                 Kernel::Sse2 => sse2::kernel::<ABOVE, COPY>(t, a, o, o2, n, start, nt),
                 Kernel::Avx2 => avx2::kernel::<ABOVE, COPY>(t, a, o, o2, n, start, nt),
                 Kernel::Avx512Vnni => avx512vnni::kernel::<ABOVE, COPY>(t, a, o, o2, n, start, nt),
             }
-        };
-        if COPY && nt {
-            fence();
         }
-        run
     }
 }
 
@@ -744,7 +753,7 @@ mod sse2 {
     /// SSE2 (x86-64 baseline); `t`, `o`, (if `ABOVE`) `a` and (if `COPY`) `o2` valid for `n`
     /// elements; `a` may equal `o` (each block reads before it writes); `o2` aliases nothing;
     /// if `COPY` and `nt` (the copy by non-temporal stores), `o2` is 16-byte aligned. The
-    /// caller fences after a call with `nt` ([`Kernel::run`]).
+    /// caller fences after the row ([`row_u8_u32`]).
     #[target_feature(enable = "sse2")]
     pub(super) unsafe fn kernel<const ABOVE: bool, const COPY: bool>(
         t: *const u8,
@@ -3970,9 +3979,10 @@ mod tests {
                         *a = base + 255 * i as u32;
                     }
                     let above = &above[..w];
-                    // The row `shift` entries past a cache line: every head (the entries
-                    // before 32 bytes, `row_u8_u32`) from 0 to 7 over the widths.
-                    let shift = (w + pattern) % 8;
+                    // The row `shift` entries past a cache line: over the widths and
+                    // patterns, every head (the entries before 32 bytes, `row_u8_u32`) from 0
+                    // to 7 with every length of the tail after the kernel's blocks (0 to 15).
+                    let shift = (w + pattern + 3 * (w / 16)) % 8;
                     for a in [None, Some(above)] {
                         let what = |how: &str| (kernel.name(), w, pattern, a.is_some(), how.len());
                         let mut want = [0u32; MAX];
@@ -3993,34 +4003,54 @@ mod tests {
                             None,
                             false,
                         );
-                        let got = &got.0[shift..];
-                        assert_eq!(got[..w], want[..w], "{:?} {shift}", what("separate"));
-                        assert!(got[w..].iter().all(|&v| v == 7), "wrote past the row");
-                        // In place, without and with a copy.
+                        let row = shift..shift + w;
+                        // Only the row written: 7 before and after it.
+                        let untouched = |l: &Line| {
+                            l.0[..shift]
+                                .iter()
+                                .chain(&l.0[shift + w..])
+                                .all(|&v| v == 7)
+                        };
+                        assert_eq!(
+                            got.0[row.clone()],
+                            want[..w],
+                            "{:?} {shift}",
+                            what("separate")
+                        );
+                        assert!(untouched(&got), "wrote around the row");
+                        // In place, without and with a copy (each row on a line, `shift` in).
                         let mut inplace = Line([7u32; MAX + 8]);
                         if let Some(a) = a {
-                            inplace.0[shift..shift + w].copy_from_slice(a);
+                            inplace.0[row.clone()].copy_from_slice(a);
                         }
-                        let mut inplace = inplace.0;
                         let mode = if a.is_some() {
                             Above::InPlace
                         } else {
                             Above::Zero
                         };
                         let mut again = inplace;
-                        let row = shift..shift + w;
-                        row_u8_u32(kernel, t, &[], &mut inplace[row.clone()], mode, None, false);
-                        assert_eq!(inplace[row.clone()], want[..w], "{:?}", what("in place"));
+                        row_u8_u32(
+                            kernel,
+                            t,
+                            &[],
+                            &mut inplace.0[row.clone()],
+                            mode,
+                            None,
+                            false,
+                        );
+                        assert_eq!(inplace.0[row.clone()], want[..w], "{:?}", what("in place"));
+                        assert!(untouched(&inplace), "wrote around the row in place");
                         let mut copy = [9u32; MAX];
                         let c = Some(&mut copy[..w]);
                         let back = again;
-                        row_u8_u32(kernel, t, &[], &mut again[row.clone()], mode, c, false);
+                        row_u8_u32(kernel, t, &[], &mut again.0[row.clone()], mode, c, false);
                         assert_eq!(
-                            again[row.clone()],
+                            again.0[row.clone()],
                             want[..w],
                             "{:?}",
                             what("in place + copy")
                         );
+                        assert!(untouched(&again), "wrote around the row in place");
                         assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
                         assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
                         // The copy by non-temporal stores: into a copy on 16 bytes (the stores
@@ -4032,10 +4062,11 @@ mod tests {
                             let mut again = back;
                             let mut line = Line([9; MAX + 8]);
                             let c = Some(&mut line.0[off..off + w]);
-                            row_u8_u32(kernel, t, &[], &mut again[row.clone()], mode, c, true);
+                            row_u8_u32(kernel, t, &[], &mut again.0[row.clone()], mode, c, true);
                             let copy = &line.0[off..off + w];
                             let how = what("streamed");
-                            assert_eq!(again[row.clone()], want[..w], "{how:?} {off} {shift}");
+                            assert_eq!(again.0[row.clone()], want[..w], "{how:?} {off} {shift}");
+                            assert!(untouched(&again), "wrote around the row, streamed");
                             assert_eq!(copy, &want[..w], "{how:?} copy {off} {shift}");
                             assert!(line.0[..off].iter().all(|&v| v == 9), "before the row");
                             assert!(line.0[off + w..].iter().all(|&v| v == 9), "past the row");
