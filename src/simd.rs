@@ -3949,7 +3949,8 @@ mod tests {
     /// written around the row), and first row, against the reference; each row 0 to 7 entries
     /// past a cache line, so that every head `row_u8_u32` takes before 32 bytes (and a head it
     /// declines for the non-temporal copy) runs. Then the same through the dispatching entry
-    /// points.
+    /// points. Under Miri only the ramp and the random texels (117 of the 128 pairings of a
+    /// head with a tail length; the four patterns took each of CI's Miri passes 1.5x as long).
     #[test]
     fn rows_equal_the_portable_rows() {
         const MAX: usize = 4 * BLOCK + 7;
@@ -3962,7 +3963,7 @@ mod tests {
         for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
             ran += 1;
             for w in 0..=MAX {
-                for pattern in 0..4 {
+                for pattern in if cfg!(miri) { 2..4 } else { 0..4 } {
                     let mut t = [0u8; MAX];
                     for (i, t) in t.iter_mut().enumerate() {
                         *t = match pattern {
