@@ -23,7 +23,8 @@
 //! costs about a cycle per field; the AVX2 kernel, eight groups of 32 fields transposed into
 //! lanes, about a third to a half of it); and, with AVX2 (on AVX-512 CPUs too),
 //! [`modular_row`]: the modular builder's whole row (prefix sums, working row and packing) in
-//! one pass per 256 texels, the working row kept transposed; and, with AVX2 (on AVX-512 CPUs
+//! one pass per 256 texels, the working row kept transposed (with AVX-512 VL, in a layout past
+//! the caches, its words stored by non-temporal stores); and, with AVX2 (on AVX-512 CPUs
 //! too), [`band_row`]: the tiled builder's rows inside a tile row (tiles 8 wide, a layout
 //! without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
@@ -60,7 +61,9 @@
 //!    [`Kernel::best`], the widest kernel whose features CPUID reports and whose registers the
 //!    operating system saves (XCR0), per the Intel SDM's detection procedure (SSE2 is part of
 //!    the x86-64 baseline; the AVX-512 kernel's detection includes AVX2's, so the AVX2 code
-//!    also runs under it: the band rows and the fused modular row); the tiled packing kernel
+//!    also runs under it: the band rows and the fused modular row, whose streamed form
+//!    `modular256::row_streamed` also enables AVX-512F and VL, which that detection includes
+//!    too); the tiled packing kernel
 //!    (AVX-512BW and VBMI as well) only when
 //!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
 //!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
@@ -82,8 +85,10 @@
 //!    [`modular_row`] checks `acc.len() >= 256 p` and `words.len() >= 8 k p` (`p` passes of
 //!    256 texels, `p = floor(texels.len() / 256)`) before its kernel reads `texels[256 b..][..256]`
 //!    and reads and writes `acc[256 b..][..256]` (one 8-lane load and store per field) and
-//!    writes `words[8 k b..][..8 k]` (the packer's stores of each group's `k` words) for `b <
-//!    p` only.
+//!    writes `words[8 k b..][..8 k]` (the packer's stores of each group's `k` words; streamed,
+//!    `k` 8-word vectors at `8 k b + 8 v`, `v < k`, each by two non-temporal 16-byte stores,
+//!    only after checking that `words` starts on 16 bytes: `32 k` bytes per pass keep every
+//!    one aligned, and the row ends with an `sfence`) for `b < p` only.
 //!    [`tiled_row`] checks its slices' lengths against the row (`acc`, `lower`: `n`; `bnd`:
 //!    `n / tile`; `local`: `n - n / tile`) before its kernel touches block `b` (16 texels) of
 //!    `t`, `acc` and `lower` for `b < n / 16` only; the boundary and local-sum stores stay inside
@@ -225,7 +230,7 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
 pub(crate) const STREAM_MIN_BYTES: usize = 32 << 20;
 
 /// Whether a table or layout of `bytes` is past the caches ([`STREAM_MIN_BYTES`]): the one
-/// test behind the streamed builds and the modular row's prefetch hints.
+/// test behind the streamed builds and the modular row's streamed stores or prefetch hints.
 #[inline]
 pub(crate) const fn past_the_caches(bytes: usize) -> bool {
     bytes >= STREAM_MIN_BYTES
@@ -1325,10 +1330,24 @@ mod pack256 {
         j: usize,
         o: &[__m256i],
     ) {
+        let rows = rows8x8(o, j);
+        let n = if FULL { 8 } else { gn };
+        for (g, r) in rows.iter().enumerate().take(n) {
+            // SAFETY: g < gn: bytes stride g + 4 j.. + 32 of w are writable (the caller's
+            // contract).
+            unsafe { _mm256_storeu_si256(w.add(stride * g + 4 * j).cast(), *r) };
+        }
+    }
+
+    /// Output words `j..j + 8` (`o[j + c]`, lane `g` for group `g`) transposed: result `g`
+    /// holds group `g`'s words `j..j + 8` (two 4 x 4 transposes, then the halves swapped).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn rows8x8(o: &[__m256i], j: usize) -> [__m256i; 8] {
         let x = transpose4([o[j], o[j + 1], o[j + 2], o[j + 3]]);
         let y = transpose4([o[j + 4], o[j + 5], o[j + 6], o[j + 7]]);
         // x[g], y[g]: words j..j + 4 and j + 4..j + 8 of group g (low half), g + 4 (high half).
-        let rows = [
+        [
             _mm256_permute2x128_si256::<0x20>(x[0], y[0]),
             _mm256_permute2x128_si256::<0x20>(x[1], y[1]),
             _mm256_permute2x128_si256::<0x20>(x[2], y[2]),
@@ -1337,13 +1356,7 @@ mod pack256 {
             _mm256_permute2x128_si256::<0x31>(x[1], y[1]),
             _mm256_permute2x128_si256::<0x31>(x[2], y[2]),
             _mm256_permute2x128_si256::<0x31>(x[3], y[3]),
-        ];
-        let n = if FULL { 8 } else { gn };
-        for (g, r) in rows.iter().enumerate().take(n) {
-            // SAFETY: g < gn: bytes stride g + 4 j.. + 32 of w are writable (the caller's
-            // contract).
-            unsafe { _mm256_storeu_si256(w.add(stride * g + 4 * j).cast(), *r) };
-        }
+        ]
     }
 
     /// As [`store8x8`] for the four words `j..j + 4`.
@@ -1760,8 +1773,8 @@ pub(crate) fn modular_fused<T: Texel, E: Entry, const C: usize>(width: usize, k:
 /// Texels per pass of [`modular_row`]: 8 groups of 32.
 pub(crate) const MODULAR_PASS: usize = 256;
 
-/// How many passes ahead [`modular_row`] asks for the words it will write (with `prefetch`):
-/// 3, about 2 KiB at `k` = 21. Two and four passes ran as fast on a Zen 4 guest; eight no
+/// How many passes ahead [`modular_row`] asks for the words it will write (with `past`, on
+/// the plain path): 3, about 2 KiB at `k` = 21. Two and four passes ran as fast on a Zen 4 guest; eight no
 /// faster than none.
 const MODULAR_AHEAD: usize = 3;
 
@@ -1786,18 +1799,26 @@ const MODULAR_AHEAD: usize = 3;
 /// back and stored. It replaces the row kernel's pass, the packer's pass over the row, and the
 /// packer's transposes of the values on their way in.
 ///
-/// With `prefetch` (a layout past the caches: the builder passes it for one of at least
-/// [`STREAM_MIN_BYTES`]), each pass also asks for the lines of the words [`MODULAR_AHEAD`]
-/// passes on (`prefetcht0`), so that its stores do not wait on each line's read: on a Zen 4
-/// guest a modular build of 4,096^2 (`k` = 21, 44 MB) took 0.88x to 0.90x the time with them,
-/// one of 1,024^2 (2.75 MB, in the L3) 1.03x, hence the threshold (docs/benchmarks.md, seventh
-/// session).
+/// With `past` (a layout past the caches: the builder passes it for one of at least
+/// [`STREAM_MIN_BYTES`]):
+/// - on a CPU with AVX-512 VL ([`Kernel::Avx512Vnni`]), a row whose words start on 16 bytes
+///   stores them by non-temporal stores (`modular256::row_streamed`: each pass's `8 k` words,
+///   which the packer holds as `k` registers of one word of each of the 8 groups, transposed
+///   into the groups' rows and realigned by one two-register permute per 8 words, then two
+///   16-byte `movntdq`), without reading each line first, and ends with an `sfence`. In one
+///   process on a Zen 4 guest, a modular build of 4,096^2 (`k` = 21, 44 MB) took 0.95x to 1.13x
+///   the flat build's time, against 1.09x to 1.41x with the plain stores (docs/benchmarks.md,
+///   tenth session);
+/// - otherwise each pass asks for the lines of the words [`MODULAR_AHEAD`] passes on
+///   (`prefetcht0`), so that its stores do not wait on each line's read: on a Zen 4 guest a
+///   modular build of 4,096^2 took 0.88x to 0.90x the time with them, one of 1,024^2 (2.75 MB,
+///   in the L3) 1.03x, hence the threshold (docs/benchmarks.md, seventh session).
 pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     acc: &mut [E],
     words: &mut [u32],
     k: u32,
-    prefetch: bool,
+    past: bool,
 ) -> Option<(usize, u32)> {
     if !modular_fused::<T, E, C>(texels.len(), k) {
         return None;
@@ -1810,16 +1831,23 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
         return None;
     }
     let (tp, ap, wp) = (t.as_ptr(), a.as_mut_ptr(), words.as_mut_ptr());
+    if past && Kernel::best() == Kernel::Avx512Vnni && (wp as usize).is_multiple_of(16) {
+        // SAFETY: as below, and AVX-512F and VL are available (`Kernel::Avx512Vnni`'s
+        // detection includes them); `words` starts on 16 bytes (checked).
+        let run = unsafe {
+            by_pack_width!(
+                ku,
+                modular256::row_streamed(tp, ap, wp, passes),
+                return None
+            )
+        };
+        fence();
+        return Some((passes * MODULAR_PASS, run));
+    }
     // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2 or AVX-512 VNNI,
     // whose detection includes AVX2's); `t` holds 256 passes texels, `a` 256 passes values and
     // `words` 8 k passes words (checked above): what the kernel reads and writes.
-    let run = unsafe {
-        by_pack_width!(
-            ku,
-            modular256::row(tp, ap, wp, passes, prefetch),
-            return None
-        )
-    };
+    let run = unsafe { by_pack_width!(ku, modular256::row(tp, ap, wp, passes, past), return None) };
     Some((passes * MODULAR_PASS, run))
 }
 
@@ -1942,49 +1970,11 @@ mod modular256 {
         passes: usize,
         prefetch: bool,
     ) -> u32 {
-        let m = _mm256_set1_epi32(if K >= 32 {
-            -1
-        } else {
-            ((1u32 << K) - 1) as i32
-        });
-        let seven = lane7();
+        let (m, seven) = (field_mask::<K>(), lane7());
         let mut carry = _mm256_setzero_si256();
         for p in 0..passes {
-            // SAFETY: p < passes: the pass's 256 texels, 256 values and 8 K words are inside
-            // the caller's slices.
-            let (tp, ap, wp) = unsafe { (t.add(256 * p), acc.add(256 * p), w.add(8 * K * p)) };
-            // SAFETY: tp[32 g..32 g + 32] is readable for g < 8: unaligned loads.
-            let g: [__m256i; 8] =
-                core::array::from_fn(|h| unsafe { _mm256_loadu_si256(tp.add(32 * h).cast()) });
-            let tot = totals(&g);
-            // Inclusive scan across the 8 lanes: within the halves, then the low half's total
-            // into the high half.
-            let mut x = _mm256_add_epi32(tot, _mm256_slli_si256::<4>(tot));
-            x = _mm256_add_epi32(x, _mm256_slli_si256::<8>(x));
-            let low = _mm256_shuffle_epi32::<0xff>(x);
-            x = _mm256_add_epi32(x, _mm256_permute2x128_si256::<0x08>(low, low));
-            // Each group's start: the running sum and the groups before it.
-            let mut run = _mm256_add_epi32(carry, _mm256_sub_epi32(x, tot));
-            carry = _mm256_add_epi32(carry, _mm256_permutevar8x32_epi32(x, seven));
-            let c = transpose(&g);
-            let mut o = [_mm256_setzero_si256(); K];
-            macro_rules! steps {
-                ($($i:literal)*) => {$(
-                    run = _mm256_add_epi32(run, column(&c, $i));
-                    // SAFETY: 8 i + 8 <= 256: inside the pass's values (unaligned).
-                    let f = unsafe {
-                        let at = ap.add(8 * $i);
-                        let f = _mm256_add_epi32(run, _mm256_loadu_si256(at.cast()));
-                        _mm256_storeu_si256(at.cast(), f);
-                        f
-                    };
-                    pack256::field::<K>(&mut o, $i, f, m);
-                )*};
-            }
-            steps!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
-            steps!(16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
-            // SAFETY: wp + K g holds K writable words for g < 8 (the pass's 8 K words).
-            unsafe { pack256::store_words::<K, true>(wp, 8, &o) };
+            // SAFETY: p < passes (the caller's contract, forwarded).
+            let wp = unsafe { pass::<K, false>(t, acc, w, p, &mut carry, m, seven) };
             if prefetch {
                 // The words of the pass `MODULAR_AHEAD` passes on (past the row's end: the next
                 // row's, or none; a hint only, never dereferenced, so the pointer may point
@@ -1999,6 +1989,221 @@ mod modular256 {
             }
         }
         _mm256_cvtsi256_si32(carry) as u32
+    }
+
+    /// [`row`] with the words stored by non-temporal 16-byte stores ([`store_streamed`]), no
+    /// prefetch hints and no fence (the caller fences after the row).
+    ///
+    /// # Safety
+    /// As [`row`], with AVX-512F and AVX-512 VL, and `w` on 16 bytes.
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    pub(super) unsafe fn row_streamed<const K: usize>(
+        t: *const u8,
+        acc: *mut u32,
+        w: *mut u32,
+        passes: usize,
+    ) -> u32 {
+        let (m, seven) = (field_mask::<K>(), lane7());
+        let mut carry = _mm256_setzero_si256();
+        for p in 0..passes {
+            // SAFETY: p < passes (the caller's contract, forwarded).
+            unsafe { pass::<K, true>(t, acc, w, p, &mut carry, m, seven) };
+        }
+        _mm256_cvtsi256_si32(carry) as u32
+    }
+
+    /// The low `K` bits of every lane.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn field_mask<const K: usize>() -> __m256i {
+        _mm256_set1_epi32(if K >= 32 {
+            -1
+        } else {
+            ((1u32 << K) - 1) as i32
+        })
+    }
+
+    /// Pass `p` of [`row`] (plain stores) or [`row_streamed`] (`STREAM`); `carry` is the
+    /// running sum in every lane, before and after; `m` is [`field_mask`], `seven` is
+    /// [`lane7`]. Returns where the pass's words start.
+    ///
+    /// # Safety
+    /// As the caller's ([`row`] or [`row_streamed`]), with `p < passes`. Inlined into them
+    /// (no target features of its own: theirs).
+    #[inline(always)]
+    unsafe fn pass<const K: usize, const STREAM: bool>(
+        t: *const u8,
+        acc: *mut u32,
+        w: *mut u32,
+        p: usize,
+        carry: &mut __m256i,
+        m: __m256i,
+        seven: __m256i,
+    ) -> *mut u32 {
+        // SAFETY (of the intrinsics): the caller's target features include AVX2.
+        unsafe {
+            // SAFETY: p < passes: the pass's 256 texels, 256 values and 8 K words are inside
+            // the caller's slices.
+            let (tp, ap, wp) = (t.add(256 * p), acc.add(256 * p), w.add(8 * K * p));
+            // SAFETY: tp[32 g..32 g + 32] is readable for g < 8: unaligned loads.
+            let g: [__m256i; 8] =
+                core::array::from_fn(|h| _mm256_loadu_si256(tp.add(32 * h).cast()));
+            let tot = totals(&g);
+            // Inclusive scan across the 8 lanes: within the halves, then the low half's total
+            // into the high half.
+            let mut x = _mm256_add_epi32(tot, _mm256_slli_si256::<4>(tot));
+            x = _mm256_add_epi32(x, _mm256_slli_si256::<8>(x));
+            let low = _mm256_shuffle_epi32::<0xff>(x);
+            x = _mm256_add_epi32(x, _mm256_permute2x128_si256::<0x08>(low, low));
+            // Each group's start: the running sum and the groups before it.
+            let mut run = _mm256_add_epi32(*carry, _mm256_sub_epi32(x, tot));
+            *carry = _mm256_add_epi32(*carry, _mm256_permutevar8x32_epi32(x, seven));
+            let c = transpose(&g);
+            let mut o = [_mm256_setzero_si256(); K];
+            macro_rules! steps {
+                ($($i:literal)*) => {$(
+                    run = _mm256_add_epi32(run, column(&c, $i));
+                    // SAFETY: 8 i + 8 <= 256: inside the pass's values (unaligned).
+                    let at = ap.add(8 * $i);
+                    let f = _mm256_add_epi32(run, _mm256_loadu_si256(at.cast()));
+                    _mm256_storeu_si256(at.cast(), f);
+                    pack256::field::<K>(&mut o, $i, f, m);
+                )*};
+            }
+            steps!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+            steps!(16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
+            if STREAM {
+                // SAFETY: the pass's 8 K words from wp, on 16 bytes (w is, and 32 K bytes per
+                // pass); AVX-512F and VL (the caller's, `row_streamed`).
+                store_streamed::<K>(wp, &o);
+            } else {
+                // SAFETY: wp + K g holds K writable words for g < 8 (the pass's 8 K words).
+                pack256::store_words::<K, true>(wp, 8, &o);
+            }
+            wp
+        }
+    }
+
+    /// Where output vector `v` of a pass comes from ([`store_streamed`]): its 8 words (words
+    /// `8 v..8 v + 8` of the pass's `8 K`) are lanes `idx` of the two transposed registers `a`
+    /// and `b` (lane `l` of `a` for `idx = l`, of `b` for `idx = 8 + l`). A register is named
+    /// `8 r + g`: group `g`'s words `8 r..8 r + 8` for `r < K / 8`, its last 8 words `K - 8..K`
+    /// for `r = K / 8` (when 8 does not divide `K`).
+    #[derive(Clone, Copy)]
+    struct Source {
+        a: usize,
+        b: usize,
+        idx: [i32; 8],
+    }
+
+    /// [`Source`] of every output vector `v < K` of a pass (entries past `K` unused). Word `x`
+    /// of the pass is word `u = x mod K` of group `g = floor(x / K)`. Where 8 does not divide
+    /// `K` and the vector's words of group `g` run to the group's last word, they are taken from
+    /// its last 8 words (they are at most 8); otherwise each from its words `8 floor(u / 8)..`,
+    /// or the last 8 for the `K mod 8` words past the whole blocks. So the 8 words come from at
+    /// most two registers: across two groups (`K > 8`: never three) the end of one (its last 8)
+    /// and the start of the next (its first block); within a group, words of two adjacent
+    /// blocks, or of the last whole block and the last 8. The assertion checks it for each
+    /// `K` at compile time.
+    const fn sources<const K: usize>() -> [Source; 32] {
+        let mut out = [Source {
+            a: 0,
+            b: 0,
+            idx: [0; 8],
+        }; 32];
+        let last = !K.is_multiple_of(8);
+        let mut v = 0;
+        while v < K {
+            let mut l = 0;
+            let (mut a, mut b) = (usize::MAX, usize::MAX);
+            while l < 8 {
+                let x = 8 * v + l;
+                let (g, u) = (x / K, x % K);
+                // Whether this group's words in the vector run to its last word.
+                let to_end = 8 * v + 7 >= K * g + K - 1;
+                let (r, lane) = if last && (to_end || u >= 8 * (K / 8)) {
+                    (K / 8, u + 8 - K)
+                } else {
+                    (u / 8, u % 8)
+                };
+                let reg = 8 * r + g;
+                if a == usize::MAX || a == reg {
+                    a = reg;
+                    out[v].idx[l] = lane as i32;
+                } else {
+                    // A third register would be a bug in the reasoning above: caught at
+                    // compile time (this runs in a constant).
+                    assert!(b == usize::MAX || b == reg);
+                    b = reg;
+                    out[v].idx[l] = 8 + lane as i32;
+                }
+                l += 1;
+            }
+            out[v].a = a;
+            out[v].b = if b == usize::MAX { a } else { b };
+            v += 1;
+        }
+        out
+    }
+
+    /// Lanes `idx` of `a` (0..8) and `b` (8..16): `vpermt2d`. Under Miri, which does not emulate
+    /// it, two `vpermd` and a blend (the same lanes).
+    #[inline(always)]
+    fn perm2(a: __m256i, idx: __m256i, b: __m256i) -> __m256i {
+        // SAFETY (of the intrinsics): only inlined into `row_streamed` (AVX2, AVX-512F, VL).
+        unsafe {
+            #[cfg(not(miri))]
+            let v = _mm256_permutex2var_epi32(a, idx, b);
+            #[cfg(miri)]
+            let v = _mm256_blendv_epi8(
+                _mm256_permutevar8x32_epi32(a, idx),
+                _mm256_permutevar8x32_epi32(b, idx),
+                _mm256_cmpgt_epi32(idx, _mm256_set1_epi32(7)),
+            );
+            v
+        }
+    }
+
+    /// Stores the `8 K` words of a pass (`o[j]`: word `j` of group `g` in lane `g`; group `g`'s
+    /// words at `w + K g`) as `K` vectors of 8 consecutive words, each by two non-temporal
+    /// 16-byte stores: the `K` registers transposed into groups' rows ([`pack256::rows8x8`]:
+    /// words `0..8`, `8..16`, ..., and the last 8 when 8 does not divide `K`), each output
+    /// vector then one two-register permute of them ([`sources`], constants per `K`). With
+    /// AVX-512 VL's 32 registers the rows stay in registers (with AVX2's 16 they spilled:
+    /// docs/benchmarks.md, ninth session).
+    ///
+    /// # Safety
+    /// AVX2, AVX-512F and AVX-512 VL; `w` is on 16 bytes and valid for writes of `8 K` words.
+    #[inline(always)]
+    unsafe fn store_streamed<const K: usize>(w: *mut u32, o: &[__m256i; K]) {
+        // SAFETY (of the intrinsics): the caller's target features.
+        unsafe {
+            let z = _mm256_setzero_si256();
+            let mut rows = [[z; 8]; 5];
+            let mut r = 0;
+            while r < K / 8 {
+                rows[r] = pack256::rows8x8(o, 8 * r);
+                r += 1;
+            }
+            if !K.is_multiple_of(8) {
+                rows[K / 8] = pack256::rows8x8(o, K - 8);
+            }
+            macro_rules! out {
+                ($($v:literal)*) => {$(
+                    if $v < K {
+                        let s = const { sources::<K>() }[$v];
+                        let i = s.idx;
+                        let idx = _mm256_setr_epi32(i[0], i[1], i[2], i[3], i[4], i[5], i[6], i[7]);
+                        let v = perm2(rows[s.a / 8][s.a % 8], idx, rows[s.b / 8][s.b % 8]);
+                        // SAFETY: words 8 v..8 v + 8 < 8 K of the pass, on 16 bytes.
+                        store_copy(w.add(8 * $v), _mm256_castsi256_si128(v), true);
+                        store_copy(w.add(8 * $v + 4), _mm256_extracti128_si256::<1>(v), true);
+                    }
+                )*};
+            }
+            out!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+            out!(16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
+        }
     }
 }
 
@@ -4333,12 +4538,13 @@ mod tests {
         assert_eq!(ran > 0, avx2);
     }
 
-    /// `modular256::row` against an independent reference, for every width 11..=32 (a few under
-    /// Miri): per position the running sum of the row's texels (each pass continuing the last)
-    /// added to a dirty working row (transposed as `modular_row` documents), the new values'
-    /// low `k` bits packed field by field with `write_bits`; texels all 255, all 0 and random;
-    /// the words past the passes untouched. Then `modular_untranspose` gives the values in
-    /// position order.
+    /// `modular256::row` and, with AVX-512 VL, `modular256::row_streamed` against an
+    /// independent reference, for every width 11..=32 (a few under Miri): per position the
+    /// running sum of the row's texels (each pass continuing the last) added to a dirty working
+    /// row (transposed as `modular_row` documents), the new values' low `k` bits packed field by
+    /// field with `write_bits`; texels all 255, all 0 and random; the words before and past the
+    /// passes untouched (the streamed words start on 16 bytes, on 32 for one pattern and 16 off
+    /// it for another). Then `modular_untranspose` gives the values in position order.
     #[test]
     fn modular_row_equals_the_reference() {
         extern crate std;
@@ -4348,8 +4554,12 @@ mod tests {
         }
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
         let passes_list: &[usize] = if cfg!(miri) { &[1] } else { &[1, 3] };
-        for k in MIN_PACK_BITS..=32 {
+        let mut streamed_runs = 0;
+        for (k, streamed) in (MIN_PACK_BITS..=32).flat_map(|k| [(k, false), (k, true)]) {
             if cfg!(miri) && ![11, 21, 32].contains(&k) {
+                continue;
+            }
+            if streamed && !Kernel::Avx512Vnni.available() {
                 continue;
             }
             for &passes in passes_list {
@@ -4372,23 +4582,50 @@ mod tests {
                         acc[to_kept(x)] = v;
                     }
                     let ku = k as usize;
-                    let noise: Vec<u32> = (0..8 * ku * passes + 5)
+                    let noise: Vec<u32> = (0..8 * ku * passes + 16)
                         .map(|_| u32::from(rng(&mut seed)) * 0x0101_0101)
                         .collect();
                     let mut words = noise.clone();
+                    // The row's words from `at`: on 16 bytes (from 32 bytes and 16 past them)
+                    // for the streamed stores, else one word past the buffer's start.
+                    let at = if streamed {
+                        let base = words.as_ptr() as usize;
+                        let on32 = (32 - base % 32) % 32 / 4;
+                        if pattern == 1 {
+                            on32 + 4
+                        } else {
+                            on32
+                        }
+                    } else {
+                        1
+                    };
                     let run = {
-                        let (tp, ap, wp) = (t.as_ptr(), acc.as_mut_ptr(), words.as_mut_ptr());
-                        // SAFETY: AVX2 is available (checked above); the slices hold 256
-                        // passes texels and values and 8 k passes words.
+                        let (tp, ap) = (t.as_ptr(), acc.as_mut_ptr());
+                        let wp = words[at..].as_mut_ptr();
+                        // SAFETY: AVX2 is available (checked above), and AVX-512F and VL for
+                        // the streamed row (`Kernel::Avx512Vnni`, checked); the slices hold 256
+                        // passes texels and values and 8 k passes words from `wp`, on 16 bytes
+                        // for the streamed row.
                         unsafe {
                             // With the prefetch hints for an odd count of passes (the
                             // same values either way).
                             let pf = passes % 2 == 1;
-                            by_pack_width!(
-                                ku,
-                                modular256::row(tp, ap, wp, passes, pf),
-                                unreachable!()
-                            )
+                            if streamed {
+                                streamed_runs += 1;
+                                let r = by_pack_width!(
+                                    ku,
+                                    modular256::row_streamed(tp, ap, wp, passes),
+                                    unreachable!()
+                                );
+                                fence();
+                                r
+                            } else {
+                                by_pack_width!(
+                                    ku,
+                                    modular256::row(tp, ap, wp, passes, pf),
+                                    unreachable!()
+                                )
+                            }
                         }
                     };
                     let mut want_words = noise.clone();
@@ -4399,13 +4636,13 @@ mod tests {
                         r = r.wrapping_add(u32::from(t[x]));
                         want[x] = want[x].wrapping_add(r);
                         assert!(crate::layouts::packed::write_bits(
-                            &mut want_words,
+                            &mut want_words[at..],
                             x as u64 * u64::from(k),
                             k,
                             u64::from(want[x] & m)
                         ));
                     }
-                    let what = (k, passes, pattern);
+                    let what = (k, streamed, passes, pattern, at);
                     assert_eq!(run, r, "{what:?}");
                     assert_eq!(words, want_words, "{what:?}");
                     for x in 0..n {
@@ -4416,6 +4653,7 @@ mod tests {
                 }
             }
         }
+        assert_eq!(streamed_runs > 0, Kernel::Avx512Vnni.available());
     }
 
     /// The detected kernel is available, and so is every narrower one.

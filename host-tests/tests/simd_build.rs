@@ -336,6 +336,46 @@ fn modular_builds_equal_the_reference() {
     }
 }
 
+/// Modular layouts of 32 MiB and more, whose fused rows (`simd`, on a CPU with AVX-512 VL)
+/// store their words by non-temporal stores where a row starts on 16 bytes and by plain stores
+/// where it does not: 4,096 x 3,200 (`k` = 21, every row on 16 bytes when the layout is, and
+/// 4 bytes off 16 when it is not) and 4,128 x 3,104 (each row 4 bytes further off 16 than the
+/// one before: both kinds of row in one build). Every corner against the reference modulo
+/// `2^k`; nothing written around the layout.
+#[test]
+fn large_modular_layouts() {
+    let mut rng = texsat_host_tests::rng(0x1a7e);
+    let k = 21;
+    for (w, h, offs) in [(4096, 3200, &[0usize, 1][..]), (4128, 3104, &[0][..])] {
+        let t: Vec<u8> = (0..w * h).map(|_| rng.random_range(0..=255u8)).collect();
+        let want = reference(&t, w, h);
+        let texture = Texture::<u8>::new(&t, w, h).unwrap();
+        let n = Modular::<u32>::words_needed(w, h, k).unwrap();
+        assert!(4 * n >= 32 << 20, "{w}x{h}: {} bytes, under 32 MiB", 4 * n);
+        let mut row = vec![0x5555_5555u32; w];
+        let mut words = vec![0xA5A5_A5A5u32; n + 8];
+        // The first index on 16 bytes, then `off` words past it.
+        let on16 = (0..4)
+            .find(|&i| (words.as_ptr() as usize + 4 * i).is_multiple_of(16))
+            .unwrap();
+        for &off in offs {
+            words.fill(0xA5A5_A5A5);
+            let at = on16 + off;
+            let m = Modular::<u32>::build(&texture, k, &mut words[at..at + n], &mut row).unwrap();
+            for y in 1..=h {
+                for x in 1..=w {
+                    let got = u64::from(m.corner(x, y, &mut NoCount)[0]);
+                    if got != want[(y - 1) * w + x - 1] & ((1 << k) - 1) {
+                        panic!("{w}x{h}, off {off}: corner ({x}, {y}) is {got}");
+                    }
+                }
+            }
+            assert!(words[..at].iter().all(|&v| v == 0xA5A5_A5A5));
+            assert!(words[at + n..].iter().all(|&v| v == 0xA5A5_A5A5));
+        }
+    }
+}
+
 /// A modular build whose rows change texel type part-way (`u8`, then `u16` with the same
 /// values, then `u8`): the fused row takes the `u8` rows until a `u16` row arrives, then the
 /// working row goes back to position order and the portable row takes the rest; the table

@@ -381,10 +381,11 @@ pub struct ModularBuilder<'a, 's, E: Entry, const C: usize = 1> {
     /// that `row` holds that function's transposed order.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     fused: bool,
-    /// Whether the fused rows ask for the words ahead of their stores: a layout of at least
-    /// `simd::STREAM_MIN_BYTES`, past the caches (see `simd::modular_row`).
+    /// Whether the layout is past the caches (at least `simd::STREAM_MIN_BYTES`): the fused
+    /// rows then store their words by non-temporal stores (AVX-512 VL) or ask for them ahead
+    /// of their stores (see `simd::modular_row`).
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    prefetch: bool,
+    past: bool,
 }
 
 impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
@@ -434,7 +435,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             fused: false,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-            prefetch: crate::simd::past_the_caches(sizes.words.saturating_mul(4)),
+            past: crate::simd::past_the_caches(sizes.words.saturating_mul(4)),
         })
     }
 
@@ -522,7 +523,7 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         let first = usize::try_from(offset.checked_div(u64::from(WORD_BITS)).unwrap_or(0))
             .unwrap_or(usize::MAX);
         let fused = self.words.get_mut(first..).and_then(|w| {
-            crate::simd::modular_row::<T, E, C>(texels, self.row, w, self.k, self.prefetch)
+            crate::simd::modular_row::<T, E, C>(texels, self.row, w, self.k, self.past)
         });
         let Some((done, run)) = fused else {
             crate::simd::modular_untranspose(self.row);
