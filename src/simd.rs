@@ -1789,7 +1789,15 @@ const MODULAR_AHEAD: usize = 3;
 /// `g`, field `i`) is kept at index `256 b + 8 i + g`, so that field `i` of the pass's eight
 /// groups is one 8-lane vector. Only this function reads and writes that part of `acc`, and it
 /// is the same for every row of a build ([`modular_fused`] is asked once), so the order is
-/// private to the builder; positions from `256 p` on keep their own order.
+/// private to the builder; positions from `256 p` on keep their own order. **That order is then
+/// rotated** by `s` ([`modular_shift`], 0 to 7 entries: the first index of `acc` on 32 bytes):
+/// index `j` of it is at `(j + s) mod n` (`n = acc.len()`), so that every 8-lane access of the
+/// passes is on 32 bytes; the one vector that may cross the end of `acc` (the last pass's
+/// last, when `s` exceeds the tail) goes through a 32-byte buffer, gathered before the passes
+/// and scattered after. [`modular_tail`] gives the tail's positions, [`modular_untranspose`]
+/// puts the row back in position order. (With the working row 16 bytes off 32 a modular build
+/// of 4,096^2 with the streamed stores took 1.22x to 1.40x the flat build's time, against 0.94x
+/// to 1.07x on 32 bytes, in one process on a Zen 4 guest: docs/benchmarks.md, tenth session.)
 ///
 /// Per pass (`modular256::row`): the eight groups' texels loaded (one 32-byte load each), their
 /// totals by `vpsadbw` and an exclusive scan across the lanes (plus the running sum) as each
@@ -1830,25 +1838,93 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     if a.len() < passes * MODULAR_PASS || words.len() < passes * 8 * ku {
         return None;
     }
-    let (tp, ap, wp) = (t.as_ptr(), a.as_mut_ptr(), words.as_mut_ptr());
-    if past && Kernel::best() == Kernel::Avx512Vnni && (wp as usize).is_multiple_of(16) {
+    if passes == 0 {
+        return None;
+    }
+    // The passes' values: indices s..s + 256 passes of the ring, the last vector's 8 (ring
+    // indices end - 8..end) in `last` when they cross the end of `a`.
+    let (n, s) = (a.len(), modular_shift(a));
+    let end = s + passes * MODULAR_PASS;
+    let wraps = end > n;
+    let mut last = Line32([0; 8]);
+    if wraps {
+        for (l, v) in last.0.iter_mut().enumerate() {
+            *v = *a.get((end - 8 + l) % n)?;
+        }
+    }
+    let (tp, wp) = (t.as_ptr(), words.as_mut_ptr());
+    let ap = a.get_mut(s..)?.as_mut_ptr();
+    // The last vector: in `a` (inside: end <= n) or `last`.
+    let lp = if wraps {
+        last.0.as_mut_ptr()
+    } else {
+        ap.wrapping_add(passes * MODULAR_PASS - 8)
+    };
+    let run = if past && Kernel::best() == Kernel::Avx512Vnni && (wp as usize).is_multiple_of(16) {
         // SAFETY: as below, and AVX-512F and VL are available (`Kernel::Avx512Vnni`'s
         // detection includes them); `words` starts on 16 bytes (checked).
         let run = unsafe {
             by_pack_width!(
                 ku,
-                modular256::row_streamed(tp, ap, wp, passes),
+                modular256::row_streamed(tp, ap, lp, wp, passes),
                 return None
             )
         };
         fence();
-        return Some((passes * MODULAR_PASS, run));
+        run
+    } else {
+        // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2 or AVX-512 VNNI,
+        // whose detection includes AVX2's); `t` holds 256 passes texels; `ap` is `a` from
+        // index s, and the kernel touches its values 0..256 passes - 8 (s + 256 passes - 8 <
+        // n: s < 8 and 256 passes <= n) and the last vector's 8 at `lp` (inside `a` when
+        // `end <= n`, else `last`); `words` holds 8 k passes words (checked above): what the
+        // kernel reads and writes.
+        unsafe {
+            by_pack_width!(
+                ku,
+                modular256::row(tp, ap, lp, wp, passes, past),
+                return None
+            )
+        }
+    };
+    if wraps {
+        for (l, v) in last.0.iter().enumerate() {
+            *a.get_mut((end - 8 + l) % n)? = *v;
+        }
     }
-    // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2 or AVX-512 VNNI,
-    // whose detection includes AVX2's); `t` holds 256 passes texels, `a` 256 passes values and
-    // `words` 8 k passes words (checked above): what the kernel reads and writes.
-    let run = unsafe { by_pack_width!(ku, modular256::row(tp, ap, wp, passes, past), return None) };
     Some((passes * MODULAR_PASS, run))
+}
+
+/// Eight `u32` on 32 bytes: [`modular_row`]'s last vector when it crosses the working row's
+/// end.
+#[repr(align(32))]
+struct Line32([u32; 8]);
+
+/// The rotation of [`modular_row`]'s working row: the entries before its first index on 32
+/// bytes (0 to 7; 0 unless `E` is `u32`, the only type the fused row takes).
+fn modular_shift<E: Entry>(acc: &[E]) -> usize {
+    if TypeId::of::<E>() != TypeId::of::<u32>() {
+        return 0;
+    }
+    (32 - acc.as_ptr() as usize % 32) % 32 / 4
+}
+
+/// The positions of [`modular_row`]'s working row from `done` (its passes' `256 p`) on, in
+/// position order: one or two runs of `acc` (`(a, b)`: `a`'s positions first), the rotation's
+/// place for them (see there).
+pub(crate) fn modular_tail<E: Entry>(acc: &mut [E], done: usize) -> (&mut [E], &mut [E]) {
+    let (n, s) = (acc.len(), modular_shift(acc));
+    let start = (s + done) % n.max(1);
+    let len = n.saturating_sub(done);
+    if start + len <= n {
+        let a = acc.get_mut(start..start + len).unwrap_or(&mut []);
+        (a, &mut [])
+    } else {
+        // start + len - n = s (the run wraps to the ring's first s indices): [start, n), [0, s).
+        let (head, rest) = acc.split_at_mut(start.min(n));
+        let b = head.get_mut(..start + len - n).unwrap_or(&mut []);
+        (rest, b)
+    }
 }
 
 /// Where [`modular_row`] keeps position `x = 32 g + i` of a pass (`x < 256`): at `8 i + g`.
@@ -1856,9 +1932,19 @@ const fn kept_at(x: usize) -> usize {
     8 * (x % 32) + x / 32
 }
 
-/// Puts a working row written by [`modular_row`] back in position order (each full pass of
-/// 256 values from its transposed order).
+/// Puts a working row written by [`modular_row`] back in position order (the rotation undone,
+/// then each full pass of 256 values from its transposed order).
 pub(crate) fn modular_untranspose<E: Entry>(acc: &mut [E]) {
+    let s = modular_shift(acc);
+    if s < acc.len() {
+        acc.rotate_left(s);
+    }
+    untranspose_passes(acc);
+}
+
+/// Each full pass of 256 values of `acc` from [`modular_row`]'s transposed order back to
+/// position order (`acc` not rotated).
+fn untranspose_passes<E: Entry>(acc: &mut [E]) {
     for pass in acc.chunks_exact_mut(MODULAR_PASS) {
         let mut t = [E::ZERO; MODULAR_PASS];
         t.copy_from_slice(pass);
@@ -1959,13 +2045,15 @@ mod modular256 {
     /// hints for the words [`MODULAR_AHEAD`] passes on); returns the running sum after them.
     ///
     /// # Safety
-    /// The CPU has AVX2; `11 <= K <= 32`; `t` is valid for reads of `256 passes` bytes, `acc`
-    /// for reads and writes of `256 passes` values, `w` for writes of `8 K passes` words, and
-    /// none overlaps another.
+    /// The CPU has AVX2; `11 <= K <= 32`; `passes >= 1`; `t` is valid for reads of `256
+    /// passes` bytes, `acc` for reads and writes of `256 passes - 8` values and `last` of 8
+    /// (the last pass's last vector: `acc + 256 passes - 8`, or a buffer of its own), `w` for
+    /// writes of `8 K passes` words, and none overlaps another.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn row<const K: usize>(
         t: *const u8,
         acc: *mut u32,
+        last: *mut u32,
         w: *mut u32,
         passes: usize,
         prefetch: bool,
@@ -1974,7 +2062,7 @@ mod modular256 {
         let mut carry = _mm256_setzero_si256();
         for p in 0..passes {
             // SAFETY: p < passes (the caller's contract, forwarded).
-            let wp = unsafe { pass::<K, false>(t, acc, w, p, &mut carry, m, seven) };
+            let wp = unsafe { pass::<K, false>(t, acc, last, w, p, passes, &mut carry, m, seven) };
             if prefetch {
                 // The words of the pass `MODULAR_AHEAD` passes on (past the row's end: the next
                 // row's, or none; a hint only, never dereferenced, so the pointer may point
@@ -2000,6 +2088,7 @@ mod modular256 {
     pub(super) unsafe fn row_streamed<const K: usize>(
         t: *const u8,
         acc: *mut u32,
+        last: *mut u32,
         w: *mut u32,
         passes: usize,
     ) -> u32 {
@@ -2007,7 +2096,7 @@ mod modular256 {
         let mut carry = _mm256_setzero_si256();
         for p in 0..passes {
             // SAFETY: p < passes (the caller's contract, forwarded).
-            unsafe { pass::<K, true>(t, acc, w, p, &mut carry, m, seven) };
+            unsafe { pass::<K, true>(t, acc, last, w, p, passes, &mut carry, m, seven) };
         }
         _mm256_cvtsi256_si32(carry) as u32
     }
@@ -2031,11 +2120,17 @@ mod modular256 {
     /// As the caller's ([`row`] or [`row_streamed`]), with `p < passes`. Inlined into them
     /// (no target features of its own: theirs).
     #[inline(always)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the row's pointers, the pass and its running state"
+    )]
     unsafe fn pass<const K: usize, const STREAM: bool>(
         t: *const u8,
         acc: *mut u32,
+        last: *mut u32,
         w: *mut u32,
         p: usize,
+        passes: usize,
         carry: &mut __m256i,
         m: __m256i,
         seven: __m256i,
@@ -2045,6 +2140,8 @@ mod modular256 {
             // SAFETY: p < passes: the pass's 256 texels, 256 values and 8 K words are inside
             // the caller's slices.
             let (tp, ap, wp) = (t.add(256 * p), acc.add(256 * p), w.add(8 * K * p));
+            // The pass's last vector: the row's last in `last`.
+            let a31 = if p + 1 == passes { last } else { ap.add(248) };
             // SAFETY: tp[32 g..32 g + 32] is readable for g < 8: unaligned loads.
             let g: [__m256i; 8] =
                 core::array::from_fn(|h| _mm256_loadu_si256(tp.add(32 * h).cast()));
@@ -2063,8 +2160,9 @@ mod modular256 {
             macro_rules! steps {
                 ($($i:literal)*) => {$(
                     run = _mm256_add_epi32(run, column(&c, $i));
-                    // SAFETY: 8 i + 8 <= 256: inside the pass's values (unaligned).
-                    let at = ap.add(8 * $i);
+                    // SAFETY: 8 i + 8 <= 256: inside the pass's values, the last pass's last
+                    // vector at `last` (the caller's contract); unaligned accesses.
+                    let at = if $i == 31 { a31 } else { ap.add(8 * $i) };
                     let f = _mm256_add_epi32(run, _mm256_loadu_si256(at.cast()));
                     _mm256_storeu_si256(at.cast(), f);
                     pack256::field::<K>(&mut o, $i, f, m);
@@ -4544,7 +4642,7 @@ mod tests {
     /// row (transposed as `modular_row` documents), the new values' low `k` bits packed field by
     /// field with `write_bits`; texels all 255, all 0 and random; the words before and past the
     /// passes untouched (the streamed words start on 16 bytes, on 32 for one pattern and 16 off
-    /// it for another). Then `modular_untranspose` gives the values in position order.
+    /// it for another). Then `untranspose_passes` gives the values in position order.
     #[test]
     fn modular_row_equals_the_reference() {
         extern crate std;
@@ -4601,6 +4699,9 @@ mod tests {
                     };
                     let run = {
                         let (tp, ap) = (t.as_ptr(), acc.as_mut_ptr());
+                        // The last vector in place (modular_rows_in_every_rotation covers the
+                        // buffer).
+                        let lp = ap.wrapping_add(n - 8);
                         let wp = words[at..].as_mut_ptr();
                         // SAFETY: AVX2 is available (checked above), and AVX-512F and VL for
                         // the streamed row (`Kernel::Avx512Vnni`, checked); the slices hold 256
@@ -4614,7 +4715,7 @@ mod tests {
                                 streamed_runs += 1;
                                 let r = by_pack_width!(
                                     ku,
-                                    modular256::row_streamed(tp, ap, wp, passes),
+                                    modular256::row_streamed(tp, ap, lp, wp, passes),
                                     unreachable!()
                                 );
                                 fence();
@@ -4622,7 +4723,7 @@ mod tests {
                             } else {
                                 by_pack_width!(
                                     ku,
-                                    modular256::row(tp, ap, wp, passes, pf),
+                                    modular256::row(tp, ap, lp, wp, passes, pf),
                                     unreachable!()
                                 )
                             }
@@ -4648,7 +4749,7 @@ mod tests {
                     for x in 0..n {
                         assert_eq!(acc[to_kept(x)], want[x], "{what:?} x {x}");
                     }
-                    modular_untranspose(&mut acc);
+                    untranspose_passes(&mut acc);
                     assert_eq!(acc, want, "{what:?}");
                 }
             }

@@ -530,27 +530,51 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
             self.fused = false;
             return Ok(false);
         };
-        // The tail after the last pass: the portable row, started at the passes' running sum.
-        let tail = self.row.get_mut(done..).unwrap_or(&mut []);
-        super::tiled::add_prefix_row::<T, E, C>(texels.get(done..).unwrap_or(&[]), tail);
-        let r = E::from_u64_truncating(u64::from(run));
-        for v in tail.iter_mut() {
-            *v = v.wrapping_add(r);
-        }
+        // The tail after the last pass (one channel: `modular_fused`), in one or two runs of
+        // the working row (`simd::modular_tail`): the portable row, started at the passes'
+        // running sum, then at that and the first run's texels.
+        let (first_run, second_run) = crate::simd::modular_tail(self.row, done);
+        let texels = texels.get(done..).unwrap_or(&[]);
+        let (t1, t2) = texels.split_at(first_run.len().min(texels.len()));
+        let mut r = E::from_u64_truncating(u64::from(run));
         #[allow(
             clippy::arithmetic_side_effects,
             clippy::as_conversions,
             reason = "done <= width fields of k bits fit the storage (checked by the caller): \
                       no wrap; usize -> u64 is lossless"
         )]
-        let at = offset + done as u64 * u64::from(self.k);
-        if !pack_fields(self.words, at, tail, self.k) {
-            return Err(Error::StorageTooSmall {
-                needed: self.sizes.words,
-                got: self.words.len(),
-            });
+        let mut at = offset + done as u64 * u64::from(self.k);
+        for (run_texels, tail) in [(t1, first_run), (t2, second_run)] {
+            super::tiled::add_prefix_row::<T, E, C>(run_texels, tail);
+            for v in tail.iter_mut() {
+                *v = v.wrapping_add(r);
+            }
+            if !pack_fields(self.words, at, tail, self.k) {
+                return Err(Error::StorageTooSmall {
+                    needed: self.sizes.words,
+                    got: self.words.len(),
+                });
+            }
+            for t in run_texels {
+                r = r.wrapping_add(E::from(t.to_u16()));
+            }
+            #[allow(
+                clippy::arithmetic_side_effects,
+                clippy::as_conversions,
+                reason = "as above: inside the row's fields"
+            )]
+            {
+                at += tail.len() as u64 * u64::from(self.k);
+            }
         }
         Ok(true)
+    }
+
+    /// Sets whether the layout counts as past the caches (tests: to run the fused row's
+    /// streamed stores on a small layout).
+    #[cfg(all(test, feature = "simd", target_arch = "x86_64"))]
+    pub(super) fn set_past(&mut self, past: bool) {
+        self.past = past;
     }
 
     /// The sizes the writes use (tests: to make a write fail).

@@ -1076,6 +1076,59 @@ fn tiled_cells4_equal_the_flat_table_on_wide_fields() {
     assert_eq!((b00, b01), (14, 17));
 }
 
+/// The fused modular row (`simd::modular_row`) with its working row at every rotation: the
+/// caller's row 0 to 7 entries past 32 bytes, so that the row's last vector crosses its end
+/// (512 x 21, no tail), the tail is shorter than the rotation (515 and 517 x 32) or longer
+/// (520 x 16, 544 x 21, in two runs), with the layout taken as past the caches or not (the
+/// streamed stores with AVX-512 VL; 515 x 32's rows alternate between 16 bytes and off them),
+/// and a `u16` row in the middle (the working row put back in position order, the portable
+/// path after it). Every corner against the summed-area table mod `2^k`.
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+#[test]
+fn modular_rows_in_every_rotation() {
+    #[repr(align(32))]
+    struct Rows([u32; 560]);
+    let h = if cfg!(miri) { 3 } else { 5 };
+    for (w, k) in [(512, 21), (515, 32), (517, 32), (520, 16), (544, 21)] {
+        let texels = noise_bytes(w * h, w as u64 + u64::from(k));
+        let mut rows = Rows([7; 560]);
+        for (shift, past) in (0..8).flat_map(|s| [(s, false), (s, true)]) {
+            if cfg!(miri) && !matches!(shift, 0 | 3 | 4) {
+                continue;
+            }
+            let mut words = std::vec![0u32; (w * h * k as usize).div_ceil(32)];
+            let row = &mut rows.0[shift..shift + w];
+            let mut b = ModularBuilder::<u32>::new(w, h, 8, k, &mut words, row).unwrap();
+            b.set_past(past);
+            for y in 0..h {
+                let r = &texels[y * w..(y + 1) * w];
+                if y == 2 {
+                    let wide: Vec<u16> = r.iter().map(|&t| u16::from(t)).collect();
+                    b.push_row(&wide).unwrap();
+                } else {
+                    b.push_row(r).unwrap();
+                }
+            }
+            let m = b.finish().unwrap();
+            let mask = if k == 32 { u32::MAX } else { (1u32 << k) - 1 };
+            let mut above = std::vec![0u32; w + 1];
+            for y in 1..=h {
+                let mut run = 0u32;
+                for x in 1..=w {
+                    run = run.wrapping_add(u32::from(texels[(y - 1) * w + x - 1]));
+                    above[x] = above[x].wrapping_add(run);
+                    let got = m.corner(x, y, &mut NoCount)[0];
+                    assert_eq!(
+                        got & mask,
+                        above[x] & mask,
+                        "{w}x{h} k {k}, row {shift} past 32 bytes, past {past}: ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// The modular builder under every build kernel this CPU runs (with `simd`: the fused AVX2 row,
 /// `simd::modular_row`, under the AVX2 and AVX-512 kernels, the row kernel and packer under
 /// SSE2 and wherever the fused row does not apply): every corner of noise textures equals the
