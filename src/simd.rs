@@ -1845,12 +1845,14 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     // indices end - 8..end) in `last` when they cross the end of `a`.
     let (n, s) = (a.len(), modular_shift(a));
     let end = s + passes * MODULAR_PASS;
-    let wraps = end > n;
+    // The entries past the end (< 8): the last vector is a[end - 8..n] then a[..over].
+    let over = end.saturating_sub(n);
+    let wraps = over > 0;
     let mut last = Line32([0; 8]);
     if wraps {
-        for (l, v) in last.0.iter_mut().enumerate() {
-            *v = *a.get((end - 8 + l) % n)?;
-        }
+        let (x, y) = last.0.split_at_mut(8 - over);
+        x.copy_from_slice(a.get(end - 8..n)?);
+        y.copy_from_slice(a.get(..over)?);
     }
     let (tp, wp) = (t.as_ptr(), words.as_mut_ptr());
     let ap = a.get_mut(s..)?.as_mut_ptr();
@@ -1888,9 +1890,9 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
         }
     };
     if wraps {
-        for (l, v) in last.0.iter().enumerate() {
-            *a.get_mut((end - 8 + l) % n)? = *v;
-        }
+        let (x, y) = last.0.split_at(8 - over);
+        a.get_mut(end - 8..n)?.copy_from_slice(x);
+        a.get_mut(..over)?.copy_from_slice(y);
     }
     Some((passes * MODULAR_PASS, run))
 }

@@ -545,6 +545,11 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
         )]
         let mut at = offset + done as u64 * u64::from(self.k);
         for (run_texels, tail) in [(t1, first_run), (t2, second_run)] {
+            if tail.is_empty() {
+                // No tail (a width of whole passes), or no second run: nothing to add or pack
+                // (the calls cost about a hundred instructions per row).
+                continue;
+            }
             super::tiled::add_prefix_row::<T, E, C>(run_texels, tail);
             for v in tail.iter_mut() {
                 *v = v.wrapping_add(r);
