@@ -208,7 +208,8 @@ impl<'a, E: Entry, const C: usize> Modular<'a, E, C> {
 
     /// Builds the table of `texture` modulo `2^k` into `words`, using `row` (`w * C` entries) as
     /// the one row of working state (its content afterwards is unspecified: with `simd` on an
-    /// AVX2 CPU it holds the last row's residues in the fused row's transposed order).
+    /// AVX2 CPU it holds the last row's residues in the fused row's order, transposed and
+    /// rotated).
     pub fn build<T: Texel>(
         texture: &Texture<'_, T, C>,
         k: u32,
@@ -396,9 +397,13 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
     /// With the `simd` feature on an x86-64 CPU with AVX2 (AVX-512 CPUs included), `u8` rows of
     /// one channel at least 256 texels wide, `k` from 11 to 32 and `w k` a multiple of 32 take a
     /// fused row: the prefix sums, the working row and the packing in one pass per 256 texels
-    /// (`simd::modular_row`; on a CPU with AVX2 only 1.06x to 1.23x the flat build's time, on
-    /// a Zen 4 guest 0.85x to 1.09x at 1,024^2 and 1.23x to 1.32x at 4,096^2, ninth session,
-    /// `docs/benchmarks.md`).
+    /// (`simd::modular_row`). `row` may sit anywhere: the fused row's order starts at its first
+    /// index on 32 bytes. On a CPU with AVX-512 VL a layout of 32 MiB and more is written by
+    /// non-temporal stores, each row whose words start on 16 bytes (every row when `words`
+    /// does and `w k` is a multiple of 128). Measured against the flat build's time: on a CPU
+    /// with AVX2 only 1.06x to 1.23x (earlier sessions); on a Zen 4 guest, 4,096^2 (44 MB at `k`
+    /// = 21), 1.23x to 1.32x with plain stores (ninth session), 0.90x to 1.15x streamed in 9 of
+    /// the tenth session's 11 runs, 1.32x and 1.40x in two (`docs/benchmarks.md`).
     pub fn new(
         width: usize,
         height: usize,
