@@ -68,10 +68,12 @@
 //!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
 //!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
 //!    features enable. The AVX-512 build kernel's 256-bit `vpdpbusd` needs AVX-512 VL, which
-//!    its detection includes (CPUID leaf 7 EBX bit 31). The one helper with its own target
-//!    feature, [`lane7`] (AVX2), is called only from functions that enable AVX2 (the compiler
-//!    refuses other callers without `unsafe`). Calling the kernels (and XGETBV, after CPUID
-//!    reports OSXSAVE) is the only reason for `unsafe` beyond the memory accesses below.
+//!    its detection includes (CPUID leaf 7 EBX bit 31). The helpers with target features of
+//!    their own ([`lane7`], `modular256::field_mask`, `pack256::rows8x8`: AVX2;
+//!    `modular256::perm2`: AVX2, AVX-512F and VL) are called only from functions that enable
+//!    them (the compiler refuses other callers without `unsafe`). Calling the kernels (and
+//!    XGETBV, after CPUID reports OSXSAVE) is the only reason for `unsafe` beyond the memory
+//!    accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its AVX-512 kernel `groups` with `32 groups <=
 //!    fields.len()` and `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]`
 //!    and writes `words[g k..g k + k]` (16 words and a masked store of the rest) for `g <
@@ -82,9 +84,14 @@
 //!    a last pass of fewer than 8 groups or runs reads its last one again for the missing
 //!    lanes and stores the ones it has only; an odd `k`'s last run word by word, its last
 //!    word's low 16 bits only).
-//!    [`modular_row`] checks `acc.len() >= 256 p` and `words.len() >= 8 k p` (`p` passes of
+//!    [`modular_row`] checks `acc.len() >= 256 p` and `words.len() >= 8 k p` (`p >= 1` passes of
 //!    256 texels, `p = floor(texels.len() / 256)`) before its kernel reads `texels[256 b..][..256]`
-//!    and reads and writes `acc[256 b..][..256]` (one 8-lane load and store per field) and
+//!    and reads and writes (one 8-lane load and store per field) `acc[s + 256 b..][..256]` for
+//!    `b < p - 1` and `acc[s + 256 (p - 1)..][..248]` (`s < 8` the rotation, so `s + 256 p - 8
+//!    < acc.len()`) and the last pass's last 8 values at `last`: `acc[s + 256 p - 8..][..8]`
+//!    when `s + 256 p <= acc.len()`, else a 32-byte buffer on the stack gathered from
+//!    `acc[s + 256 p - 8..]` and `acc[..s + 256 p - acc.len()]` before the kernel (both ranges
+//!    checked) and scattered back after it; and it
 //!    writes `words[8 k b..][..8 k]` (the packer's stores of each group's `k` words; streamed,
 //!    `k` 8-word vectors at `8 k b + 8 v`, `v < k`, each by two non-temporal 16-byte stores,
 //!    only after checking that `words` starts on 16 bytes: `32 k` bytes per pass keep every
@@ -139,7 +146,10 @@
 //!    above through the same pointer it writes: each step (a block of 16, or with AVX-512 half
 //!    a block) reads `row[j..j + s]` before it writes those same entries, and no step reads
 //!    what another wrote. The optional copy of the working row is a third, separate `&mut
-//!    [u32]` (at least `n` long). No reference is created from the raw pointers.
+//!    [u32]` (at least `n` long). [`modular_row`]'s kernel gets `acc`'s pointers (the passes'
+//!    values and, when in place, the last vector) from one `&mut` borrow, or the last vector
+//!    in its own stack buffer, disjoint from the values the passes touch. No reference is
+//!    created from the raw pointers.
 //! 4. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]` and `&mut [E]` to `&mut [u32]` only after
 //!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length. The band
 //!    rows read and write `u32` words as pairs of `u16` halves through raw pointers derived
@@ -413,14 +423,13 @@ fn row_u8_u32(
         && copy
             .as_ref()
             .is_some_and(|c| (c.as_ptr() as usize).is_multiple_of(16));
-    // The head: entries to 32 bytes in `out` (a multiple of 4 with a non-temporal copy, which
-    // then stays on 16 bytes), at most the row.
+    // The entries before `out` reaches 32 bytes (none for rows built into a table).
     let to_line = match mode {
         Above::Slice => 0,
         Above::Zero | Above::InPlace => (32 - (out.as_ptr() as usize) % 32) % 32 / 4,
     };
-    // Not when the row ends before 32 bytes (no block could run) or when it would move a
-    // non-temporal copy off 16 bytes: the head is then 0, 4 with a non-temporal copy.
+    // The head, done the portable way: those entries, unless the row ends before 32 bytes (no
+    // block could run) or a non-temporal copy would leave 16 bytes (its head must be 0 or 4).
     let head = if to_line > n || (nt && !to_line.is_multiple_of(4)) {
         0
     } else {
@@ -549,6 +558,8 @@ extern crate std;
 std::thread_local! {
     /// The calling test thread's cap on [`Kernel::best`] ([`Kernel::cap`]).
     static CAP: core::cell::Cell<Option<Kernel>> = const { core::cell::Cell::new(None) };
+    /// The rows [`modular_row`] streamed on the calling test thread (tests: that the path ran).
+    pub(crate) static STREAMED_ROWS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
 }
 
 impl Kernel {
@@ -1774,8 +1785,8 @@ pub(crate) fn modular_fused<T: Texel, E: Entry, const C: usize>(width: usize, k:
 pub(crate) const MODULAR_PASS: usize = 256;
 
 /// How many passes ahead [`modular_row`] asks for the words it will write (with `past`, on
-/// the plain path): 3, about 2 KiB at `k` = 21. Two and four passes ran as fast on a Zen 4 guest; eight no
-/// faster than none.
+/// the plain path): 3, about 2 KiB at `k` = 21. Two and four passes ran as fast on a Zen 4
+/// guest; eight no faster than none.
 const MODULAR_AHEAD: usize = 3;
 
 /// One row of the modular build, fused (AVX2): for the first `p = floor(n / 256)` passes of 256
@@ -1873,6 +1884,8 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
             )
         };
         fence();
+        #[cfg(test)]
+        STREAMED_ROWS.with(|c| c.set(c.get() + 1));
         run
     } else {
         // SAFETY: AVX2 is available (`modular_fused`: `Kernel::best` is AVX2 or AVX-512 VNNI,
@@ -1890,9 +1903,14 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
         }
     };
     if wraps {
+        // The gather above checked both ranges: no return here, after the kernel wrote.
         let (x, y) = last.0.split_at(8 - over);
-        a.get_mut(end - 8..n)?.copy_from_slice(x);
-        a.get_mut(..over)?.copy_from_slice(y);
+        if let Some(d) = a.get_mut(end - 8..n) {
+            d.copy_from_slice(x);
+        }
+        if let Some(d) = a.get_mut(..over) {
+            d.copy_from_slice(y);
+        }
     }
     Some((passes * MODULAR_PASS, run))
 }
@@ -2162,8 +2180,8 @@ mod modular256 {
             macro_rules! steps {
                 ($($i:literal)*) => {$(
                     run = _mm256_add_epi32(run, column(&c, $i));
-                    // SAFETY: 8 i + 8 <= 256: inside the pass's values, the last pass's last
-                    // vector at `last` (the caller's contract); unaligned accesses.
+                    // SAFETY: 8 i + 8 <= 256: inside the pass's values (the last pass's: 248, and
+                    // its vector 31 at `last`: the caller's contract); unaligned accesses.
                     let at = if $i == 31 { a31 } else { ap.add(8 * $i) };
                     let f = _mm256_add_epi32(run, _mm256_loadu_si256(at.cast()));
                     _mm256_storeu_si256(at.cast(), f);
@@ -2248,20 +2266,18 @@ mod modular256 {
 
     /// Lanes `idx` of `a` (0..8) and `b` (8..16): `vpermt2d`. Under Miri, which does not emulate
     /// it, two `vpermd` and a blend (the same lanes).
-    #[inline(always)]
+    #[inline]
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
     fn perm2(a: __m256i, idx: __m256i, b: __m256i) -> __m256i {
-        // SAFETY (of the intrinsics): only inlined into `row_streamed` (AVX2, AVX-512F, VL).
-        unsafe {
-            #[cfg(not(miri))]
-            let v = _mm256_permutex2var_epi32(a, idx, b);
-            #[cfg(miri)]
-            let v = _mm256_blendv_epi8(
-                _mm256_permutevar8x32_epi32(a, idx),
-                _mm256_permutevar8x32_epi32(b, idx),
-                _mm256_cmpgt_epi32(idx, _mm256_set1_epi32(7)),
-            );
-            v
-        }
+        #[cfg(not(miri))]
+        let v = _mm256_permutex2var_epi32(a, idx, b);
+        #[cfg(miri)]
+        let v = _mm256_blendv_epi8(
+            _mm256_permutevar8x32_epi32(a, idx),
+            _mm256_permutevar8x32_epi32(b, idx),
+            _mm256_cmpgt_epi32(idx, _mm256_set1_epi32(7)),
+        );
+        v
     }
 
     /// Stores the `8 K` words of a pass (`o[j]`: word `j` of group `g` in lane `g`; group `g`'s
@@ -4643,8 +4659,8 @@ mod tests {
     /// running sum of the row's texels (each pass continuing the last) added to a dirty working
     /// row (transposed as `modular_row` documents), the new values' low `k` bits packed field by
     /// field with `write_bits`; texels all 255, all 0 and random; the words before and past the
-    /// passes untouched (the streamed words start on 16 bytes, on 32 for one pattern and 16 off
-    /// it for another). Then `untranspose_passes` gives the values in position order.
+    /// passes untouched (the streamed words start on 16 bytes: on 32 for two patterns, 16 off it
+    /// for the third). Then `untranspose_passes` gives the values in position order.
     #[test]
     fn modular_row_equals_the_reference() {
         extern crate std;
