@@ -2208,10 +2208,10 @@ mod modular256 {
     /// `8 r + g`: group `g`'s words `8 r..8 r + 8` for `r < K / 8`, its last 8 words `K - 8..K`
     /// for `r = K / 8` (when 8 does not divide `K`).
     #[derive(Clone, Copy)]
-    struct Source {
-        a: usize,
-        b: usize,
-        idx: [i32; 8],
+    pub(super) struct Source {
+        pub(super) a: usize,
+        pub(super) b: usize,
+        pub(super) idx: [i32; 8],
     }
 
     /// [`Source`] of every output vector `v < K` of a pass (entries past `K` unused). Word `x`
@@ -2223,7 +2223,7 @@ mod modular256 {
     /// and the start of the next (its first block); within a group, words of two adjacent
     /// blocks, or of the last whole block and the last 8. The assertion checks it for each
     /// `K` at compile time.
-    const fn sources<const K: usize>() -> [Source; 32] {
+    pub(super) const fn sources<const K: usize>() -> [Source; 32] {
         let mut out = [Source {
             a: 0,
             b: 0,
@@ -4773,6 +4773,37 @@ mod tests {
             }
         }
         assert_eq!(streamed_runs > 0, Kernel::Avx512Vnni.available());
+    }
+
+    /// The streamed modular row's plan (`modular256::sources`) for every width 11..=32, on any
+    /// CPU: with the transposed rows as `pack256::rows8x8` leaves them (register `8 r + g`, lane
+    /// `l`: group `g`'s word `8 r + l`, or `K - 8 + l` for the last 8 when 8 does not divide
+    /// `K`), lane `l` of output vector `v` is word `8 v + l` of the pass (group `g`'s words at
+    /// `K g`), each from one of the two registers named, which exist.
+    #[test]
+    fn streamed_plan_puts_every_word_in_order() {
+        fn check<const K: usize>() {
+            let plan = modular256::sources::<K>();
+            let rows = K / 8 + usize::from(!K.is_multiple_of(8));
+            for (v, s) in plan.iter().enumerate().take(K) {
+                for (l, &i) in s.idx.iter().enumerate() {
+                    assert!((0..16).contains(&i), "K {K} v {v} lane {l}: index {i}");
+                    let reg = if i < 8 { s.a } else { s.b };
+                    let (r, g, lane) = (reg / 8, reg % 8, i as usize % 8);
+                    assert!(r < rows, "K {K} v {v}: register row {r}");
+                    let word = if r == K / 8 {
+                        K - 8 + lane
+                    } else {
+                        8 * r + lane
+                    };
+                    assert_eq!(K * g + word, 8 * v + l, "K {K}, vector {v}, lane {l}");
+                }
+            }
+        }
+        macro_rules! every {
+            ($($k:literal)*) => {$( check::<$k>(); )*};
+        }
+        every!(11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32);
     }
 
     /// The detected kernel is available, and so is every narrower one.
