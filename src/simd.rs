@@ -1807,8 +1807,9 @@ const MODULAR_AHEAD: usize = 3;
 /// last, when `s` exceeds the tail) goes through a 32-byte buffer, gathered before the passes
 /// and scattered after. [`modular_tail`] gives the tail's positions, [`modular_untranspose`]
 /// puts the row back in position order. (With the working row 16 bytes off 32 a modular build
-/// of 4,096^2 with the streamed stores took 1.22x to 1.40x the flat build's time, against 0.94x
-/// to 1.07x on 32 bytes, in one process on a Zen 4 guest: docs/benchmarks.md, tenth session.)
+/// of 4,096^2 with the streamed stores took 1.22x to 1.40x the flat build's time, against 0.89x
+/// to 1.08x on 32 bytes, in single processes on a Zen 4 guest: docs/benchmarks.md, tenth
+/// session.)
 ///
 /// Per pass (`modular256::row`): the eight groups' texels loaded (one 32-byte load each), their
 /// totals by `vpsadbw` and an exclusive scan across the lanes (plus the running sum) as each

@@ -402,8 +402,8 @@ impl<'a, 's, E: Entry, const C: usize> ModularBuilder<'a, 's, E, C> {
     /// non-temporal stores, each row whose words start on 16 bytes (every row when `words`
     /// does and `w k` is a multiple of 128). Measured against the flat build's time: on a CPU
     /// with AVX2 only 1.06x to 1.23x (earlier sessions); on a Zen 4 guest, 4,096^2 (44 MB at `k`
-    /// = 21), 1.23x to 1.32x with plain stores (ninth session), 0.90x to 1.15x streamed in 9 of
-    /// the tenth session's 11 runs, 1.32x and 1.40x in two (`docs/benchmarks.md`).
+    /// = 21), 1.23x to 1.32x with plain stores (ninth session), 0.90x to 1.15x streamed in 11
+    /// of the tenth session's 14 runs, 1.26x to 1.40x in three (`docs/benchmarks.md`).
     pub fn new(
         width: usize,
         height: usize,
