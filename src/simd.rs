@@ -28,8 +28,10 @@
 //! too), [`band_row`]: the tiled builder's rows inside a tile row (tiles 8 wide, a layout
 //! without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
-//! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]);
-//! [`band_flush`] turns the column sums back into the accumulator. The kernel is the widest
+//! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]; with
+//! AVX-512BW and VBMI as well, `band512::row_packed` packs them in the row step itself, 32
+//! columns at a time, and stores no 16-bit values); [`band_flush`] turns the column sums back
+//! into the accumulator. The kernel is the widest
 //! this CPU runs, detected
 //! once at run time from CPUID and XGETBV (no `std` needed), as OpenCV and the standard
 //! library's `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
@@ -63,9 +65,9 @@
 //!    the x86-64 baseline; the AVX-512 kernel's detection includes AVX2's, so the AVX2 code
 //!    also runs under it: the band rows and the fused modular row, whose streamed form
 //!    `modular256::row_streamed` also enables AVX-512F and VL, which that detection includes
-//!    too); the tiled packing kernel
-//!    (AVX-512BW and VBMI as well) only when
-//!    [`vbmi`] also reports those (CPUID leaf 7, on top of the AVX-512 kernel's detection).
+//!    too); the tiled packing kernels `tiled512::kernel8_packed` and `band512::row_packed`
+//!    (AVX-512BW and VBMI as well) only when [`vbmi`] also reports those (CPUID leaf 7, on top
+//!    of the AVX-512 kernel's detection).
 //!    Under Miri, which cannot execute CPUID, the kernel is the one the build's target
 //!    features enable. The AVX-512 build kernel's 256-bit `vpdpbusd` needs AVX-512 VL, which
 //!    its detection includes (CPUID leaf 7 EBX bit 31). The helpers with target features of
@@ -115,7 +117,14 @@
 //!    tail's, fit the `2 (n - n / 8)` halves of `local`'s words) before its kernel touches
 //!    block `b < n / 16`: texels `t[16 b..][..16]`, column sums `u16` `n + 16 b..` of `acc0`'s
 //!    `2 n` halves, local sums `14 b..14 b + 15`, boundaries `2 b`, `2 b + 1` (for four blocks
-//!    `b..b + 4` at once, `b + 4 <= n / 16`: boundaries `2 b..2 b + 8`, one store). It packs
+//!    `b..b + 4` at once, `b + 4 <= n / 16`: boundaries `2 b..2 b + 8`, one store). With
+//!    `band512::row_packed` it touches pair `p < n / 32` instead (texels `t[32 p..][..32]`,
+//!    column sums `u16` `n + 32 p..` (32), boundaries `4 p..4 p + 4`), after checking that the
+//!    `7 k / 2` bytes per pair from byte `bit / 8` lie inside the target's words, and writes
+//!    them as `tiled512::kernel8_packed` does (a full 64-byte store only when it ends inside
+//!    those bytes, else a masked store of exactly the pair's); the 16-bit values of the tail
+//!    go to `local`'s halves from `28 (n / 32)` on, and [`pack256::even`] packs whole steps of
+//!    them right after the pairs' bytes (which end on a byte: `k` is even). It packs
 //!    from 16 bits into the target's words only after checking that the `2 k` bytes per 16
 //!    fields from byte `bit / 8` lie inside them ([`pack256::even`] writes the last step's
 //!    bytes as two 8-byte pieces ending on its last byte: exactly `2 k steps` bytes); then it
@@ -3211,7 +3220,12 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// boundaries by one vector prefix sum, [`band256::row`]). Then the local sums
 /// packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and
 /// 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16), the rest widened into
-/// `local`. The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form
+/// `local`. With AVX-512BW and VBMI, fields below `2^k` (`exact`) and room for them, the pairs
+/// of blocks go through `band512::row_packed` instead, which packs their local sums in the
+/// same pass (`28 (n / 32)` fields, `7 k / 2` bytes per pair) and stores no 16-bit values;
+/// `pack256::even` then packs whole steps of 16 of the tail's after them. (A tiled build of
+/// 4,096^2 took 1.04x to 1.10x the flat build's time with it, 1.34x to 1.46x with the AVX2
+/// step, in one process on a Zen 4 guest: docs/benchmarks.md, eleventh session.) The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form
 /// and no level below: `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals
 /// fit 16 bits by [`band_applies`]'s conditions (a tile's sum fits); the 16-bit additions wrap
 /// only past them. `None` (nothing
@@ -3246,14 +3260,64 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     let loc = base.cast::<u16>();
     let cs = acc0.as_mut_ptr().cast::<u16>().wrapping_add(n);
     let bp = bnd.as_mut_ptr();
-    // SAFETY: AVX2 is available (Kernel::best is AVX2 or AVX-512 VNNI, whose detection
-    // includes it); the kernel reads t[..16 blocks], reads and writes the column sums
-    // cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage), writes loc[..14 blocks
-    // + 1] (inside local's 2 nl u16, checked above) and bnd[..2 blocks] (<= nb); distinct
-    // slices.
-    let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
+    // The packing target, if the fields start on a byte and have a width the packers take:
+    // its first byte and the bytes available from it. (Exact local sums, below 2^k, need no
+    // mask: one instruction per 16 fields.)
+    let target = pack.and_then(
+        |PackTo {
+             words,
+             bit,
+             k,
+             exact,
+         }| {
+            (matches!(k, 8 | 10 | 12 | 14) && bit % 8 == 0 && bit < 32).then(|| {
+                let skip = bit as usize / 8;
+                let room = (4 * words.len()).saturating_sub(skip);
+                (
+                    words.as_mut_ptr().cast::<u8>().wrapping_add(skip),
+                    room,
+                    k,
+                    exact,
+                )
+            })
+        },
+    );
+    // With AVX-512BW and VBMI, exact fields and a whole number of pairs of blocks: the local
+    // sums packed in the row step (`band512::row_packed`), 7 k / 2 bytes per pair; else the
+    // AVX2 step, which stores them as 16-bit values for `pack256::even` below.
+    let pairs = n / (2 * BLOCK);
+    let fused = target.filter(|&(_, room, k, exact)| {
+        exact
+            && pairs > 0
+            && 7 * k as usize / 2 * pairs <= room
+            && Kernel::best() == Kernel::Avx512Vnni
+            && vbmi()
+    });
+    let (run, from, mut kb, mut kl, packed) = if let Some((out, _, k, _)) = fused {
+        // SAFETY: AVX-512F, BW and VBMI are available (Kernel::best is AVX-512 VNNI, whose
+        // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum
+        // below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (<= n), reads
+        // and writes the column sums cs[..32 pairs] (u16 n..n + 32 pairs <= 2 n of acc0's
+        // storage), writes bnd[..4 pairs] (<= nb) and out[..7 k / 2 pairs] (inside the
+        // target's words, checked above, not local's storage); distinct slices.
+        let run = unsafe { band512::row_packed(t.as_ptr(), cs, bp, pairs, out, k, ahead) };
+        (
+            run,
+            2 * BLOCK * pairs,
+            4 * pairs,
+            PAIR * pairs,
+            PAIR * pairs,
+        )
+    } else {
+        // SAFETY: AVX2 is available (Kernel::best is AVX2 or AVX-512 VNNI, whose detection
+        // includes it); the kernel reads t[..16 blocks], reads and writes the column sums
+        // cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage), writes loc[..14
+        // blocks + 1] (inside local's 2 nl u16, checked above) and bnd[..2 blocks] (<= nb);
+        // distinct slices.
+        let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
+        (run, BLOCK * blocks, 2 * blocks, 14 * blocks, 0)
+    };
     // The tail, column by column (it starts on a tile boundary).
-    let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
     let col = |i: usize| {
         // SAFETY: i < n: column sum n + i < 2 n u16 of acc0.
         unsafe {
@@ -3262,7 +3326,7 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
             u32::from(c)
         }
     };
-    tile_walk(BLOCK * blocks, n, 8, run, col, |_, boundary, v| {
+    tile_walk(from, n, 8, run, col, |_, boundary, v| {
         // SAFETY: kb < nb; kl < nl <= 2 nl u16 of local's storage (one value per column).
         unsafe {
             if boundary {
@@ -3274,43 +3338,32 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
             }
         }
     });
-    // The whole steps of 16 local sums packed from 16 bits, when the row starts on a byte.
-    let mut kp = 0;
-    if let Some(PackTo {
-        words,
-        bit,
-        k,
-        exact,
-    }) = pack
-    {
-        let steps = kl / 16;
+    // The whole steps of 16 local sums after those packed in the row step, packed from 16
+    // bits (loc[packed..kl]), right after them in the target.
+    let mut kp = packed;
+    if let Some((out, room, k, exact)) = target {
+        let steps = (kl - packed) / 16;
         let ku = k as usize;
-        if matches!(k, 8 | 10 | 12 | 14)
-            && bit % 8 == 0
-            && bit < 32
-            && steps > 0
-            && bit as usize / 8 + 2 * ku * steps <= 4 * words.len()
-        {
-            let out = words
-                .as_mut_ptr()
-                .cast::<u8>()
-                .wrapping_add(bit as usize / 8);
-            // SAFETY: AVX2 (above); loc[..16 steps] readable (16 steps <= kl, written above);
-            // out[..2 k steps] inside words (checked above), not local's storage. Exact local
-            // sums (below 2^k) need no mask (one instruction per 16 fields).
+        // The packed fields end on a byte: 7 k / 2 bytes per pair, k even.
+        let at = packed * ku / 8;
+        if steps > 0 && at + 2 * ku * steps <= room {
+            let (f, out) = (loc.wrapping_add(packed).cast::<u8>(), out.wrapping_add(at));
+            // SAFETY: AVX2 (above); loc[packed..packed + 16 steps] readable (<= kl, written
+            // above); out[..2 k steps] inside the target's words (checked above), not local's
+            // storage.
             unsafe {
                 match (k, exact) {
-                    (8, true) => pack256::even::<8, true, false>(loc.cast(), out, steps),
-                    (10, true) => pack256::even::<10, true, false>(loc.cast(), out, steps),
-                    (12, true) => pack256::even::<12, true, false>(loc.cast(), out, steps),
-                    (_, true) => pack256::even::<14, true, false>(loc.cast(), out, steps),
-                    (8, false) => pack256::even::<8, true, true>(loc.cast(), out, steps),
-                    (10, false) => pack256::even::<10, true, true>(loc.cast(), out, steps),
-                    (12, false) => pack256::even::<12, true, true>(loc.cast(), out, steps),
-                    (_, false) => pack256::even::<14, true, true>(loc.cast(), out, steps),
+                    (8, true) => pack256::even::<8, true, false>(f, out, steps),
+                    (10, true) => pack256::even::<10, true, false>(f, out, steps),
+                    (12, true) => pack256::even::<12, true, false>(f, out, steps),
+                    (_, true) => pack256::even::<14, true, false>(f, out, steps),
+                    (8, false) => pack256::even::<8, true, true>(f, out, steps),
+                    (10, false) => pack256::even::<10, true, true>(f, out, steps),
+                    (12, false) => pack256::even::<12, true, true>(f, out, steps),
+                    (_, false) => pack256::even::<14, true, true>(f, out, steps),
                 }
             }
-            kp = 16 * steps;
+            kp += 16 * steps;
         }
     }
     // The rest widened to 32 bits in place, last first: word j holds u16 2 j and 2 j + 1, at
@@ -3649,6 +3702,197 @@ mod band256 {
             }
         });
         _mm256_cvtsi256_si32(carry) as u32
+    }
+}
+
+/// [`band_row`]'s kernel on CPUs with AVX-512BW and VBMI when the local sums are packed as they
+/// are computed (see [`band512::row_packed`]).
+mod band512 {
+    use super::*;
+
+    /// `vpermw` indices: the 28 local sums of a pair of blocks (lanes 0..7 of each tile's 8,
+    /// not its boundary lane 7) in order, then 4 unused (lane 0).
+    static LOCAL_LANES: [u16; 32] = {
+        let mut ix = [0u16; 32];
+        let mut f = 0;
+        while f < PAIR {
+            ix[f] = (8 * (f / 7) + f % 7) as u16;
+            f += 1;
+        }
+        ix
+    };
+
+    /// `vpermw` indices: the 4 tiles' totals (lanes 7, 15, 23 and 31) into the low halves of
+    /// 32-bit lanes 0..4 (16-bit lanes 0, 2, 4 and 6; the others zeroed by the mask `0x55`).
+    static TOTAL_LANES: [u16; 32] = {
+        let mut ix = [0u16; 32];
+        let mut j = 0;
+        while j < 4 {
+            ix[2 * j] = (8 * j + 7) as u16;
+            j += 1;
+        }
+        ix
+    };
+
+    /// The prefix sums of each 128-bit lane's eight 16-bit lanes (one tile of 8 columns):
+    /// three shifts within the lanes and adds, wrapping.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512bw")]
+    fn prefix8(c: __m512i) -> __m512i {
+        let p = _mm512_add_epi16(c, _mm512_bslli_epi128::<2>(c));
+        let p = _mm512_add_epi16(p, _mm512_bslli_epi128::<4>(p));
+        _mm512_add_epi16(p, _mm512_bslli_epi128::<8>(p))
+    }
+
+    /// The constants of [`pack`] for the width `k` (8, 10, 12 or 14).
+    #[derive(Clone, Copy)]
+    struct Packing {
+        local: __m512i,
+        weights: __m512i,
+        shift: __m512i,
+        low2k: __m512i,
+        bytes: __m512i,
+        #[cfg(miri)]
+        k: u32,
+    }
+
+    /// The 28 local sums of a pair of blocks (the tiles' prefix sums `p`, all below `2^k`)
+    /// packed at `k` bits: bytes `0..7 k / 2` of the result (the rest unspecified), as
+    /// [`tiled512::kernel8_packed`] packs them: gathered into 16-bit lanes (`vpermw`), pairs
+    /// joined by `vpmaddwd` with weights `(1, 2^k)`, pairs of pairs by a shift and a bit
+    /// select (`vpsrlvq`, `vpternlogq`: `4 k` bits at the bottom of each 64-bit lane), the 7
+    /// lanes' `k / 2` bytes moved together (`vpermb`, [`PACK8_BYTES`]).
+    #[cfg(not(miri))]
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512bw,avx512vbmi")]
+    fn pack(p: __m512i, c: &Packing) -> __m512i {
+        let f = _mm512_permutexvar_epi16(c.local, p);
+        let d = _mm512_madd_epi16(f, c.weights);
+        let q = _mm512_ternarylogic_epi64::<0xE4>(d, _mm512_srlv_epi64(d, c.shift), c.low2k);
+        _mm512_permutexvar_epi8(c.bytes, q)
+    }
+
+    /// Under Miri, which emulates neither `vpermw` nor `vpermb`: [`pack`]'s bytes computed
+    /// field by field (bytes past `7 k / 2` zero).
+    #[cfg(miri)]
+    #[target_feature(enable = "avx512f")]
+    fn pack(p: __m512i, c: &Packing) -> __m512i {
+        let mut lanes = [0u16; 32];
+        let mut bytes = [0u8; 64];
+        // SAFETY: a 64-byte store into `lanes`, a 64-byte load of `bytes`.
+        unsafe { _mm512_storeu_si512(lanes.as_mut_ptr().cast(), p) };
+        for (i, &ix) in LOCAL_LANES.iter().take(PAIR).enumerate() {
+            let v = u32::from(lanes[usize::from(ix)]) & ((1 << c.k) - 1);
+            for bit in 0..c.k as usize {
+                let at = i * c.k as usize + bit;
+                bytes[at / 8] |= (((v >> bit) & 1) as u8) << (at % 8);
+            }
+        }
+        // SAFETY: as above.
+        unsafe { _mm512_loadu_si512(bytes.as_ptr().cast()) }
+    }
+
+    /// The 4 tiles' totals of the prefix sums `p` (lanes 7, 15, 23, 31) as 32-bit lanes.
+    #[cfg(not(miri))]
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512bw")]
+    fn totals(p: __m512i, ix: __m512i) -> __m128i {
+        _mm512_castsi512_si128(_mm512_maskz_permutexvar_epi16(0x55, ix, p))
+    }
+
+    /// Under Miri (no `vpermw`): [`totals`] lane by lane.
+    #[cfg(miri)]
+    #[target_feature(enable = "avx512f")]
+    fn totals(p: __m512i, _ix: __m512i) -> __m128i {
+        let mut lanes = [0u16; 32];
+        // SAFETY: a 64-byte store into `lanes`.
+        unsafe { _mm512_storeu_si512(lanes.as_mut_ptr().cast(), p) };
+        let t = |j: usize| i32::from(lanes[8 * j + 7]);
+        _mm_setr_epi32(t(0), t(1), t(2), t(3))
+    }
+
+    /// [`band_row`]'s kernel over `pairs` pairs of blocks (32 columns, 4 tiles) with the local
+    /// sums packed as they are computed; returns the running boundary sum after them. Per
+    /// pair: 32 texels widened (`vpmovzxbw`) and added to the column sums `cs`, stored back;
+    /// their prefix within each tile (each 128-bit lane holds one); the 28 local sums packed
+    /// at `k` bits ([`pack`]) and stored at `out + 7 k / 2 pair` (all 64 bytes while they end
+    /// inside the pairs' `7 k / 2 pairs` bytes: the bytes past this pair's are the next
+    /// pairs', rewritten by their stores in order; then a masked store of exactly its bytes);
+    /// the 4 tiles' totals ([`totals`]) prefix-summed onto the running sum and stored as the 4
+    /// boundaries. The 16-bit local sums of [`band256::row`] are neither stored nor read back
+    /// by [`pack256::even`]: per 32 columns about 25 instructions instead of about 55. The
+    /// lines of `ahead` asked for as in [`tiled512::kernel8_packed`].
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F, AVX-512BW and AVX-512 VBMI; `k` is 8, 10, 12 or 14 and every
+    /// local sum below `2^k`; `t` valid for reads of `32 pairs` bytes, `cs` for reads and
+    /// writes of `32 pairs` `u16`, `bnd` for writes of `4 pairs` `u32`, `out` for writes of
+    /// `7 k / 2 pairs` bytes; not overlapping.
+    #[target_feature(enable = "avx512f,avx512bw,avx512vbmi")]
+    pub(super) unsafe fn row_packed(
+        t: *const u8,
+        cs: *mut u16,
+        bnd: *mut u32,
+        pairs: usize,
+        out: *mut u8,
+        k: u32,
+        ahead: Ahead,
+    ) -> u32 {
+        // Prefetching, a group of pairs at a time (the bookkeeping once per group).
+        const GROUP: usize = 4;
+        let mut prefetch = Prefetch::new(ahead, 2 * pairs);
+        // SAFETY: each table is 64 bytes: one unaligned load.
+        let (local, total, bytes) = unsafe {
+            (
+                _mm512_loadu_si512(LOCAL_LANES.as_ptr().cast()),
+                _mm512_loadu_si512(TOTAL_LANES.as_ptr().cast()),
+                _mm512_loadu_si512(PACK8_BYTES[(k as usize - 8) / 2].as_ptr().cast()),
+            )
+        };
+        let c = Packing {
+            local,
+            weights: _mm512_set1_epi32(((1u32 << k) << 16 | 1) as i32),
+            shift: _mm512_set1_epi64(i64::from(32 - 2 * k)),
+            low2k: _mm512_set1_epi64(((1u64 << (2 * k)) - 1) as i64),
+            bytes,
+            #[cfg(miri)]
+            k,
+        };
+        let n = 7 * k as usize / 2;
+        let store = (1u64 << n) - 1;
+        let mut run = _mm_setzero_si128();
+        let mut from = 0;
+        while from < pairs {
+            let end = (from + GROUP).min(pairs);
+            prefetch.ask(2 * end);
+            for pr in from..end {
+                let i = 32 * pr;
+                // SAFETY: pr < pairs: texels and column sums i..i + 32 inside `t` and `cs`,
+                // boundaries 4 pr..4 pr + 4 inside `bnd`; the packed bytes at out[n pr..n pr +
+                // 64] when that ends inside the caller's `n pairs`, else out[n pr..n (pr +
+                // 1)] by the masked store (the caller's contract).
+                unsafe {
+                    let x = _mm512_cvtepu8_epi16(_mm256_loadu_si256(t.add(i).cast()));
+                    let s = _mm512_add_epi16(x, _mm512_loadu_si512(cs.add(i).cast()));
+                    _mm512_storeu_si512(cs.add(i).cast(), s);
+                    let p = prefix8(s);
+                    let o = pack(p, &c);
+                    if n * pr + 64 <= n * pairs {
+                        _mm512_storeu_si512(out.add(n * pr).cast(), o);
+                    } else {
+                        _mm512_mask_storeu_epi8(out.add(n * pr).cast(), store, o);
+                    }
+                    let w = totals(p, total);
+                    let w = _mm_add_epi32(w, _mm_slli_si128::<4>(w));
+                    let w = _mm_add_epi32(w, _mm_slli_si128::<8>(w));
+                    let w = _mm_add_epi32(w, run);
+                    _mm_storeu_si128(bnd.add(4 * pr).cast(), w);
+                    run = _mm_shuffle_epi32::<0xff>(w);
+                }
+            }
+            from = end;
+        }
+        _mm_cvtsi128_si32(run) as u32
     }
 }
 
@@ -4434,14 +4678,28 @@ mod tests {
     /// sums, boundaries at multiples of 8).
     #[test]
     fn band_rows_equal_the_reference() {
+        // Each kernel this CPU runs: with AVX-512BW and VBMI the local sums of whole pairs of
+        // blocks are packed in the row step (band512), with AVX2 alone from 16-bit values.
+        for kernel in [Kernel::Avx512Vnni, Kernel::Avx2, Kernel::Sse2] {
+            if kernel.available() {
+                kernel.cap(band_rows_equal_the_reference_at_best);
+            }
+        }
+    }
+
+    fn band_rows_equal_the_reference_at_best() {
         extern crate std;
         use std::vec::Vec;
         let avx2 = matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni);
+        let vbmi = Kernel::best() == Kernel::Avx512Vnni && vbmi();
         let sizes = band_sizes();
         let mut seed = 0x1234_5678_9abc_def0u64;
         let mut ran = 0;
         for &n in &sizes {
-            for full in [true, false] {
+            // The texels and column sums: all at their largest (255, 6 x 255), random, or
+            // random below the largest texel whose tile's local sums fit k bits (49 m < 2^k):
+            // then every width is exact.
+            for data in 0..3 {
                 let widths = [
                     (0, 0),
                     (14, 0),
@@ -4456,18 +4714,15 @@ mod tests {
                     if cfg!(miri) && matches!(k, 8 | 10 | 12) {
                         continue;
                     }
-                    let t: Vec<u8> = (0..n)
-                        .map(|_| if full { 255 } else { rng(&mut seed) })
-                        .collect();
-                    let cs0: Vec<u16> = (0..n)
-                        .map(|_| {
-                            if full {
-                                6 * 255
-                            } else {
-                                u16::from(rng(&mut seed)) * 6
-                            }
-                        })
-                        .collect();
+                    let small = data == 2 && k > 0;
+                    let top = if small { ((1u32 << k) - 1) / 49 } else { 255 } as u8;
+                    let texel = |seed: &mut u64| match data {
+                        0 => 255,
+                        1 => rng(seed),
+                        _ => (u16::from(rng(seed)) % (u16::from(top) + 1)) as u8,
+                    };
+                    let t: Vec<u8> = (0..n).map(|_| texel(&mut seed)).collect();
+                    let cs0: Vec<u16> = (0..n).map(|_| u16::from(texel(&mut seed)) * 6).collect();
                     // acc0's storage: the column sums in u16 n..2 n, the lower half dirty.
                     let (_, mut acc0) = band_storage(&cs0);
                     // The reference.
@@ -4499,7 +4754,7 @@ mod tests {
                         words: &mut words,
                         bit,
                         k,
-                        exact: k == 14 && bit != 8,
+                        exact: small || (k == 14 && bit != 8),
                     });
                     let got = band_row::<u8, u32, 1>(
                         &t,
@@ -4515,12 +4770,20 @@ mod tests {
                     }
                     ran += 1;
                     let (kb, kl, kp) = got.unwrap_or_else(|| panic!("None: n {n} k {k} bit {bit}"));
-                    let packs = k > 0 && bit % 8 == 0 && nl >= 16;
-                    assert_eq!(
-                        (kb, kl, kp),
-                        (nb, nl, if packs { nl / 16 * 16 } else { 0 }),
-                        "n {n} k {k} bit {bit}"
-                    );
+                    // Packed: the row step's pairs of blocks (28 fields each, exact fields on
+                    // AVX-512 VBMI), then whole steps of 16 of the rest.
+                    let packs = k > 0 && bit % 8 == 0;
+                    let fused = if packs && vbmi && (small || (k == 14 && bit != 8)) {
+                        PAIR * (n / 32)
+                    } else {
+                        0
+                    };
+                    let want_kp = if packs {
+                        fused + (nl - fused) / 16 * 16
+                    } else {
+                        0
+                    };
+                    assert_eq!((kb, kl, kp), (nb, nl, want_kp), "n {n} k {k} bit {bit}");
                     let cs_got: Vec<u16> = acc0
                         .iter()
                         .flat_map(|w| [*w as u16, (w >> 16) as u16])
