@@ -3224,9 +3224,10 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// of blocks go through `band512::row_packed` instead, which packs their local sums in the
 /// same pass (`28 (n / 32)` fields, `7 k / 2` bytes per pair) and stores no 16-bit values;
 /// `pack256::even` then packs whole steps of 16 of the tail's after them. (A tiled build of
-/// 4,096^2 took 1.04x to 1.10x the flat build's time with it, 1.34x to 1.46x with the AVX2
-/// step, in one process on a Zen 4 guest: docs/benchmarks.md, eleventh session.) The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form
-/// and no level below: `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals
+/// 4,096^2 took 1.04x and 1.10x the flat build's time with it, 1.34x and 1.46x with the AVX2
+/// step, in two processes on a Zen 4 guest: docs/benchmarks.md, eleventh session.) The values
+/// are [`tiled_row`]'s with the level-0 accumulator the column sums' form and no level below:
+/// `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals
 /// fit 16 bits by [`band_applies`]'s conditions (a tile's sum fits); the 16-bit additions wrap
 /// only past them. `None` (nothing
 /// written) for other types, without AVX2, or short slices.
