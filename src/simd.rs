@@ -124,7 +124,8 @@
 //!    them as `tiled512::kernel8_packed` does (a full 64-byte store only when it ends inside
 //!    those bytes, else a masked store of exactly the pair's); the 16-bit values of the tail
 //!    go to `local`'s halves from `28 (n / 32)` on, and [`pack256::even`] packs whole steps of
-//!    them right after the pairs' bytes (which end on a byte: `k` is even). It packs
+//!    them right after the pairs' bytes (which end on a byte: `k` is even), from byte
+//!    `bit / 8 + 7 k / 2 (n / 32)`, after the same check for its bytes. It packs
 //!    from 16 bits into the target's words only after checking that the `2 k` bytes per 16
 //!    fields from byte `bit / 8` lie inside them ([`pack256::even`] writes the last step's
 //!    bytes as two 8-byte pieces ending on its last byte: exactly `2 k steps` bytes); then it
@@ -705,7 +706,8 @@ fn detect() -> Kernel {
     }
 }
 
-/// Whether the CPU also has AVX-512BW and AVX-512 VBMI (for `tiled512::kernel8_packed`), on
+/// Whether the CPU also has AVX-512BW and AVX-512 VBMI (for `tiled512::kernel8_packed`,
+/// `band512::row_packed`; `band512::end_row` needs only AVX-512BW), on
 /// top of [`Kernel::Avx512Vnni`]: CPUID leaf 7 EBX bit 30 and ECX bit 1 (the registers' state
 /// as for AVX-512F). Detected once, then cached as [`Kernel::detected`] is (from the CPU's
 /// kernel, not a test thread's capped [`Kernel::best`], so that the cached answer does not
@@ -3217,20 +3219,23 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// added to the column sums (one 16-bit add), their prefix inside each tile (three shifts and
 /// adds within each 128-bit half, which holds one tile), the 14 local sums stored as 16-bit
 /// values, the two tiles' totals added into the running boundary sum (four blocks' 8
-/// boundaries by one vector prefix sum, [`band256::row`]). Then the local sums
-/// packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and
-/// 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16), the rest widened into
-/// `local`. With AVX-512BW and VBMI, fields below `2^k` (`exact`) and room for them, the pairs
-/// of blocks go through `band512::row_packed` instead, which packs their local sums in the
-/// same pass (`28 (n / 32)` fields, `7 k / 2` bytes per pair) and stores no 16-bit values;
-/// `pack256::even` then packs whole steps of 16 of the tail's after them. (A tiled build of
-/// 4,096^2 took 1.04x and 1.10x the flat build's time with it, 1.34x and 1.46x with the AVX2
-/// step, in two processes on a Zen 4 guest: docs/benchmarks.md, eleventh session.) The values
-/// are [`tiled_row`]'s with the level-0 accumulator the column sums' form and no level below:
-/// `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals
-/// fit 16 bits by [`band_applies`]'s conditions (a tile's sum fits); the 16-bit additions wrap
-/// only past them. `None` (nothing
-/// written) for other types, without AVX2, or short slices.
+/// boundaries by one vector prefix sum, [`band256::row`]). Then the local sums packed as
+/// `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and 14 from a
+/// byte-aligned `bit`: `kp` fields, a multiple of 16 on this path), the rest widened into
+/// `local`.
+///
+/// With AVX-512BW and VBMI, fields below `2^k` (`exact`) and room for them, the pairs of blocks
+/// go through `band512::row_packed` instead, which packs their local sums in the same pass
+/// (`28 (n / 32)` fields, `7 k / 2` bytes per pair) and stores no 16-bit values;
+/// `pack256::even` then packs whole steps of 16 of the tail's after them where the target's
+/// words hold them (`kp = 28 (n / 32) + 16 steps`; the rest is the caller's). (A tiled build
+/// of 4,096^2 took 1.04x and 1.10x the flat build's time with it, 1.34x and 1.46x with the
+/// AVX2 step, in two processes on a Zen 4 guest: docs/benchmarks.md, eleventh session.)
+///
+/// The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form and no
+/// level below: `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals fit 16
+/// bits by [`band_applies`]'s conditions (a tile's sum fits); the 16-bit additions wrap only
+/// past them. `None` (nothing written) for other types, without AVX2, or short slices.
 pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     acc0: &mut [E],
@@ -3283,9 +3288,10 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
             })
         },
     );
-    // With AVX-512BW and VBMI, exact fields and a whole number of pairs of blocks: the local
-    // sums packed in the row step (`band512::row_packed`), 7 k / 2 bytes per pair; else the
-    // AVX2 step, which stores them as 16-bit values for `pack256::even` below.
+    // With AVX-512BW and VBMI, exact fields and at least one pair of blocks (32 columns): the
+    // pairs' local sums packed in the row step (`band512::row_packed`), 7 k / 2 bytes per pair,
+    // the rest (fewer than 32 columns) by the tail below; else the AVX2 step, which stores them
+    // as 16-bit values for `pack256::even` below.
     let pairs = n / (2 * BLOCK);
     let fused = target.filter(|&(_, room, k, exact)| {
         exact
@@ -3778,6 +3784,8 @@ mod band512 {
     #[cfg(miri)]
     #[target_feature(enable = "avx512f")]
     fn pack(p: __m512i, c: &Packing) -> __m512i {
+        // (The vector constants are the native path's.)
+        let _ = (c.local, c.weights, c.shift, c.low2k, c.bytes);
         let mut lanes = [0u16; 32];
         let mut bytes = [0u8; 64];
         // SAFETY: a 64-byte store into `lanes`, a 64-byte load of `bytes`.
@@ -4665,18 +4673,21 @@ mod tests {
         assert!(ran >= 1 && Kernel::Sse2.available());
     }
 
-    /// `band_row` and `band_flush` against an independent reference: rows of 0 to 70 texels and
-    /// a few long ones, column sums that start dirty (up to 6 rows of 255, the most a tile row
-    /// of 8 leaves before its last row), texels all 255 and random. The column sums after the
-    /// row (the upper half of `acc0`), the boundaries (the running sum of the tiles' column
-    /// totals), the local sums (the prefix of the column sums inside each tile) and their
-    /// counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10 and 12 bits from
-    /// bits 16, 0 and 8 (packed from 16 bits: `kp` a multiple of 16, the fields as `write_bits`
-    /// writes them, the words past them untouched) and of 14 bits from bit 3 (not
-    /// byte-aligned: nothing packed); exact (`pack256::even` without its mask) for 14 bits
-    /// except from bit 8, masked for the others, whose local sums pass `2^k` (so a missing
-    /// mask fails); then `band_flush` gives the level-0 accumulator of the column sums (local
-    /// sums, boundaries at multiples of 8).
+    /// `band_row` and `band_flush` against an independent reference, under each kernel this
+    /// CPU runs: rows of 0 to 70 texels and a few long ones, column sums that start dirty (up
+    /// to 6 rows of the largest texel, the most a tile row of 8 leaves before its last row),
+    /// texels all 255, random, or random below the largest whose local sums fit `k` bits. The
+    /// column sums after the row (the upper half of `acc0`), the boundaries (the running sum of
+    /// the tiles' column totals), the local sums (the prefix of the column sums inside each
+    /// tile) and their counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10
+    /// and 12 bits from bits 16, 0 and 8 and of 14 bits from bit 3 (not byte-aligned: nothing
+    /// packed). Packed: with AVX-512 VBMI and exact fields, the pairs of blocks' in the row
+    /// step (`band512::row_packed`), then whole steps of 16 of the rest from 16 bits
+    /// (`pack256::even`); `kp` exactly that, the fields as `write_bits` writes them, the words
+    /// past them untouched. Exact (no mask) for the small texels and for 14 bits except from
+    /// bit 8; masked for the others, whose local sums pass `2^k` (so a missing mask fails).
+    /// Then `band_flush` gives the level-0 accumulator of the column sums (local sums,
+    /// boundaries at multiples of 8).
     #[test]
     fn band_rows_equal_the_reference() {
         // Each kernel this CPU runs: with AVX-512BW and VBMI the local sums of whole pairs of
@@ -4716,7 +4727,11 @@ mod tests {
                         continue;
                     }
                     let small = data == 2 && k > 0;
-                    let top = if small { ((1u32 << k) - 1) / 49 } else { 255 } as u8;
+                    let top = if small {
+                        (((1u32 << k) - 1) / 49).min(255) as u8
+                    } else {
+                        255
+                    };
                     let texel = |seed: &mut u64| match data {
                         0 => 255,
                         1 => rng(seed),
@@ -4818,10 +4833,91 @@ mod tests {
         assert_eq!(ran > 0, avx2);
     }
 
+    /// `band_row` with packing targets around the sizes each part needs, 92 columns (2 pairs of
+    /// blocks and 28 columns: 81 local sums), 14-bit exact fields from bit 0. With AVX-512
+    /// VBMI the pairs' 56 fields (98 bytes) are packed in the row step when they fit, then one
+    /// step of 16 (28 bytes more) when it fits too; without, or when the pairs' bytes do not
+    /// fit, the AVX2 step's 5 steps of 16 (140 bytes) or nothing. `kp` is exactly what fits,
+    /// the packed fields are the reference's, and no byte past them changes.
+    #[test]
+    fn band_row_packs_only_what_fits() {
+        extern crate std;
+        use std::vec::Vec;
+        for kernel in [Kernel::Avx512Vnni, Kernel::Avx2] {
+            if !kernel.available() {
+                continue;
+            }
+            kernel.cap(|| {
+                let fused = Kernel::best() == Kernel::Avx512Vnni && vbmi();
+                let (n, k) = (92usize, 14u32);
+                let (nb, nl) = (n / 8, n - n / 8);
+                let mut seed = 0x5eed_0f0f_1234_abcdu64;
+                let t: Vec<u8> = (0..n).map(|_| rng(&mut seed)).collect();
+                let cs0: Vec<u16> = (0..n).map(|_| u16::from(rng(&mut seed)) * 6).collect();
+                let (mut want_l, mut inner) = (Vec::new(), 0u32);
+                for (i, (&c, &x)) in cs0.iter().zip(&t).enumerate() {
+                    inner += u32::from(c) + u32::from(x);
+                    if (i + 1) % 8 == 0 {
+                        inner = 0;
+                    } else {
+                        want_l.push(inner);
+                    }
+                }
+                // Words 24 to 36: 96 to 144 bytes.
+                for len in [24usize, 25, 31, 32, 34, 35, 36] {
+                    let room = 4 * len;
+                    let want_kp = match (fused && room >= 98, fused) {
+                        (true, _) if room >= 98 + 28 => 72,
+                        (true, _) => 56,
+                        _ if room >= 140 => 80,
+                        _ => 0,
+                    };
+                    let (_, mut acc0) = band_storage(&cs0);
+                    let mut bnd = std::vec![0u32; nb];
+                    let mut local = std::vec![0u32; nl];
+                    let noise: Vec<u32> = (0..len as u32)
+                        .map(|i| 0x9e37_79b9u32.rotate_left(i))
+                        .collect();
+                    let mut words = noise.clone();
+                    let got = band_row::<u8, u32, 1>(
+                        &t,
+                        &mut acc0,
+                        &mut bnd,
+                        &mut local,
+                        [(core::ptr::null(), 0); 2],
+                        Some(PackTo {
+                            words: &mut words,
+                            bit: 0,
+                            k,
+                            exact: true,
+                        }),
+                    );
+                    assert_eq!(got, Some((nb, nl, want_kp)), "{len} words, {kernel:?}");
+                    let mut want_w = noise.clone();
+                    for (i, &f) in want_l.iter().take(want_kp).enumerate() {
+                        let at = i as u64 * u64::from(k);
+                        assert!(crate::layouts::packed::write_bits(
+                            &mut want_w,
+                            at,
+                            k,
+                            u64::from(f)
+                        ));
+                    }
+                    assert_eq!(words, want_w, "{len} words, {kernel:?}");
+                    assert_eq!(
+                        &local[want_kp..],
+                        &want_l[want_kp..],
+                        "{len} words, {kernel:?}"
+                    );
+                }
+            });
+        }
+    }
+
     /// The row lengths of the band tests: 0 to 70 and 255, 256 and 1,000 (a few under Miri).
     fn band_sizes() -> std::vec::Vec<usize> {
         if cfg!(miri) {
-            std::vec![0, 7, 16, 17, 40, 112]
+            std::vec![0, 7, 16, 17, 40, 60, 112]
         } else {
             (0..=70).chain([255, 256, 1000]).collect()
         }
