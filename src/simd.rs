@@ -5,7 +5,8 @@
 //! dependent additions that no compiler vectorizes: about one entry per cycle. Here a row is cut
 //! into blocks of 16 texels; each block's inclusive prefix sums are computed in registers,
 //! independently of the other blocks, and only the block's totals join the running sum (one or
-//! two vector additions per 16 entries on the dependency chain). Each entry is then `prefix + running sum +
+//! two vector additions per 16 entries on the dependency chain). Each entry is then `prefix +
+//! running sum +
 //! entry above`: the same value as the portable build's `r(i, j) + entry(i, j - 1)` (integer
 //! addition is associative and, under the width proof, nothing wraps), so tables are identical
 //! bit for bit (tests below compare them exhaustively on small sizes; host-tests by proptest).
@@ -3077,7 +3078,8 @@ mod tiled256 {
 
     /// [`tiled_row`]'s kernel for AVX2 and tiles of 8 texels, over `blocks` blocks of 16;
     /// returns the running sum after them. Per block: each tile's sums since its start by
-    /// `avx2::chunk` (lanes 0..8 `lo`, 8..16 `hi`; dot products, no shuffle); the boundary lanes (7 of each)
+    /// `avx2::chunk` (lanes 0..8 `lo`, 8..16 `hi`; dot products, no shuffle); the boundary lanes
+    /// (7 of each)
     /// get the running sum, and `hi`'s also the first tile's total; the rows added and stored;
     /// the local sums stored as two 8-lane stores 7 apart (each one's lane 7, a boundary, is
     /// overwritten by the next store: through a copy for the last block's `hi`), the two
@@ -3176,7 +3178,8 @@ mod tiled256 {
 /// AVX-512 row kernel; the boundaries go to the widest packer; on a Zen 4 guest the tiled
 /// build of 1,024^2 took 0.80x the time with the band rows, 4,096^2 about the same:
 /// docs/benchmarks.md, seventh session); tiles 8 texels wide (`tile_w`); a row of at least
-/// one block of 16 texels; and the sum of a whole tile, `tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1`. The band rows keep the column
+/// one block of 16 texels; and the sum of a whole tile, `tile_w tile_h (2^texel_bits - 1)`, at
+/// most `2^16 - 1`. The band rows keep the column
 /// sums and their prefix inside a tile, up to the tile's total (lane 7 of each half, the
 /// boundary's increment), as 16-bit values: a tile row's rows before its last are fewer than
 /// `tile_h`, so every such value is at most that bound. The local sums' field width is not
@@ -4042,7 +4045,8 @@ mod tests {
     /// `k` stored); counts below, at and past whole runs and groups, and past whole passes of
     /// 8 groups of the AVX2 kernel (a last pass of 4 to 7 groups, or 1 to 8 runs, with and
     /// without an odd run after them; under Miri the first count, one group and an odd run,
-    /// for every width). Then a slice of `k` words, which holds 2 of 3 runs: no more packed. Every packing kernel the CPU runs, explicitly (AVX2 on
+    /// for every width). Then a slice of `k` words, which holds 2 of 3 runs: no more packed. Every
+    /// packing kernel the CPU runs, explicitly (AVX2 on
     /// an AVX-512 CPU too), then `pack_u32` itself: all the whole groups packed with AVX2 or
     /// AVX-512 (Miri: the kernel the target features enable), 0 without, for another type, or
     /// a width outside 11..=32.

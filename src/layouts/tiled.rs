@@ -1920,7 +1920,8 @@ pub(crate) type Ahead = [(*const u32, usize); 2];
 /// is too short (never, for the builder's rows). With `simd`, one vectorized pass where it
 /// applies ([`crate::simd::tiled_row`], the same values), which may pack the first `kp` local
 /// sums straight into `pack` (`(words, bit, k, exact)`: `k`-bit fields from bit `bit < 32` of
-/// `words`, the component row of the local sums; `exact` if every local sum is below `2^k`) and not write `local[..kp]`; returns `(kb,
+/// `words`, the component row of the local sums; `exact` if every local sum is below `2^k`) and
+/// not write `local[..kp]`; returns `(kb,
 /// kl, kp)` (`kp = 0` on the portable path). `ahead` (the first word and the word count of the
 /// rows the fields go to) is a prefetch hint for the kernel, never dereferenced.
 #[allow(
@@ -2106,7 +2107,8 @@ mod row_step_tests {
     use std::vec::Vec;
 
     /// `row_fields` (with `simd`, the kernel where it applies, else the portable loops: `u8`
-    /// into `u32` and `u64`, one and two channels) equals a value-by-value reference for tile widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
+    /// into `u32` and `u64`, one and two channels) equals a value-by-value reference for tile
+    /// widths 0 (no level), 2, 3, 4, 5, 8 and 16, rows of 0 to 70
     /// positions, with and without the level below: accumulators, the cleared level below,
     /// boundaries, local sums and their counts.
     #[test]
@@ -2281,7 +2283,8 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// component (two for one level of tiles) plus one row of fields.
 ///
 /// Per row `y`, ending a block of y level `q` (`q = 0` for 7 rows in 8 with 8 x 8 tiles): one
-/// pass over the row (`row_fields`; with `simd`, one AVX-512 or AVX2 kernel) adds the row's sums and the
+/// pass over the row (`row_fields`; with `simd`, one AVX-512 or AVX2 kernel) adds the row's sums
+/// and the
 /// level below (`q >= 1`) into the accumulator of level `q`, which holds the sums in the form
 /// the fields are read in (inside a tile the local sum, at a tile boundary the total), and
 /// splits it into the row's local sums `C_0q(X, y)` and tile boundaries; the local sums are
@@ -2296,7 +2299,7 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// local sum at `X` is the prefix of the column sums inside the tile, and a boundary the
 /// prefix of the tiles' column totals, so one 16-bit addition per texel and a prefix within
 /// each tile give the row's fields, and the local sums are packed from 16 bits (with
-/// AVX-512BW and VBMI, in the same pass, 32 columns at a time: tiled over flat 1.05x to 1.24x
+/// AVX-512BW and VBMI, in the same pass, 32 columns at a time: tiled over flat 0.82x to 1.24x
 /// at 1,024^2 and 1.06x to 1.23x at 4,096^2 in 15 of 18 runs on a Zen 4 guest, against 1.22x to
 /// 1.65x at 4,096^2 before; docs/benchmarks.md, eleventh session). A row that ends a tile row
 /// (or a row of other texels) first turns the column sums back into acc_0.
