@@ -2299,8 +2299,8 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// local sum at `X` is the prefix of the column sums inside the tile, and a boundary the
 /// prefix of the tiles' column totals, so one 16-bit addition per texel and a prefix within
 /// each tile give the row's fields, and the local sums are packed from 16 bits (with
-/// AVX-512BW and VBMI, in the same pass, 32 columns at a time: tiled over flat 0.82x to 1.24x
-/// at 1,024^2 and 1.06x to 1.23x at 4,096^2 in 15 of 18 runs on a Zen 4 guest, against 1.22x to
+/// AVX-512BW and VBMI, in the same pass, 32 columns at a time: tiled over flat 0.82x to 1.25x
+/// at 1,024^2 and 1.06x to 1.23x at 4,096^2 in 20 of 25 runs on a Zen 4 guest, against 1.22x to
 /// 1.65x at 4,096^2 before; docs/benchmarks.md, eleventh session). A row that ends a tile row
 /// (or a row of other texels) first turns the column sums back into acc_0.
 #[derive(Debug)]
