@@ -707,12 +707,12 @@ fn detect() -> Kernel {
     }
 }
 
-/// Whether the CPU also has AVX-512BW and AVX-512 VBMI (for `tiled512::kernel8_packed`,
-/// `band512::row_packed`; `band512::end_row` needs only AVX-512BW), on
-/// top of [`Kernel::Avx512Vnni`]: CPUID leaf 7 EBX bit 30 and ECX bit 1 (the registers' state
-/// as for AVX-512F). Detected once, then cached as [`Kernel::detected`] is (from the CPU's
-/// kernel, not a test thread's capped [`Kernel::best`], so that the cached answer does not
-/// depend on which test asked first; the packing kernel runs only with the AVX-512 kernel).
+/// Whether the CPU also has AVX-512BW and AVX-512 VBMI (for `tiled512::kernel8_packed` and
+/// `band512::row_packed`), on top of [`Kernel::Avx512Vnni`]: CPUID leaf 7 EBX bit 30 and ECX
+/// bit 1 (the registers' state as for AVX-512F). Detected once, then cached as
+/// [`Kernel::detected`] is (from the CPU's kernel, not a test thread's capped
+/// [`Kernel::best`], so that the cached answer does not depend on which test asked first; the
+/// packing kernels run only with the AVX-512 kernel).
 pub(crate) fn vbmi() -> bool {
     match VBMI.load(Ordering::Relaxed) {
         1 => false,
