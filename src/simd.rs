@@ -2867,21 +2867,16 @@ mod tiled512 {
     #[target_feature(enable = "avx512f")]
     fn miri_pack(va: __m512i, vb: __m512i, k: u32) -> __m512i {
         let mut lanes = [0u32; 32];
-        let mut bytes = [0u8; 64];
-        // SAFETY: 64-byte stores into 128 bytes of `lanes`, a 64-byte load of `bytes`.
+        // SAFETY: 64-byte stores into 128 bytes of `lanes`.
         unsafe {
             _mm512_storeu_si512(lanes.as_mut_ptr().cast(), va);
             _mm512_storeu_si512(lanes.as_mut_ptr().add(16).cast(), vb);
         }
-        for (i, &ix) in PACK8_WORDS.iter().take(PAIR).enumerate() {
-            let v = lanes[usize::from(ix) / 2] & ((1 << k) - 1);
-            for bit in 0..k as usize {
-                let at = i * k as usize + bit;
-                bytes[at / 8] |= (((v >> bit) & 1) as u8) << (at % 8);
-            }
-        }
-        // SAFETY: as above.
-        unsafe { _mm512_loadu_si512(bytes.as_ptr().cast()) }
+        let fields = PACK8_WORDS
+            .iter()
+            .take(PAIR)
+            .map(|&ix| lanes[usize::from(ix) / 2]);
+        super::miri_pack_bits(fields, k)
     }
 
     /// [`kernel`] for tiles of 8 with the local sums packed: per pair of blocks, the 28 local
@@ -3038,6 +3033,24 @@ mod tiled512 {
         // Lane 15, a boundary, holds the running sum.
         _mm_extract_epi32::<3>(_mm512_extracti32x4_epi32::<3>(carry)) as u32
     }
+}
+
+/// Under Miri: `fields` (at most 28 of at most 14 bits' width `k`) packed field by field, the
+/// low `k` bits of field `i` at bits `i k` of the 64 bytes returned (the rest zero): what the
+/// packing kernels' byte permutes produce, for the permutes Miri does not emulate.
+#[cfg(miri)]
+#[target_feature(enable = "avx512f")]
+fn miri_pack_bits(fields: impl Iterator<Item = u32>, k: u32) -> __m512i {
+    let mut bytes = [0u8; 64];
+    for (i, f) in fields.enumerate() {
+        let v = f & ((1 << k) - 1);
+        for bit in 0..k as usize {
+            let at = i * k as usize + bit;
+            bytes[at / 8] |= (((v >> bit) & 1) as u8) << (at % 8);
+        }
+    }
+    // SAFETY: a 64-byte load of `bytes`.
+    unsafe { _mm512_loadu_si512(bytes.as_ptr().cast()) }
 }
 
 /// [`tiled512::kernel8_packed`]'s `vpermt2w` indices: the 16-bit lanes (the low halves of the
@@ -3790,18 +3803,13 @@ mod band512 {
         // (The vector constants are the native path's.)
         let _ = (c.local, c.weights, c.shift, c.low2k, c.bytes);
         let mut lanes = [0u16; 32];
-        let mut bytes = [0u8; 64];
-        // SAFETY: a 64-byte store into `lanes`, a 64-byte load of `bytes`.
+        // SAFETY: a 64-byte store into `lanes`.
         unsafe { _mm512_storeu_si512(lanes.as_mut_ptr().cast(), p) };
-        for (i, &ix) in LOCAL_LANES.iter().take(PAIR).enumerate() {
-            let v = u32::from(lanes[usize::from(ix)]) & ((1 << c.k) - 1);
-            for bit in 0..c.k as usize {
-                let at = i * c.k as usize + bit;
-                bytes[at / 8] |= (((v >> bit) & 1) as u8) << (at % 8);
-            }
-        }
-        // SAFETY: as above.
-        unsafe { _mm512_loadu_si512(bytes.as_ptr().cast()) }
+        let fields = LOCAL_LANES
+            .iter()
+            .take(PAIR)
+            .map(|&ix| u32::from(lanes[usize::from(ix)]));
+        super::miri_pack_bits(fields, c.k)
     }
 
     /// The 4 tiles' totals of the prefix sums `p` (lanes 7, 15, 23, 31) as 32-bit lanes.
