@@ -1183,3 +1183,78 @@ fn modular_rows_under_every_kernel() {
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
     cases();
 }
+
+/// The tiled builder's rows that end a tile row in the band form (8 x 8 tiles, `u8` texels,
+/// `u32` entries), under every build kernel this CPU runs: every corner of noise and saturated
+/// textures equals the summed-area table. Widths of whole chunks of 256 columns, whose
+/// component rows all start on a word (256, 512, 1,024: packed in the pass with AVX-512BW,
+/// `simd::band512::end_row_packed`, its chunks counted), and others whose rows do not (808 x
+/// 27 and 520 x 24: 707 and 455 fields of 16 bits per row of `(0, 1)`; the tails after whole
+/// chunks are `simd::tests::band_end_row_equals_the_reference`'s) or have no whole chunk
+/// (136); heights with a partial tile row last (17, 27).
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+#[test]
+fn tiled_end_rows_under_every_kernel() {
+    fn check(w: usize, h: usize, full: bool) -> usize {
+        let texels = if full {
+            std::vec![255u8; w * h]
+        } else {
+            noise_bytes(w * h, w as u64 * 131 + h as u64)
+        };
+        let tex = Texture::<u8>::new(&texels, w, h).unwrap();
+        let spec = TiledSpec::tiles(8, 8).unwrap();
+        let mut words = std::vec![0u32; Tiled::<u32>::words_needed(spec, w, h, 8).unwrap()];
+        let mut scratch = std::vec![0u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
+        let before = crate::simd::END_CHUNKS.with(|c| c.get());
+        let t = Tiled::<u32>::build(&tex, spec, &mut words, &mut scratch).unwrap();
+        let chunks = crate::simd::END_CHUNKS.with(|c| c.get()) - before;
+        let mut above = std::vec![0u32; w + 1];
+        for y in 1..=h {
+            let mut run = 0u32;
+            for x in 1..=w {
+                run += u32::from(texels[(y - 1) * w + x - 1]);
+                above[x] += run;
+                let got = t.corner(x, y, &mut NoCount)[0];
+                assert_eq!(got, above[x], "{w}x{h}, full {full}: ({x}, {y})");
+            }
+        }
+        chunks
+    }
+    let sizes: &[(usize, usize)] = if cfg!(miri) {
+        &[(256, 9)]
+    } else {
+        &[
+            (512, 24),
+            (256, 16),
+            (1024, 17),
+            (808, 27),
+            (520, 24),
+            (136, 16),
+        ]
+    };
+    let fused =
+        crate::simd::Kernel::best() == crate::simd::Kernel::Avx512Vnni && crate::simd::vbmi();
+    for kernel in crate::simd::Kernel::ALL
+        .into_iter()
+        .filter(|k| k.available())
+    {
+        kernel.cap(|| {
+            for &(w, h) in sizes {
+                for full in [false, true] {
+                    let chunks = check(w, h, full);
+                    // The widths of whole chunks: every row of both components starts on a
+                    // word (7/8 of 256 columns are 224 k bits, their boundaries 32 k), so every
+                    // row that ends a tile row packs all its chunks in the pass; the others
+                    // (their rows off a word, or no whole chunk) none.
+                    let packs = fused && kernel == crate::simd::Kernel::Avx512Vnni;
+                    let want = if packs && w % 256 == 0 {
+                        h / 8 * (w / 256)
+                    } else {
+                        0
+                    };
+                    assert_eq!(chunks, want, "{w}x{h}, full {full}, under {kernel:?}");
+                }
+            }
+        });
+    }
+}

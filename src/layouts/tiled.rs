@@ -53,6 +53,8 @@
 )]
 
 use core::num::NonZeroU32;
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+use core::ops::Range;
 
 use super::packed::{
     bits_of_mul, check_dimensions, mask, pack_fields, read2_32, read_masked, read_masked32,
@@ -2302,7 +2304,10 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// AVX-512BW and VBMI, in the same pass, 32 columns at a time: tiled over flat 0.82x to 1.25x
 /// at 1,024^2 and 1.06x to 1.23x at 4,096^2 in 20 of 25 runs on a Zen 4 guest, against 1.22x to
 /// 1.65x at 4,096^2 before; docs/benchmarks.md, eleventh session). A row that ends a tile row
-/// (or a row of other texels) first turns the column sums back into acc_0.
+/// adds the column sums' form into acc_1 in one pass (`simd::band_end_row`; with AVX-512BW
+/// and one level of tiles on x it packs components `(0, 1)` and `(1, 1)` in the same pass,
+/// `band_end_step`); a row that ends a higher level, or a row of other
+/// texels, first turns the column sums back into acc_0.
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
@@ -2325,6 +2330,10 @@ pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     /// constants, looked up and checked once here instead of per row.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     band_one: Option<BandPlan>,
+    /// As `band_one`, for the rows that end a tile row in the band form (`q = 1`:
+    /// components `(0, 1)` and `(1, 1)`, [`TiledBuilder::band_end_step`]).
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    end_one: Option<BandPlan>,
 }
 
 /// [`TiledBuilder::band_step`]'s constants, from the geometry (`TiledBuilder::new`): the two
@@ -2353,13 +2362,48 @@ struct BandPlan {
 
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 impl BandPlan {
-    /// The plan for `g` when a band row writes components `(0, 0)` and `(1, 0)` only (one
-    /// level of tiles on x); `None` if any check fails (the general step then runs).
-    fn new<const C: usize>(g: &Geometry) -> Option<BandPlan> {
+    /// Row `iy` of both components in `words` (`len` of them): each one's first bit and the
+    /// words it spans, `None` past the end.
+    fn rows(&self, len: usize, iy: u32) -> Option<[(u64, Range<usize>); 2]> {
+        let span = |c: &Component| {
+            let at = c.offset(0, iy);
+            let from = usize::try_from(at / 32).ok()?;
+            let to = usize::try_from(at.saturating_add(c.row_bits).div_ceil(32)).ok()?;
+            (from <= to && to <= len).then_some((at, from..to))
+        };
+        Some([span(&self.local)?, span(&self.bnd)?])
+    }
+
+    /// The lines to ask for while the row is computed (both components' rows, as the general
+    /// step asks), when the layout is large enough.
+    fn ahead(&self, words: &[u32], rows: &[(u64, Range<usize>); 2]) -> Ahead {
+        let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
+        if self.prefetch {
+            for (a, (_, r)) in ahead.iter_mut().zip(rows) {
+                if let Some(w) = words.get(r.clone()) {
+                    *a = (w.as_ptr(), w.len());
+                }
+            }
+        }
+        ahead
+    }
+
+    /// The refusal of storage shorter than the layout (`got` words).
+    fn too_small(&self, got: usize) -> Error {
+        Error::StorageTooSmall {
+            needed: self.words,
+            got,
+        }
+    }
+
+    /// The plan for `g` when a band row (`q = 0`) or a row that ends a tile row (`q = 1`)
+    /// writes components `(0, q)` and `(1, q)` only (one level of tiles on x); `None` if any
+    /// check fails (the general step then runs).
+    fn new<const C: usize>(g: &Geometry, q: usize) -> Option<BandPlan> {
         if g.ax.levels != 1 {
             return None;
         }
-        let (local, bnd) = (*g.component(0, 0)?, *g.component(1, 0)?);
+        let (local, bnd) = (*g.component(0, q)?, *g.component(1, q)?);
         #[allow(
             clippy::as_conversions,
             reason = "u32 -> usize is lossless (MAX_DIMENSION)"
@@ -2383,6 +2427,53 @@ impl BandPlan {
             exact: g.spec.modulus.is_none(),
             words: g.words,
         })
+    }
+}
+
+/// Packs `fields[done..]` (`bits` each) into `words` from bit `at + done bits`: the fields of
+/// a component's row left after a kernel packed its first `done`. `short` for `done` past
+/// the fields, `too_small` for words too short.
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+fn pack_rest<E: Entry>(
+    words: &mut [u32],
+    at: u64,
+    fields: &[E],
+    (done, bits): (usize, u32),
+    short: Error,
+    too_small: Error,
+) -> Result<(), Error> {
+    let rest = fields.get(done..).ok_or(short)?;
+    if rest.is_empty() {
+        return Ok(());
+    }
+    let from = u64::try_from(done)
+        .ok()
+        .and_then(|d| d.checked_mul(u64::from(bits)))
+        .and_then(|b| b.checked_add(at))
+        .ok_or(short)?;
+    if pack_fields(words, from, rest, bits) {
+        Ok(())
+    } else {
+        Err(too_small)
+    }
+}
+
+/// The words of two disjoint ranges of `words`, mutably (`None` if they overlap or pass its
+/// end).
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+fn two_rows(
+    words: &mut [u32],
+    a: Range<usize>,
+    b: Range<usize>,
+) -> Option<(&mut [u32], &mut [u32])> {
+    if a.end <= b.start {
+        let (lo, hi) = words.split_at_mut_checked(b.start)?;
+        Some((lo.get_mut(a)?, hi.get_mut(..b.end.checked_sub(b.start)?)?))
+    } else if b.end <= a.start {
+        let (lo, hi) = words.split_at_mut_checked(a.start)?;
+        Some((hi.get_mut(..a.end.checked_sub(a.start)?)?, lo.get_mut(b)?))
+    } else {
+        None
     }
 }
 
@@ -2436,7 +2527,13 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             band_fits,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             band_one: if band_fits {
-                BandPlan::new::<C>(&geo)
+                BandPlan::new::<C>(&geo, 0)
+            } else {
+                None
+            },
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            end_one: if band_fits {
+                BandPlan::new::<C>(&geo, 1)
             } else {
                 None
             },
@@ -2458,6 +2555,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             band_fits,
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             band_one,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            end_one,
         } = self;
         let row_len = *row_len;
         if *rows_done >= g.height {
@@ -2530,6 +2629,26 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         if let (true, Some(plan)) = (band_row, band_one) {
             let acc = accs.get_mut(C..row_len).ok_or(short)?;
             Self::band_step(words, plan, texels, buf, acc, iy, short)?;
+            #[allow(
+                clippy::arithmetic_side_effects,
+                reason = "rows_done < h (checked above)"
+            )]
+            {
+                *rows_done += 1;
+            }
+            return Ok(());
+        }
+        // A row that ends a tile row in the band form, one level of tiles: the short step.
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        if let (true, Some(plan)) = (band_end, end_one) {
+            // acc_0 (its first n positions: the band form) and acc_1.
+            let (acc0, acc1) = accs.split_at_mut_checked(row_len).ok_or(short)?;
+            let acc0 = acc0
+                .get_mut(C..)
+                .and_then(|a| a.get_mut(..n))
+                .ok_or(short)?;
+            let acc = acc1.get_mut(C..row_len).ok_or(short)?;
+            Self::band_end_step(words, plan, texels, buf, acc0, acc, iy, short)?;
             #[allow(
                 clippy::arithmetic_side_effects,
                 reason = "rows_done < h (checked above)"
@@ -2649,7 +2768,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         } else if band_end {
             // q = 1: `lower` is acc_0's storage (n positions from its first), in the band form.
             let acc0 = lower.and_then(|l| l.get_mut(..n)).ok_or(short)?;
-            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead)
+            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, None)
+                .map(|(kb, kl, _, _)| (kb, kl, 0))
         } else {
             row_fields::<T, E, C>(texels, lower, acc, t, bnd_out, local, ahead, pack)
         };
@@ -2749,28 +2869,12 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let (bnd, local) = buf.split_at_mut_checked(plan.split).ok_or(short)?;
         let bnd_out = bnd.get_mut(C..).ok_or(short)?;
         // Each component's row: its first bit and the words it spans.
-        let (at0, at1) = (plan.local.offset(0, iy), plan.bnd.offset(0, iy));
-        let span = |at: u64, c: &Component| {
-            let from = usize::try_from(at / 32).ok()?;
-            let to = usize::try_from(at.saturating_add(c.row_bits).div_ceil(32)).ok()?;
-            (from <= to && to <= words.len()).then_some((from, to))
-        };
-        let too_small = Error::StorageTooSmall {
-            needed: plan.words,
-            got: words.len(),
-        };
-        let ((from0, to0), (from1, to1)) = span(at0, &plan.local)
-            .zip(span(at1, &plan.bnd))
-            .ok_or(too_small)?;
-        // The lines to ask for, as the general step: both components' rows.
-        let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
-        if plan.prefetch {
-            if let (Some(w0), Some(w1)) = (words.get(from0..to0), words.get(from1..to1)) {
-                ahead = [(w0.as_ptr(), w0.len()), (w1.as_ptr(), w1.len())];
-            }
-        }
+        let too_small = plan.too_small(words.len());
+        let rows = plan.rows(words.len(), iy).ok_or(too_small)?;
+        let ahead = plan.ahead(words, &rows);
+        let [(at0, ref row0), (at1, ref row1)] = rows;
         let pack = crate::simd::PackTo {
-            words: words.get_mut(from0..to0).ok_or(too_small)?,
+            words: words.get_mut(row0.clone()).ok_or(too_small)?,
             bit: at0 % 32,
             k: plan.local.bits,
             exact: plan.exact,
@@ -2785,19 +2889,16 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         }
         // The local sums left after the kernel's packing, then the boundaries: from a word
         // boundary straight to the packer (the rest, if any, field by field).
-        let rest = local.get(kp..kl).ok_or(short)?;
-        if !rest.is_empty() {
-            let from = u64::try_from(kp)
-                .ok()
-                .and_then(|d| d.checked_mul(u64::from(plan.local.bits)))
-                .and_then(|b| b.checked_add(at0))
-                .ok_or(short)?;
-            if !pack_fields(words, from, rest, plan.local.bits) {
-                return Err(too_small);
-            }
-        }
+        pack_rest(
+            words,
+            at0,
+            local.get(..kl).ok_or(short)?,
+            (kp, plan.local.bits),
+            short,
+            too_small,
+        )?;
         let bnds = bnd_out.get(..kb).ok_or(short)?;
-        let row = words.get_mut(from1..to1).ok_or(too_small)?;
+        let row = words.get_mut(row1.clone()).ok_or(too_small)?;
         let done = if at1 % 32 == 0 {
             crate::simd::pack_u32(row, bnds, plan.bnd.bits)
         } else {
@@ -2815,6 +2916,78 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             }
         }
         Ok(())
+    }
+
+    /// [`TiledBuilder::push_row`]'s step for a row that ends a tile row in the band form (`q
+    /// = 1`, `simd::band_end_row`) when the x axis has one level of tiles: it writes
+    /// components `(0, 1)` (the local sums) and `(1, 1)` (the boundaries) only, the same
+    /// values, fields and refusals as the general step, with the plan's constants
+    /// ([`BandPlan`]). When both rows start on a word, the kernel packs them as it computes
+    /// them (with AVX-512BW: `simd::band512::end_row_packed`); the fields it leaves go to the
+    /// packer. `acc0` is acc_0's row (its column sums, `n` positions), `acc` acc_1's, `buf`
+    /// the row of fields.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "push_row's parts, split for the borrows; one call site"
+    )]
+    fn band_end_step<T: Texel>(
+        words: &mut [u32],
+        plan: &BandPlan,
+        texels: &[T],
+        buf: &mut [E],
+        acc0: &mut [E],
+        acc: &mut [E],
+        iy: u32,
+        short: Error,
+    ) -> Result<(), Error> {
+        let (bnd, local) = buf.split_at_mut_checked(plan.split).ok_or(short)?;
+        let bnd_out = bnd.get_mut(C..).ok_or(short)?;
+        let too_small = plan.too_small(words.len());
+        let rows = plan.rows(words.len(), iy).ok_or(too_small)?;
+        let ahead = plan.ahead(words, &rows);
+        let [(at0, ref row0), (at1, ref row1)] = rows;
+        let (k0, k1) = (plan.local.bits, plan.bnd.bits);
+        let packed = if at0 % 32 == 0 && at1 % 32 == 0 {
+            let (w0, w1) = two_rows(words, row0.clone(), row1.clone()).ok_or(too_small)?;
+            let pack = crate::simd::EndPackTo {
+                local: (w0, k0),
+                bnd: (w1, k1),
+            };
+            crate::simd::band_end_row::<T, E, C>(
+                texels,
+                acc0,
+                acc,
+                bnd_out,
+                local,
+                ahead,
+                Some(pack),
+            )
+        } else {
+            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, None)
+        };
+        let (kb, kl, pl, pb) = packed.ok_or(short)?;
+        // The field counts the plan checked against the components' rows (a mismatch would
+        // be a bug here, refused rather than written across the next row).
+        if kb != plan.nb || kl != plan.nl {
+            return Err(short);
+        }
+        pack_rest(
+            words,
+            at0,
+            local.get(..kl).ok_or(short)?,
+            (pl, k0),
+            short,
+            too_small,
+        )?;
+        pack_rest(
+            words,
+            at1,
+            bnd_out.get(..kb).ok_or(short)?,
+            (pb, k1),
+            short,
+            too_small,
+        )
     }
 
     /// Checks that every row arrived and returns the layout.
