@@ -2714,12 +2714,31 @@ struct Prefetch {
     lines: [usize; 2],
     asked: [usize; 2],
     /// Lines due per block, `2 lines / blocks` in 16.16 fixed point (one division per row, not
-    /// per group).
+    /// per group), or `lines / blocks` ([`Prefetch::paced`]).
     rate: [usize; 2],
+    /// Blocks ahead of the one asked for ([`Prefetch::paced`]; 0 for [`Prefetch::new`]).
+    lead: usize,
 }
 
 impl Prefetch {
+    /// All the lines by the middle of the row: for kernels whose fields are packed after the
+    /// row step (the packing then needs every line soon after it).
     fn new(ahead: Ahead, blocks: usize) -> Self {
+        Self::with_rate(ahead, blocks, 17, 0)
+    }
+
+    /// The lines at the row's pace, `lead` blocks ahead of the block asked for: for kernels
+    /// that pack their fields as they go (`band512::row_packed`, `band512::end_row_packed`),
+    /// which need a line only when they reach it. At 4,096^2 a tiled build took 0.91x to
+    /// 0.93x the time with the rows that end a tile row paced 16 blocks ahead instead of all
+    /// their lines by the middle of the row, and 0.97x to 0.99x more with the band rows paced
+    /// too (in process on a Zen 4 guest, docs/benchmarks.md, twelfth session).
+    fn paced(ahead: Ahead, blocks: usize, lead: usize) -> Self {
+        Self::with_rate(ahead, blocks, 16, lead)
+    }
+
+    /// `2^shift lines / blocks` lines per block in 16.16 fixed point.
+    fn with_rate(ahead: Ahead, blocks: usize, shift: u32, lead: usize) -> Self {
         let lines = ahead.map(|(_, len)| len.div_ceil(16));
         Prefetch {
             ahead,
@@ -2729,11 +2748,12 @@ impl Prefetch {
             rate: lines.map(|l| {
                 let b = blocks.max(1);
                 if b.is_power_of_two() {
-                    ((l << 17) + b - 1) >> b.trailing_zeros()
+                    ((l << shift) + b - 1) >> b.trailing_zeros()
                 } else {
-                    (l << 17).div_ceil(b)
+                    (l << shift).div_ceil(b)
                 }
             }),
+            lead,
         }
     }
 
@@ -2778,11 +2798,13 @@ impl Prefetch {
         }
     }
 
-    /// Asks for the lines due by the end of the group ending at block `end`: all of them by
-    /// the middle of the row (2 lines end / blocks, rounded up: the last lines are packed soon
-    /// after the row step, so they need the lead; asking for all of them at once measured
-    /// slower at 4096^2). The lines of a slice (fewer than 2^28) times 2^17, and `rate end <=
-    /// 2^17 lines + end`: no overflow on x86-64.
+    /// Asks for the lines due by the end of the group ending at block `end`: with
+    /// [`Prefetch::new`] all of them by the middle of the row (2 lines end / blocks, rounded
+    /// up: the last lines are packed soon after the row step, so they need the lead; asking
+    /// for all of them at once measured slower at 4096^2), with [`Prefetch::paced`] those up
+    /// to block `end + lead` (lines (end + lead) / blocks). The lines of a slice (fewer than
+    /// 2^28) times 2^17, and `rate (end + lead) <= 2^17 lines (1 + lead / blocks) + end +
+    /// lead`: no overflow on x86-64.
     /// A stream whose lines are all asked for costs one comparison per group.
     #[inline(always)]
     fn ask(&mut self, end: usize) {
@@ -2791,7 +2813,7 @@ impl Prefetch {
             if asked >= lines {
                 continue;
             }
-            let due = ((self.rate[r] * end + 0xffff) >> 16).min(lines);
+            let due = ((self.rate[r] * (end + self.lead) + 0xffff) >> 16).min(lines);
             // Lines asked..due, four per turn (a loop of one took five instructions per line:
             // 2 % of a tiled build of 1,024^2), then the rest.
             let mut at = self.ahead[r].0.wrapping_add(16 * asked);
@@ -3976,7 +3998,8 @@ mod band512 {
     /// the 4 tiles' totals ([`totals`]) prefix-summed onto the running sum and stored as the 4
     /// boundaries. The 16-bit local sums of [`band256::row`] are neither stored nor read back
     /// by [`pack256::even`]: per 32 columns about 25 instructions instead of about 55. The
-    /// lines of `ahead` asked for as in [`tiled512::kernel8_packed`].
+    /// lines of `ahead` asked for at the row's pace, 16 blocks ahead ([`Prefetch::paced`]: the
+    /// pairs pack as they go), a group of 4 pairs at a time.
     ///
     /// # Safety
     /// The CPU has AVX-512F, AVX-512BW and AVX-512 VBMI; `k` is 8, 10, 12 or 14 and every
@@ -3995,7 +4018,7 @@ mod band512 {
     ) -> u32 {
         // Prefetching, a group of pairs at a time (the bookkeeping once per group).
         const GROUP: usize = 4;
-        let mut prefetch = Prefetch::new(ahead, 2 * pairs);
+        let mut prefetch = Prefetch::paced(ahead, 2 * pairs, 16);
         // SAFETY: each table is 64 bytes: one unaligned load.
         let (local, total, bytes) = unsafe {
             (
@@ -4100,8 +4123,10 @@ mod band512 {
     /// kb chunk` ([`pack512::Packer`], its constants loaded once per row). The 32-bit local
     /// sums and boundaries are not written to the builder's scratch and read back by a second
     /// pass, and the step itself takes about 40 instructions per 32 columns instead of about
-    /// 75 ([`band256::end_row`]). The lines of `ahead` asked for as in
-    /// [`band256::end_row`], a chunk (16 blocks) at a time.
+    /// 75 ([`band256::end_row`]). The lines of `ahead` asked for a chunk ahead, a chunk (16
+    /// blocks) at a time ([`Prefetch::paced`]: all of them by the middle of the row, as
+    /// [`band256::end_row`] asks, took 1.06x to 1.08x the time of the tiled build of
+    /// 4,096^2).
     ///
     /// # Safety
     /// The CPU has AVX-512F and AVX-512BW; `t` valid for reads of `256 chunks` bytes, `cs` for
@@ -4123,7 +4148,7 @@ mod band512 {
         ahead: Ahead,
     ) -> u32 {
         const STEPS: usize = CHUNK / 32;
-        let mut prefetch = Prefetch::new(ahead, CHUNK / BLOCK * chunks);
+        let mut prefetch = Prefetch::paced(ahead, CHUNK / BLOCK * chunks, CHUNK / BLOCK);
         let (pl, pb) = (pack512::Packer::new(kl, tl), pack512::Packer::new(kb, tb));
         // 28 local sums per step, 16 past the last one's start stored: 224 + 4 words.
         let mut buf = [0u32; PAIR * STEPS + 4];
