@@ -4393,20 +4393,6 @@ mod tests {
             seed ^= seed << 17;
             seed as u32
         };
-        // The reference: each field's low k bits written one by one over `words`.
-        let field_by_field = |mut words: Vec<u32>, fields: &[u32], k: u32| {
-            let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
-            for (i, &f) in fields.iter().enumerate() {
-                let at = i as u64 * u64::from(k);
-                assert!(crate::layouts::packed::write_bits(
-                    &mut words,
-                    at,
-                    k,
-                    u64::from(f & m)
-                ));
-            }
-            words
-        };
         // None: `pack_u32`, which packs with AVX2 or AVX-512 (whichever is best).
         let packs = Kernel::best() != Kernel::Sse2;
         let kernels = [Kernel::Sse2, Kernel::Avx2, Kernel::Avx512Vnni]
@@ -5232,6 +5218,22 @@ mod tests {
         }
     }
 
+    /// The packers' reference: each field's low `k` bits written one by one over `words`
+    /// (field `i` at bit `i k`).
+    fn field_by_field(mut words: std::vec::Vec<u32>, fields: &[u32], k: u32) -> std::vec::Vec<u32> {
+        let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
+        for (i, &f) in fields.iter().enumerate() {
+            let at = i as u64 * u64::from(k);
+            assert!(crate::layouts::packed::write_bits(
+                &mut words,
+                at,
+                k,
+                u64::from(f & m)
+            ));
+        }
+        words
+    }
+
     /// acc_0's storage in the band form for column sums `cs0` (`n` of them): its `u16`
     /// halves (the lower `n` dirty, then the column sums) and the words that hold them.
     fn band_storage(cs0: &[u16]) -> (std::vec::Vec<u16>, std::vec::Vec<u32>) {
@@ -5372,19 +5374,7 @@ mod tests {
                 assert_eq!((bnd[nb], local[nl]), (0xdead_beef, 0xdead_beef), "n {n}");
                 // The packed fields, each one's low k bits, over the noise; the words past
                 // them untouched.
-                let reference = |mut words: Vec<u32>, fields: &[u32], k: u32| {
-                    let m = if k == 32 { u32::MAX } else { (1 << k) - 1 };
-                    for (i, &f) in fields.iter().enumerate() {
-                        let at = i as u64 * u64::from(k);
-                        assert!(crate::layouts::packed::write_bits(
-                            &mut words,
-                            at,
-                            k,
-                            u64::from(f & m)
-                        ));
-                    }
-                    words
-                };
+                let reference = field_by_field;
                 assert_eq!(
                     wl,
                     reference(wl0, &want_l[..pl], kl),

@@ -2398,6 +2398,38 @@ impl BandPlan {
         }
     }
 
+    /// What both band steps start from: the row of fields `buf` split into the boundaries
+    /// after `acc[0]` (not written here: the general step zeroes it) and the local sums; the
+    /// refusal of short storage; row `iy` of both components ([`BandPlan::rows`]) and the
+    /// lines to ask for ([`BandPlan::ahead`]).
+    #[allow(
+        clippy::type_complexity,
+        reason = "the steps' five parts, destructured at once by both callers"
+    )]
+    fn start<'b, E: Entry, const C: usize>(
+        &self,
+        words: &[u32],
+        buf: &'b mut [E],
+        iy: u32,
+        short: Error,
+    ) -> Result<
+        (
+            &'b mut [E],
+            &'b mut [E],
+            Error,
+            [(u64, Range<usize>); 2],
+            Ahead,
+        ),
+        Error,
+    > {
+        let (bnd, local) = buf.split_at_mut_checked(self.split).ok_or(short)?;
+        let bnd_out = bnd.get_mut(C..).ok_or(short)?;
+        let too_small = self.too_small(words.len());
+        let rows = self.rows(words.len(), iy).ok_or(too_small)?;
+        let ahead = self.ahead(words, &rows);
+        Ok((bnd_out, local, too_small, rows, ahead))
+    }
+
     /// The plan for `g` when a band row (`q = 0`) or a row that ends a tile row (`q = 1`)
     /// writes components `(0, q)` and `(1, q)` only (one level of tiles on x); `None` if any
     /// check fails (the general step then runs).
@@ -2866,14 +2898,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         iy: u32,
         short: Error,
     ) -> Result<(), Error> {
-        // The boundaries after acc[0] (not written here: the general step zeroes it), then
-        // the local sums.
-        let (bnd, local) = buf.split_at_mut_checked(plan.split).ok_or(short)?;
-        let bnd_out = bnd.get_mut(C..).ok_or(short)?;
-        // Each component's row: its first bit and the words it spans.
-        let too_small = plan.too_small(words.len());
-        let rows = plan.rows(words.len(), iy).ok_or(too_small)?;
-        let ahead = plan.ahead(words, &rows);
+        let (bnd_out, local, too_small, rows, ahead) = plan.start::<E, C>(words, buf, iy, short)?;
         let [(at0, ref row0), (at1, ref row1)] = rows;
         let pack = crate::simd::PackTo {
             words: words.get_mut(row0.clone()).ok_or(too_small)?,
@@ -2943,11 +2968,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         iy: u32,
         short: Error,
     ) -> Result<(), Error> {
-        let (bnd, local) = buf.split_at_mut_checked(plan.split).ok_or(short)?;
-        let bnd_out = bnd.get_mut(C..).ok_or(short)?;
-        let too_small = plan.too_small(words.len());
-        let rows = plan.rows(words.len(), iy).ok_or(too_small)?;
-        let ahead = plan.ahead(words, &rows);
+        let (bnd_out, local, too_small, rows, ahead) = plan.start::<E, C>(words, buf, iy, short)?;
         let [(at0, ref row0), (at1, ref row1)] = rows;
         let (k0, k1) = (plan.local.bits, plan.bnd.bits);
         let packed = if at0 % 32 == 0 && at1 % 32 == 0 {
