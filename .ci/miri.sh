@@ -69,9 +69,8 @@ step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512
 # target features enable: each run tests every kernel up to its flags, in its own target dir.
 # The last set adds AVX-512BW and VBMI: the tiled kernels that pack their local sums in the row
 # step, tiled512::kernel8_packed, band512::row_packed and band512::end_row_packed (Miri emulates
-# their loads and stores;
-# the word and byte permutes it cannot emulate are computed field by field under cfg(miri),
-# src/simd.rs). Miri is single-threaded: two sets at a time, each in its
+# their loads and stores; the word and byte permutes it cannot emulate are computed field by
+# field under cfg(miri), src/simd.rs). Miri is single-threaded: two sets at a time, each in its
 # own target dir with its own log, printed when both are done.
 simd_pass() {
   local flags=$1 log=$2

@@ -35,9 +35,8 @@
 //! row, which add the column sums' form into the level above (with AVX-512BW as well,
 //! `band512::end_row_packed` packs both components' rows in the same pass, 256 columns at a
 //! time); [`band_flush`] turns the column sums back into the accumulator. The kernel is the
-//! widest
-//! this CPU runs, detected
-//! once at run time from CPUID and XGETBV (no `std` needed), as OpenCV and the standard
+//! widest this CPU runs, detected once at run time from CPUID and XGETBV (no `std` needed), as
+//! OpenCV and the standard
 //! library's `is_x86_feature_detected!` do; the binary needs no `-C target-cpu` flag:
 //!
 //! * AVX-512 VNNI (`avx512f` + `avx512vl` + `avx512vnni`): the 8 prefix sums of each half
@@ -2706,9 +2705,10 @@ const fn tile_table(tile: usize) -> TileTable {
 /// Tile widths 2, 4, 8, 16 (index `log2 tile - 1`).
 static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8), tile_table(16)];
 
-/// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`]):
-/// the 64-byte lines of each `ahead` slice (the words the row's fields go to), spread over the
-/// first half of the row's blocks, asked for a group of blocks at a time.
+/// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`],
+/// the band rows' kernels): the 64-byte lines of each `ahead` slice (the words the row's fields
+/// go to), spread over the first half of the row's blocks ([`Prefetch::new`]) or over all of
+/// them a lead ahead ([`Prefetch::paced`]), asked for a group of blocks at a time.
 struct Prefetch {
     ahead: Ahead,
     lines: [usize; 2],
@@ -3262,8 +3262,8 @@ mod tiled256 {
 /// channel; with AVX2, on an AVX-512 CPU too (there the rows that end a tile row take
 /// [`band_end_row`], with AVX-512BW its packing step `band512::end_row_packed`, and only the
 /// rows that end a level above the tiles the AVX-512 row kernel; the boundaries go to the
-/// widest packer; on a Zen 4 guest the tiled
-/// build of 1,024^2 took 0.80x the time with the band rows, 4,096^2 about the same:
+/// widest packer; on a Zen 4 guest the tiled build of 1,024^2 took 0.80x the time with the
+/// band rows, 4,096^2 about the same:
 /// docs/benchmarks.md, seventh session); tiles 8 texels wide (`tile_w`); a row of at least
 /// one block of 16 texels; and the sum of a whole tile, `tile_w tile_h (2^texel_bits - 1)`, at
 /// most `2^16 - 1`. The band rows keep the column
@@ -3502,10 +3502,11 @@ pub(crate) struct EndPackTo<'w> {
 /// The column sums with this row are a whole tile's at most: they fit 16 bits by
 /// [`band_applies`].
 ///
-/// With `pack`, on a CPU with AVX-512BW (detected with VBMI: [`vbmi`]) and field widths of
-/// [`MIN_PACK_BITS`] to 32, the row's whole chunks of [`band512::CHUNK`] columns take
-/// [`band512::end_row_packed`], which packs their local sums and boundaries into `pack`'s
-/// rows as it computes them (written to neither `local` nor `bnd`); the rest as above.
+/// With `pack`, on a CPU with AVX-512BW (detected with VBMI: [`vbmi`]; the kernel itself needs
+/// BW only) and field widths of [`MIN_PACK_BITS`] to 32, the row's whole chunks of
+/// [`band512::CHUNK`] columns whose fields both of `pack`'s rows hold take
+/// [`band512::end_row_packed`], which packs their local sums and boundaries into those rows
+/// as it computes them (written to neither `local` nor `bnd`); the rest as above.
 /// Returns `(kb, kl, pl, pb)`: the boundaries and local sums of the row (`n / 8`, `n - n /
 /// 8`), and how many of each were packed (from the first: those before them in `local` and
 /// `bnd` are not written). `None` (nothing written) for other types, without AVX2, or short
@@ -3581,8 +3582,8 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
             };
             #[cfg(test)]
             END_CHUNKS.with(|c| c.set(c.get() + chunks));
-            // The row's lines were all asked for by the chunks (by the middle of its
-            // blocks, and the chunks are at least half of them).
+            // The row's lines were all asked for by the chunks (paced a chunk ahead over the
+            // chunks' blocks: all of them by the start of the last chunk).
             (band512::CHUNK * chunks, run, [(core::ptr::null(), 0); 2])
         }
         None => (0, 0, ahead),
@@ -3841,10 +3842,11 @@ mod band256 {
     }
 
     /// [`band_end_row`]'s kernel over `blocks` blocks of 16 columns from the running boundary
-    /// sum `run` (that of the columns before them); returns it after them. Per block: 16 texels widened and added to the column sums,
-    /// which are cleared (one 32-byte store of zeros); the sums' [`form`] added to `acc` and
-    /// stored; the new values split into the streams ([`tiled256::split`]). The lines of
-    /// `ahead` asked for as in [`tiled256::kernel`].
+    /// sum `run` (that of the columns before them); returns it after them. Per block: 16
+    /// texels widened and added to the column sums, which are cleared (one 32-byte store of
+    /// zeros); the sums' [`form`] added to `acc` and stored; the new values split into the
+    /// streams ([`tiled256::split`]). The lines of `ahead` asked for as in
+    /// [`tiled256::kernel`].
     ///
     /// # Safety
     /// The CPU has AVX2; `t` valid for reads of `16 blocks` bytes, `cs` for reads and writes
@@ -3896,11 +3898,17 @@ mod band512 {
         let mut ix = [0u16; 32];
         let mut f = 0;
         while f < PAIR {
-            ix[f] = (8 * (f / 7) + f % 7) as u16;
+            ix[f] = local_lane(f) as u16;
             f += 1;
         }
         ix
     };
+
+    /// The lane of local sum `f` among the lanes of whole tiles of 8 (7 local sums, then the
+    /// boundary lane, per tile).
+    const fn local_lane(f: usize) -> usize {
+        8 * (f / 7) + f % 7
+    }
 
     /// `vpermw` indices: the 4 tiles' totals (lanes 7, 15, 23 and 31) into the low halves of
     /// 32-bit lanes 0..4 (16-bit lanes 0, 2, 4 and 6; the others zeroed by the mask `0x55`).
@@ -3988,6 +3996,19 @@ mod band512 {
         _mm_setr_epi32(t(0), t(1), t(2), t(3))
     }
 
+    /// The 4 tiles' boundaries of the prefix sums `p`: their totals ([`totals`]) prefix-summed
+    /// onto the running sum `run`, which becomes the last of them.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512bw")]
+    fn boundaries(p: __m512i, ix: __m512i, run: &mut __m128i) -> __m128i {
+        let w = totals(p, ix);
+        let w = _mm_add_epi32(w, _mm_slli_si128::<4>(w));
+        let w = _mm_add_epi32(w, _mm_slli_si128::<8>(w));
+        let w = _mm_add_epi32(w, *run);
+        *run = _mm_shuffle_epi32::<0xff>(w);
+        w
+    }
+
     /// [`band_row`]'s kernel over `pairs` pairs of blocks (32 columns, 4 tiles) with the local
     /// sums packed as they are computed; returns the running boundary sum after them. Per
     /// pair: 32 texels widened (`vpmovzxbw`) and added to the column sums `cs`, stored back;
@@ -4060,12 +4081,8 @@ mod band512 {
                     } else {
                         _mm512_mask_storeu_epi8(out.add(n * pr).cast(), store, o);
                     }
-                    let w = totals(p, total);
-                    let w = _mm_add_epi32(w, _mm_slli_si128::<4>(w));
-                    let w = _mm_add_epi32(w, _mm_slli_si128::<8>(w));
-                    let w = _mm_add_epi32(w, run);
+                    let w = boundaries(p, total, &mut run);
                     _mm_storeu_si128(bnd.add(4 * pr).cast(), w);
-                    run = _mm_shuffle_epi32::<0xff>(w);
                 }
             }
             from = end;
@@ -4099,7 +4116,7 @@ mod band512 {
         let mut ix = [[0u32; 16]; 3];
         let mut f = 0;
         while f < PAIR {
-            ix[f / 16][f % 16] = (8 * (f / 7) + f % 7) as u32;
+            ix[f / 16][f % 16] = local_lane(f) as u32;
             f += 1;
         }
         let mut j = 0;
@@ -4120,7 +4137,8 @@ mod band512 {
     /// stored; its 28 local sums and 4 boundaries gathered (`vpermt2d`) into two small
     /// buffers (`buf`, `bbuf`: they stay in L1). Per chunk, the buffers packed into the rows:
     /// 7 groups of `kl`-bit fields at `wl + 7 kl chunk`, 1 group of `kb`-bit fields at `wb +
-    /// kb chunk` ([`pack512::Packer`], its constants loaded once per row). The 32-bit local
+    /// kb chunk` ([`pack512::Packer`], its constants computed once per row; with the kernel's
+    /// own they pass the 32 registers, and the compiler keeps some in L1). The 32-bit local
     /// sums and boundaries are not written to the builder's scratch and read back by a second
     /// pass, and the step itself takes about 40 instructions per 32 columns instead of about
     /// 75 ([`band256::end_row`]). The lines of `ahead` asked for a chunk ahead, a chunk (16
@@ -4180,12 +4198,7 @@ mod band512 {
                     let sum = _mm512_add_epi16(x, _mm512_loadu_si512(cs.add(i).cast()));
                     _mm512_storeu_si512(cs.add(i).cast(), zero);
                     let p = prefix8(sum);
-                    let w = totals(p, total);
-                    let w = _mm_add_epi32(w, _mm_slli_si128::<4>(w));
-                    let w = _mm_add_epi32(w, _mm_slli_si128::<8>(w));
-                    let w = _mm_add_epi32(w, run);
-                    run = _mm_shuffle_epi32::<0xff>(w);
-                    let w = _mm512_zextsi128_si512(w);
+                    let w = _mm512_zextsi128_si512(boundaries(p, total, &mut run));
                     let lo = _mm512_cvtepu16_epi32(_mm512_castsi512_si256(p));
                     let hi = _mm512_cvtepu16_epi32(_mm512_extracti64x4_epi64::<1>(p));
                     let lo = _mm512_mask_permutexvar_epi32(lo, 0x8080, ins_lo, w);
@@ -5247,18 +5260,23 @@ mod tests {
         (halves, words)
     }
 
-    /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256 and
-    /// 1,000 (a few under Miri), saturated and random texels, dirty column sums of up to 7 rows
-    /// of 255 (with the row: a tile row of 8), a dirty level above (values near 2^32: the adds
-    /// wrap). Checked: the level above plus the column sums' form, its split into boundaries
-    /// and local sums (nothing written past them), the column sums cleared, the lower half of
-    /// acc_0's storage untouched; `None` without AVX2.
-    /// Each kernel this CPU runs, and each way of packing: none (the fields in `local` and
-    /// `bnd`), and both component rows packed from their first word (with AVX-512BW the whole
-    /// chunks of 256 columns in the pass, `band512::end_row_packed`; the rest, or everything
-    /// on other kernels, left in `local` and `bnd` from the count returned): the packed words
-    /// equal each field's low `k` bits written one by one, over noise, with the words past
-    /// the chunks untouched, for widths 11 to 32.
+    /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256,
+    /// 512, 537, 968 and 1,000 (a few under Miri, 280 and 536 the longest), saturated and
+    /// random texels, dirty column sums of up to 7 rows of 255 (with the row: a tile row of 8),
+    /// a dirty level above (values near 2^32: the adds wrap). Checked: the level above plus the
+    /// column sums' form, its split into boundaries and local sums (nothing written past
+    /// them), the column sums cleared, the lower half of acc_0's storage untouched; `None`
+    /// without AVX2.
+    ///
+    /// Under each kernel this CPU runs, and each way of packing: none (the fields in `local`
+    /// and `bnd`), and both component rows packed from their first word, with widths (local,
+    /// boundaries) of (21, 28), (11, 32), (23, 32), (32, 11) and (16, 17), (10, 28) (no
+    /// packer: nothing packed) and a local row one chunk and 5 words long. With AVX-512BW the
+    /// whole chunks of 256 columns that both rows hold are packed in the pass
+    /// (`band512::end_row_packed`) and their fields not written to `local` and `bnd`; the
+    /// rest, or everything on other kernels, is left there from the counts returned. The
+    /// packed words equal each field's low `k` bits written one by one over noise, the words
+    /// past the chunks untouched.
     #[test]
     fn band_end_row_equals_the_reference() {
         for kernel in [Kernel::Avx512Vnni, Kernel::Avx2, Kernel::Sse2] {
@@ -5277,25 +5295,30 @@ mod tests {
         if !cfg!(miri) {
             sizes.extend([512, 512 + 16 + 9, 3 * 256 + 200]);
         } else {
-            sizes.push(256 + 24);
+            sizes.extend([256 + 24, 512 + 24]);
         }
-        // (k local, k boundaries): None leaves every field in the scratch.
-        let widths: &[Option<(u32, u32)>] = if cfg!(miri) {
-            &[None, Some((21, 28))]
+        // ((k local, k boundaries), the local row's words if fewer than its fields need):
+        // None leaves every field in the scratch; 10 bits has no packer (nothing packed); the
+        // last row holds one chunk and 5 words (one chunk packed).
+        type Widths = (Option<(u32, u32)>, Option<usize>);
+        let widths: &[Widths] = if cfg!(miri) {
+            &[(None, None), (Some((21, 28)), None)]
         } else {
             &[
-                None,
-                Some((21, 28)),
-                Some((11, 32)),
-                Some((23, 32)),
-                Some((32, 11)),
-                Some((16, 17)),
+                (None, None),
+                (Some((21, 28)), None),
+                (Some((11, 32)), None),
+                (Some((23, 32)), None),
+                (Some((32, 11)), None),
+                (Some((16, 17)), None),
+                (Some((10, 28)), None),
+                (Some((21, 28)), Some(7 * 21 + 5)),
             ]
         };
         let mut seed = 0x0fed_cba9_8765_4321u64;
         let (mut ran, mut packed_any) = (0, false);
         for &n in &sizes {
-            for (full, &w) in [true, false]
+            for (full, &(w, short)) in [true, false]
                 .into_iter()
                 .flat_map(|f| widths.iter().map(move |w| (f, w)))
             {
@@ -5341,7 +5364,9 @@ mod tests {
                 };
                 let (kl, kb) = w.unwrap_or((32, 32));
                 let (ll, lb) = (
-                    (nl * kl as usize).div_ceil(32),
+                    (nl * kl as usize)
+                        .div_ceil(32)
+                        .min(short.unwrap_or(usize::MAX)),
                     (nb * kb as usize).div_ceil(32),
                 );
                 let (mut wl, mut wb) = (noise(ll, 0x1357), noise(lb, 0x2468));
@@ -5364,14 +5389,23 @@ mod tests {
                     continue;
                 }
                 ran += 1;
-                let chunks = if fused && w.is_some() { n / 256 } else { 0 };
+                // Whole chunks whose fields both rows hold, with a packer for both widths.
+                let packer = |k: u32| (MIN_PACK_BITS..=32).contains(&k);
+                let chunks = if fused && w.is_some() && packer(kl) && packer(kb) {
+                    (n / 256).min(ll / (7 * kl as usize)).min(lb / kb as usize)
+                } else {
+                    0
+                };
                 let (pl, pb) = (224 * chunks, 32 * chunks);
                 packed_any |= chunks > 0;
-                assert_eq!(got, Some((nb, nl, pl, pb)), "n {n}, {w:?}");
+                assert_eq!(got, Some((nb, nl, pl, pb)), "n {n}, {w:?}, {short:?}");
                 assert_eq!(acc, want_acc, "level above, n {n}");
                 assert_eq!(&bnd[pb..nb], &want_b[pb..], "boundaries, n {n}, {w:?}");
                 assert_eq!(&local[pl..nl], &want_l[pl..], "local sums, n {n}, {w:?}");
                 assert_eq!((bnd[nb], local[nl]), (0xdead_beef, 0xdead_beef), "n {n}");
+                // The fields packed in the pass are not written to the scratch.
+                assert!(bnd[..pb].iter().all(|&v| v == 0xdead_beef), "n {n}");
+                assert!(local[..pl].iter().all(|&v| v == 0xdead_beef), "n {n}");
                 // The packed fields, each one's low k bits, over the noise; the words past
                 // them untouched.
                 let reference = field_by_field;

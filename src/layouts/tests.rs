@@ -1186,12 +1186,11 @@ fn modular_rows_under_every_kernel() {
 
 /// The tiled builder's rows that end a tile row in the band form (8 x 8 tiles, `u8` texels,
 /// `u32` entries), under every build kernel this CPU runs: every corner of noise and saturated
-/// textures equals the summed-area table. Widths of whole chunks of 256 columns, whose
-/// component rows all start on a word (256, 512, 1,024: packed in the pass with AVX-512BW,
-/// `simd::band512::end_row_packed`, its chunks counted), and others whose rows do not (808 x
-/// 27 and 520 x 24: 707 and 455 fields of 16 bits per row of `(0, 1)`; the tails after whole
-/// chunks are `simd::tests::band_end_row_equals_the_reference`'s) or have no whole chunk
-/// (136); heights with a partial tile row last (17, 27).
+/// textures equals the summed-area table. Widths whose component rows all start on a word
+/// (256, 512, 1,024, and 384 with 128 columns after its chunk: packed in the pass with
+/// AVX-512BW, `simd::band512::end_row_packed`, its chunks counted), others whose rows do not
+/// (808 x 27, 520 x 24) or that have no whole chunk (136); heights with a partial tile row
+/// last (17, 27).
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 #[test]
 fn tiled_end_rows_under_every_kernel() {
@@ -1220,18 +1219,16 @@ fn tiled_end_rows_under_every_kernel() {
         }
         chunks
     }
-    let sizes: &[(usize, usize)] = if cfg!(miri) {
-        &[(256, 9)]
-    } else {
-        &[
-            (512, 24),
-            (256, 16),
-            (1024, 17),
-            (808, 27),
-            (520, 24),
-            (136, 16),
-        ]
-    };
+    // (w, h, the chunks each row that ends a tile row packs in the pass with AVX-512BW).
+    let sizes = [
+        (512, 24, 2),
+        (256, 16, 1),
+        (1024, 17, 4),
+        (384, 24, 1),
+        (808, 27, 0),
+        (520, 24, 0),
+        (136, 16, 0),
+    ];
     let fused =
         crate::simd::Kernel::best() == crate::simd::Kernel::Avx512Vnni && crate::simd::vbmi();
     for kernel in crate::simd::Kernel::ALL
@@ -1239,19 +1236,17 @@ fn tiled_end_rows_under_every_kernel() {
         .filter(|k| k.available())
     {
         kernel.cap(|| {
-            for &(w, h) in sizes {
+            for &(w, h, per_row) in &sizes {
                 for full in [false, true] {
                     let chunks = check(w, h, full);
-                    // The widths of whole chunks: every row of both components starts on a
-                    // word (7/8 of 256 columns are 224 k bits, their boundaries 32 k), so every
-                    // row that ends a tile row packs all its chunks in the pass; the others
-                    // (their rows off a word, or no whole chunk) none.
+                    // Where both components' rows all start on a word (7/8 of 256 columns are
+                    // 224 k bits, their boundaries 32 k; 384 x 24: 336 fields of 16 bits and
+                    // 48 of 22), every row that ends a tile row packs all its chunks in the
+                    // pass, and the 128 columns after them go to the packer (384); where they
+                    // do not (808 x 27, 520 x 24: 707 and 455 fields of 16 bits per row of
+                    // `(0, 1)`), or without a whole chunk (136), none.
                     let packs = fused && kernel == crate::simd::Kernel::Avx512Vnni;
-                    let want = if packs && w % 256 == 0 {
-                        h / 8 * (w / 256)
-                    } else {
-                        0
-                    };
+                    let want = if packs { h / 8 * per_row } else { 0 };
                     assert_eq!(chunks, want, "{w}x{h}, full {full}, under {kernel:?}");
                 }
             }

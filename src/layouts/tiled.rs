@@ -2305,11 +2305,11 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// at 1,024^2 and 1.06x to 1.23x at 4,096^2 in 20 of 25 runs on a Zen 4 guest, against 1.22x to
 /// 1.65x at 4,096^2 before; docs/benchmarks.md, eleventh session). A row that ends a tile row
 /// adds the column sums' form into acc_1 in one pass (`simd::band_end_row`; with AVX-512BW
-/// and one level of tiles on x it packs components `(0, 1)` and `(1, 1)` in the same pass,
-/// `band_end_step`: with the kernels' lines asked for at their own pace, the tiled build of
-/// 4,096^2 took about 0.90x the time, 1.03x to 1.15x the flat build in 14 runs;
-/// docs/benchmarks.md, twelfth session); a row that ends a higher level, or a row of other
-/// texels, first turns the column sums back into acc_0.
+/// and one level of tiles on x it packs components `(0, 1)` and `(1, 1)` in the same pass
+/// when both rows start on a word, `band_end_step`: with the kernels' lines asked for at
+/// their own pace, the tiled build of 4,096^2 took about 0.90x the time, 1.03x to 1.15x the
+/// flat build in 14 runs; docs/benchmarks.md, twelfth session); a row that ends a higher
+/// level, or a row of other texels, first turns the column sums back into acc_0.
 #[derive(Debug)]
 pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     words: &'a mut [u32],
@@ -2338,16 +2338,17 @@ pub struct TiledBuilder<'a, 's, E: Entry, const C: usize = 1> {
     end_one: Option<BandPlan>,
 }
 
-/// [`TiledBuilder::band_step`]'s constants, from the geometry (`TiledBuilder::new`): the two
-/// components a band row writes, where the row of fields splits, and the checks that hold
-/// for every row (each row's field counts are `n / t` boundaries and `n - n / t` local sums,
-/// which fill the components' rows exactly).
+/// [`TiledBuilder::band_step`]'s constants (`q = 0`) or [`TiledBuilder::band_end_step`]'s (`q
+/// = 1`), from the geometry (`TiledBuilder::new`): the two components such a row writes, `(0,
+/// q)` and `(1, q)`, where the row of fields splits, and the checks that hold for every row
+/// (each row's field counts are `n / t` boundaries and `n - n / t` local sums, which fill the
+/// components' rows exactly).
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 #[derive(Debug, Clone, Copy)]
 struct BandPlan {
-    /// Component `(0, 0)`: the local sums.
+    /// Component `(0, q)`: the local sums.
     local: Component,
-    /// Component `(1, 0)`: the tile boundaries (one level: the running sums themselves).
+    /// Component `(1, q)`: the tile boundaries (one level: the running sums themselves).
     bnd: Component,
     /// The boundaries per row, `n / t`, and the local sums, `n - n / t`.
     nb: usize,
@@ -2899,7 +2900,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         short: Error,
     ) -> Result<(), Error> {
         let (bnd_out, local, too_small, rows, ahead) = plan.start::<E, C>(words, buf, iy, short)?;
-        let [(at0, ref row0), (at1, ref row1)] = rows;
+        let [(at0, ref row0), (at1, _)] = rows;
         let pack = crate::simd::PackTo {
             words: words.get_mut(row0.clone()).ok_or(too_small)?,
             bit: at0 % 32,
@@ -2914,8 +2915,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         if kb != plan.nb || kl != plan.nl {
             return Err(short);
         }
-        // The local sums left after the kernel's packing, then the boundaries: from a word
-        // boundary straight to the packer (the rest, if any, field by field).
+        // The local sums left after the kernel's packing, then the boundaries (from a word
+        // boundary the packer's vector path takes them; the rest, if any, field by field).
         pack_rest(
             words,
             at0,
@@ -2924,25 +2925,14 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             short,
             too_small,
         )?;
-        let bnds = bnd_out.get(..kb).ok_or(short)?;
-        let row = words.get_mut(row1.clone()).ok_or(too_small)?;
-        let done = if at1 % 32 == 0 {
-            crate::simd::pack_u32(row, bnds, plan.bnd.bits)
-        } else {
-            0
-        };
-        let rest = bnds.get(done..).ok_or(short)?;
-        if !rest.is_empty() {
-            let from = u64::try_from(done)
-                .ok()
-                .and_then(|d| d.checked_mul(u64::from(plan.bnd.bits)))
-                .and_then(|b| b.checked_add(at1 % 32))
-                .ok_or(short)?;
-            if !pack_fields(row, from, rest, plan.bnd.bits) {
-                return Err(too_small);
-            }
-        }
-        Ok(())
+        pack_rest(
+            words,
+            at1,
+            bnd_out.get(..kb).ok_or(short)?,
+            (0, plan.bnd.bits),
+            short,
+            too_small,
+        )
     }
 
     /// [`TiledBuilder::push_row`]'s step for a row that ends a tile row in the band form (`q
@@ -2971,24 +2961,18 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let (bnd_out, local, too_small, rows, ahead) = plan.start::<E, C>(words, buf, iy, short)?;
         let [(at0, ref row0), (at1, ref row1)] = rows;
         let (k0, k1) = (plan.local.bits, plan.bnd.bits);
-        let packed = if at0 % 32 == 0 && at1 % 32 == 0 {
-            let (w0, w1) = two_rows(words, row0.clone(), row1.clone()).ok_or(too_small)?;
-            let pack = crate::simd::EndPackTo {
-                local: (w0, k0),
-                bnd: (w1, k1),
-            };
-            crate::simd::band_end_row::<T, E, C>(
-                texels,
-                acc0,
-                acc,
-                bnd_out,
-                local,
-                ahead,
-                Some(pack),
-            )
+        // Both rows from a word (disjoint: two components' rows), for the kernel to pack.
+        let rows_words = if at0 % 32 == 0 && at1 % 32 == 0 {
+            two_rows(words, row0.clone(), row1.clone())
         } else {
-            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, None)
+            None
         };
+        let pack = rows_words.map(|(w0, w1)| crate::simd::EndPackTo {
+            local: (w0, k0),
+            bnd: (w1, k1),
+        });
+        let packed =
+            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, pack);
         let (kb, kl, pl, pb) = packed.ok_or(short)?;
         // The field counts the plan checked against the components' rows (a mismatch would
         // be a bug here, refused rather than written across the next row).
