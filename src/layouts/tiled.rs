@@ -2431,6 +2431,29 @@ impl BandPlan {
         Ok((bnd_out, local, too_small, rows, ahead))
     }
 
+    /// What both band steps end with: the row's field counts `(kb, kl)` checked against the
+    /// plan (a mismatch would be a bug here, refused rather than written across the next
+    /// row), then the local sums and the boundaries the kernel left (after the `packed`
+    /// first of each) packed from the rows' first bits `at` (from a word boundary the
+    /// packer's vector path takes them; the rest, if any, field by field).
+    fn end<E: Entry>(
+        &self,
+        words: &mut [u32],
+        at: [u64; 2],
+        (local, bnd): (&[E], &[E]),
+        (kb, kl): (usize, usize),
+        (pl, pb): (usize, usize),
+        short: Error,
+    ) -> Result<(), Error> {
+        if kb != self.nb || kl != self.nl {
+            return Err(short);
+        }
+        let too_small = self.too_small(words.len());
+        let (local, bnd) = (local.get(..kl).ok_or(short)?, bnd.get(..kb).ok_or(short)?);
+        pack_rest(words, at[0], local, (pl, self.local.bits), short, too_small)?;
+        pack_rest(words, at[1], bnd, (pb, self.bnd.bits), short, too_small)
+    }
+
     /// The plan for `g` when a band row (`q = 0`) or a row that ends a tile row (`q = 1`)
     /// writes components `(0, q)` and `(1, q)` only (one level of tiles on x); `None` if any
     /// check fails (the general step then runs).
@@ -2910,28 +2933,13 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let (kb, kl, kp) =
             crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, Some(pack))
                 .ok_or(short)?;
-        // The field counts the plan checked against the components' rows (a mismatch would
-        // be a bug here, refused rather than written across the next row).
-        if kb != plan.nb || kl != plan.nl {
-            return Err(short);
-        }
-        // The local sums left after the kernel's packing, then the boundaries (from a word
-        // boundary the packer's vector path takes them; the rest, if any, field by field).
-        pack_rest(
+        plan.end(
             words,
-            at0,
-            local.get(..kl).ok_or(short)?,
-            (kp, plan.local.bits),
+            [at0, at1],
+            (local, bnd_out),
+            (kb, kl),
+            (kp, 0),
             short,
-            too_small,
-        )?;
-        pack_rest(
-            words,
-            at1,
-            bnd_out.get(..kb).ok_or(short)?,
-            (0, plan.bnd.bits),
-            short,
-            too_small,
         )
     }
 
@@ -2958,7 +2966,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         iy: u32,
         short: Error,
     ) -> Result<(), Error> {
-        let (bnd_out, local, too_small, rows, ahead) = plan.start::<E, C>(words, buf, iy, short)?;
+        let (bnd_out, local, _, rows, ahead) = plan.start::<E, C>(words, buf, iy, short)?;
         let [(at0, ref row0), (at1, ref row1)] = rows;
         let (k0, k1) = (plan.local.bits, plan.bnd.bits);
         // Both rows from a word (disjoint: two components' rows), for the kernel to pack.
@@ -2974,26 +2982,13 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let packed =
             crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, pack);
         let (kb, kl, pl, pb) = packed.ok_or(short)?;
-        // The field counts the plan checked against the components' rows (a mismatch would
-        // be a bug here, refused rather than written across the next row).
-        if kb != plan.nb || kl != plan.nl {
-            return Err(short);
-        }
-        pack_rest(
+        plan.end(
             words,
-            at0,
-            local.get(..kl).ok_or(short)?,
-            (pl, k0),
+            [at0, at1],
+            (local, bnd_out),
+            (kb, kl),
+            (pl, pb),
             short,
-            too_small,
-        )?;
-        pack_rest(
-            words,
-            at1,
-            bnd_out.get(..kb).ok_or(short)?,
-            (pb, k1),
-            short,
-            too_small,
         )
     }
 
