@@ -1085,7 +1085,8 @@ mod avx512vnni {
 /// the group clamped to 31: their shift counts are at least 32, and AVX-512's variable shifts
 /// give 0 there, as for the terms a word does not need), one `vpsrlvd`, three `vpsllvd`, three
 /// ors, one (masked) store; from 16 bits on, a word holds parts of at most three fields: three
-/// of each. The index and count tables depend on `k` only: built once per call.
+/// of each. The index and count tables depend on `k` only: constants of the width's own
+/// instantiation (`pack512::pack_k`).
 ///
 /// With AVX2 ([`pack256`]), which has no two-register permute: eight groups side by side, one
 /// per 32-bit lane, so that every shift is the same in all lanes (the constant shifts of the
@@ -1137,15 +1138,11 @@ unsafe fn pack_u32_with<E: Entry>(
     if groups == 0 {
         return 0;
     }
-    // idx[t][j], cnt[t][j]: the field (0..32 in the group) and the shift of term t of word j.
-    let Some(table) = PACK_TABLES.get(ku - MIN_PACK_BITS as usize) else {
-        return 0;
-    };
     // SAFETY: AVX-512F is available (`kernel` is Avx512Vnni, whose detection includes it, and
     // available: the caller's contract); `f` holds at least 32 groups values and `words` at
     // least groups k words (above); the kernel reads f[0..32 groups] and writes
-    // words[0..groups k] only; the table is k's.
-    unsafe { pack512::pack(f.as_ptr(), words.as_mut_ptr(), groups, k, table) };
+    // words[0..groups k] only; 11 <= k <= 32 (above).
+    unsafe { pack512::pack(f.as_ptr(), words.as_mut_ptr(), groups, k) };
     groups * 32
 }
 
@@ -1172,9 +1169,9 @@ pub(crate) const MIN_PACK_BITS: u32 = 11;
 
 /// [`pack_u32`]'s tables, per width `k = 11..=32` (index `k - 11`): rows `t = 0..4` the field
 /// (0..32 in the group, clamped to 31) of term `t` of output word `j` (column `j`), rows
-/// `4 + t` its shift count (`s` right for `t = 0`, `t k - s` left after; at most 96). Bytes,
-/// widened in the kernel: 5.5 KiB, computed at compile time.
-static PACK_TABLES: [[[u8; 32]; 8]; 22] = pack_tables();
+/// `4 + t` its shift count (`s` right for `t = 0`, `t k - s` left after; at most 96).
+/// Computed at compile time, widened to 32-bit lanes per width (`pack512::pack_k`).
+const PACK_TABLES: [[[u8; 32]; 8]; 22] = pack_tables();
 
 const fn pack_tables() -> [[[u8; 32]; 8]; 22] {
     let mut out = [[[0u8; 32]; 8]; 22];
@@ -1222,107 +1219,99 @@ mod pack512 {
         v
     }
 
-    /// The kernel of [`pack_u32`].
+    /// The kernel of [`pack_u32`]: [`pack_k`] for `k`.
     ///
     /// # Safety
     /// The CPU has AVX-512F; `f` is valid for reads of `32 groups` values and `w` for writes of
-    /// `groups k` words; `11 <= k <= 32`; `table` is `PACK_TABLES[k - 11]`.
+    /// `groups k` words; `11 <= k <= 32` (any other width packs nothing).
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn pack(
-        f: *const u32,
-        w: *mut u32,
-        groups: usize,
-        k: u32,
-        table: &[[u8; 32]; 8],
-    ) {
-        let packer = Packer::new(k, table);
-        // SAFETY: the caller's contract, which is `groups`'.
-        unsafe { packer.groups(f, w, groups) };
+    pub(super) unsafe fn pack(f: *const u32, w: *mut u32, groups: usize, k: u32) {
+        // SAFETY: the caller's contract, with K = k.
+        unsafe { by_pack_width!(k as usize, pack512::pack_k(f, w, groups), ()) }
     }
 
-    /// [`pack`]'s constants for one width `k`, loaded once (the tiled build's rows that end a
-    /// tile row pack a few groups at a time: `band512::end_row_packed`): per half of the
-    /// output (words 0..16 and 16..k) the 4 index and 4 count vectors of `PACK_TABLES[k -
-    /// 11]` and how many words it stores; the fields' mask.
-    pub(super) struct Packer {
-        halves: [([__m512i; 4], [__m512i; 4], usize); 2],
-        mask: __m512i,
-        k: usize,
-    }
-
-    impl Packer {
-        /// The constants for `k` (`11..=32`) from its `table` (`PACK_TABLES[k - 11]`).
-        #[inline]
-        #[target_feature(enable = "avx512f")]
-        pub(super) fn new(k: u32, table: &[[u8; 32]; 8]) -> Packer {
-            let load = |r: usize, half: usize| {
-                // SAFETY: r < 8 and half is 0 or 1: 16 bytes inside the table's 32-byte row.
-                unsafe {
-                    _mm512_cvtepu8_epi32(_mm_loadu_si128(table[r].as_ptr().add(16 * half).cast()))
+    /// `PACK_TABLES[K - 11]` widened to 32-bit lanes, per half of the output (words 0..16 and
+    /// 16..K): rows 0..4 the terms' field indices, rows 4..8 their shift counts. A constant of
+    /// each instantiation of [`pack_k`], so its vectors are constants of the code.
+    const fn wide_table<const K: usize>() -> [[[u32; 16]; 8]; 2] {
+        let t = &PACK_TABLES[K - MIN_PACK_BITS as usize];
+        let mut out = [[[0u32; 16]; 8]; 2];
+        let mut h = 0;
+        while h < 2 {
+            let mut r = 0;
+            while r < 8 {
+                let mut j = 0;
+                while j < 16 {
+                    out[h][r][j] = t[r][16 * h + j] as u32;
+                    j += 1;
                 }
-            };
-            let mask = _mm512_set1_epi32(if k >= 32 {
-                -1
-            } else {
-                ((1u32 << k) - 1) as i32
-            });
-            let k = k as usize;
-            let half = |h: usize| {
-                (
-                    [load(0, h), load(1, h), load(2, h), load(3, h)],
-                    [load(4, h), load(5, h), load(6, h), load(7, h)],
-                    k.saturating_sub(16 * h).min(16),
-                )
-            };
-            Packer {
-                halves: [half(0), half(1)],
-                mask,
-                k,
+                r += 1;
             }
+            h += 1;
         }
+        out
+    }
 
-        /// Packs `groups` groups of 32 fields from `f` into `groups k` words at `w` (group `g`'s
-        /// fields `f[32 g..32 g + 32]`, their low `k` bits, at bit `i k` of words `w[g k..g k +
-        /// k]`).
-        ///
-        /// # Safety
-        /// The CPU has AVX-512F; `f` is valid for reads of `32 groups` values and `w` for
-        /// writes of `groups k` words.
-        #[inline]
-        #[target_feature(enable = "avx512f")]
-        pub(super) unsafe fn groups(&self, f: *const u32, w: *mut u32, groups: usize) {
-            let (k, m) = (self.k, self.mask);
-            for g in 0..groups {
-                // SAFETY: g < groups: f[32 g .. 32 g + 32] is readable and w[g k .. g k + k]
-                // writable (the caller's contract); each store writes n <= 16 words from
-                // 16 h < k on, so inside them.
-                unsafe {
-                    let a = _mm512_and_si512(_mm512_loadu_si512(f.add(32 * g).cast()), m);
-                    let b = _mm512_and_si512(_mm512_loadu_si512(f.add(32 * g + 16).cast()), m);
-                    for (h, (ix, c, n)) in self.halves.iter().enumerate() {
-                        if *n == 0 {
-                            continue;
-                        }
-                        let t = |i: usize| perm2(a, ix[i], b);
-                        // The fourth term only below 16 bits: from 16 bits on its shift count,
-                        // 3k - s > 2k, is at least 32, so it contributes nothing (the three ORs
-                        // become one `vpternlogd`).
-                        let mut v = _mm512_or_si512(
-                            _mm512_or_si512(
-                                _mm512_srlv_epi32(t(0), c[0]),
-                                _mm512_sllv_epi32(t(1), c[1]),
-                            ),
-                            _mm512_sllv_epi32(t(2), c[2]),
-                        );
-                        if k < 16 {
-                            v = _mm512_or_si512(v, _mm512_sllv_epi32(t(3), c[3]));
-                        }
-                        let out = w.add(g * k + 16 * h);
-                        if *n == 16 {
-                            _mm512_storeu_si512(out.cast(), v);
-                        } else {
-                            _mm512_mask_storeu_epi32(out.cast(), ((1u32 << n) - 1) as u16, v);
-                        }
+    /// [`pack`] for a width `K` known at compile time (`pack_u32`'s path, one instantiation per
+    /// width): the index and count vectors are constants, the terms, halves and masks of `K`
+    /// chosen at compile time, so a call does not build them first (built at run time from
+    /// `k`, they went through the stack: the call's fixed cost about halved on a Zen 4, where
+    /// a tiled band row's boundaries are 4 groups; docs/benchmarks.md, thirteenth session).
+    /// Every group but the last stores whole vectors: the words past its own
+    /// `K` that a 16-word store writes belong to the next group, which writes them after it
+    /// (for `K >= 16` they lie inside the next group's first 16 words, for `K < 16` inside
+    /// its `K`); the last group stores its own words only.
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F; `f` is valid for reads of `32 groups` values and `w` for writes of
+    /// `groups K` words; `11 <= K <= 32`.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn pack_k<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
+        let wide = const { wide_table::<K>() };
+        let m = _mm512_set1_epi32(if K >= 32 {
+            -1
+        } else {
+            ((1u32 << K) - 1) as i32
+        });
+        // SAFETY: each row is 16 u32, one 64-byte unaligned load.
+        let v = |h: usize, r: usize| unsafe { _mm512_loadu_si512(wide[h][r].as_ptr().cast()) };
+        let half = |h: usize| {
+            (
+                [v(h, 0), v(h, 1), v(h, 2), v(h, 3)],
+                [v(h, 4), v(h, 5), v(h, 6), v(h, 7)],
+                K.saturating_sub(16 * h).min(16),
+            )
+        };
+        let halves = [half(0), half(1)];
+        for g in 0..groups {
+            let last = g + 1 == groups;
+            // SAFETY: g < groups: f[32 g .. 32 g + 32] is readable (the caller's contract). The
+            // last group's stores write n <= 16 words from 16 h < K on, inside w[g K .. g K +
+            // K]; another group's whole stores end at g K + 16 h + 16 <= (groups - 2) K + 32
+            // <= groups K words (K >= 16 when h = 1, and K >= 8), inside the caller's words.
+            unsafe {
+                let a = _mm512_and_si512(_mm512_loadu_si512(f.add(32 * g).cast()), m);
+                let b = _mm512_and_si512(_mm512_loadu_si512(f.add(32 * g + 16).cast()), m);
+                for (h, (ix, c, n)) in halves.iter().enumerate() {
+                    if *n == 0 {
+                        continue;
+                    }
+                    let t = |i: usize| perm2(a, ix[i], b);
+                    let mut v = _mm512_or_si512(
+                        _mm512_or_si512(
+                            _mm512_srlv_epi32(t(0), c[0]),
+                            _mm512_sllv_epi32(t(1), c[1]),
+                        ),
+                        _mm512_sllv_epi32(t(2), c[2]),
+                    );
+                    if K < 16 {
+                        v = _mm512_or_si512(v, _mm512_sllv_epi32(t(3), c[3]));
+                    }
+                    let out = w.add(g * K + 16 * h);
+                    if *n == 16 || !last {
+                        _mm512_storeu_si512(out.cast(), v);
+                    } else {
+                        _mm512_mask_storeu_epi32(out.cast(), ((1u32 << n) - 1) as u16, v);
                     }
                 }
             }
@@ -3551,23 +3540,17 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
             let chunks = (n / band512::CHUNK)
                 .min(wl.len() / (7 * kl_))
                 .min(wb.len() / kb_);
-            let tables = PACK_TABLES
-                .get(kl_ - MIN_PACK_BITS as usize)
-                .zip(PACK_TABLES.get(kb_ - MIN_PACK_BITS as usize));
-            match tables {
-                Some((tl, tb)) if chunks > 0 => Some((chunks, (wl, kl, tl), (wb, kb, tb))),
-                _ => None,
-            }
+            (chunks > 0).then_some((chunks, (wl, kl), (wb, kb)))
         }
         _ => None,
     };
     let (done, run, ahead) = match fused {
-        Some((chunks, (wl, kl, tl), (wb, kb, tb))) => {
+        Some((chunks, (wl, kl), (wb, kb))) => {
             // SAFETY: AVX-512F and BW are available (the AVX-512 kernel's detection includes
             // F, `vbmi` BW); the kernel reads t[..256 chunks] (<= n), reads and writes the
             // column sums cs[..256 chunks] (u16 n..n + 256 chunks <= 2 n of acc0's storage)
             // and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb chunks],
-            // inside them (the chunks' bound above); k and its table for both; distinct
+            // inside them (the chunks' bound above); both widths in 11..=32 (above); distinct
             // slices.
             let run = unsafe {
                 band512::end_row_packed(
@@ -3575,8 +3558,8 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
                     cs,
                     ap,
                     chunks,
-                    (wl.as_mut_ptr(), kl, tl),
-                    (wb.as_mut_ptr(), kb, tb),
+                    (wl.as_mut_ptr(), kl),
+                    (wb.as_mut_ptr(), kb),
                     ahead,
                 )
             };
@@ -4091,7 +4074,7 @@ mod band512 {
     }
 
     /// Columns per chunk of [`end_row_packed`]: 32 tiles, whose 224 local sums and 32
-    /// boundaries are 7 and 1 groups of [`pack512::Packer`] (each chunk's fields start on a
+    /// boundaries are 7 and 1 groups of [`pack512::pack`] (each chunk's fields start on a
     /// word: `224 k` and `32 k` bits).
     pub(super) const CHUNK: usize = 256;
 
@@ -4137,8 +4120,8 @@ mod band512 {
     /// stored; its 28 local sums and 4 boundaries gathered (`vpermt2d`) into two small
     /// buffers (`buf`, `bbuf`: they stay in L1). Per chunk, the buffers packed into the rows:
     /// 7 groups of `kl`-bit fields at `wl + 7 kl chunk`, 1 group of `kb`-bit fields at `wb +
-    /// kb chunk` ([`pack512::Packer`], its constants computed once per row; with the kernel's
-    /// own they pass the 32 registers, and the compiler keeps some in L1). The 32-bit local
+    /// kb chunk` ([`pack512::pack`]: its constants are the code's, loaded from memory per
+    /// call; with the kernel's own they would pass the 32 registers). The 32-bit local
     /// sums and boundaries are not written to the builder's scratch and read back by a second
     /// pass, and the step itself takes about 40 instructions per 32 columns instead of about
     /// 75 ([`band256::end_row`]). The lines of `ahead` asked for a chunk ahead, a chunk (16
@@ -4150,7 +4133,7 @@ mod band512 {
     /// The CPU has AVX-512F and AVX-512BW; `t` valid for reads of `256 chunks` bytes, `cs` for
     /// reads and writes of `256 chunks` `u16`, `acc` for reads and writes of `256 chunks`
     /// words, `wl` for writes of `7 kl chunks` words, `wb` for writes of `kb chunks` words;
-    /// `11 <= kl, kb <= 32`, `tl` and `tb` their `PACK_TABLES` rows; not overlapping.
+    /// `11 <= kl, kb <= 32`; not overlapping.
     #[allow(
         clippy::too_many_arguments,
         reason = "a kernel's raw parts, one call site"
@@ -4161,13 +4144,12 @@ mod band512 {
         cs: *mut u16,
         acc: *mut u32,
         chunks: usize,
-        (wl, kl, tl): (*mut u32, u32, &[[u8; 32]; 8]),
-        (wb, kb, tb): (*mut u32, u32, &[[u8; 32]; 8]),
+        (wl, kl): (*mut u32, u32),
+        (wb, kb): (*mut u32, u32),
         ahead: Ahead,
     ) -> u32 {
         const STEPS: usize = CHUNK / 32;
         let mut prefetch = Prefetch::paced(ahead, CHUNK / BLOCK * chunks, CHUNK / BLOCK);
-        let (pl, pb) = (pack512::Packer::new(kl, tl), pack512::Packer::new(kb, tb));
         // 28 local sums per step, 16 past the last one's start stored: 224 + 4 words.
         let mut buf = [0u32; PAIR * STEPS + 4];
         let mut bbuf = [0u32; 4 * STEPS];
@@ -4218,8 +4200,13 @@ mod band512 {
             // wl[7 kl c..7 kl (c + 1)] and wb[kb c..kb (c + 1)] writable (the caller's
             // contract).
             unsafe {
-                pl.groups(buf.as_ptr(), wl.add(7 * kl as usize * c), PAIR * STEPS / 32);
-                pb.groups(bbuf.as_ptr(), wb.add(kb as usize * c), 1);
+                pack512::pack(
+                    buf.as_ptr(),
+                    wl.add(7 * kl as usize * c),
+                    PAIR * STEPS / 32,
+                    kl,
+                );
+                pack512::pack(bbuf.as_ptr(), wb.add(kb as usize * c), 1, kb);
             }
         }
         _mm_cvtsi128_si32(run) as u32
@@ -4441,6 +4428,18 @@ mod tests {
                     ran += usize::from(done > 0);
                     let want = field_by_field(noise.clone(), &fields[..done], k);
                     assert_eq!(words, want, "{name} k {k} n {n}");
+                    // Words exactly as long as the whole groups: the same words, none written
+                    // past them (Miri checks each store; `pack512::pack_k` stores whole
+                    // vectors for every group but the last).
+                    let len = n / 32 * k as usize;
+                    let mut exact = noise[..len].to_vec();
+                    let done = match kernel {
+                        // SAFETY: as above.
+                        Some(kr) => unsafe { pack_u32_with(kr, &mut exact, &fields, k) },
+                        None => pack_u32(&mut exact, &fields, k),
+                    };
+                    let fit = field_by_field(noise[..len].to_vec(), &fields[..done], k);
+                    assert_eq!(exact, fit, "{name} k {k} n {n}, exact words");
                 }
             }
         }
