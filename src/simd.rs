@@ -585,6 +585,9 @@ std::thread_local! {
     /// The chunks [`band_end_row`] packed in its pass on the calling test thread (tests: that
     /// `band512::end_row_packed` ran).
     pub(crate) static END_CHUNKS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
+    /// The rows [`band_rows`] took in runs on the calling test thread (tests: that the path
+    /// ran).
+    pub(crate) static RUN_ROWS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
 }
 
 impl Kernel {
@@ -2643,6 +2646,10 @@ fn tile_walk(
 /// at a time (4 fields of `k` bits per 64-bit lane, `7 k / 2` bytes).
 const PAIR: usize = 28;
 
+/// The most band rows [`band_rows`] takes at once: a tile row of 16 has 15 (the sixteenth
+/// ends it).
+pub(crate) const MAX_BAND_ROWS: usize = 15;
+
 /// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds position `x =
 /// 16 b + l + 1`, texel `j` of the block (`16 b + j`) counts in every `x > 16 b + j`. With `r =
 /// (l + 1) mod tile`, lane `l` is a tile boundary if `r = 0`: it takes the block's prefix sum
@@ -3467,6 +3474,110 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
         unsafe { base.add(j).write(u32::from(loc.add(j).read())) };
     }
     Some((kb, kl, kp))
+}
+
+/// Whether [`band_rows`] takes rows of `n` texels with fields of `k` bits, `exact` or not, on
+/// this CPU (asked before the rows are gathered: where it does not, the builder takes each
+/// row on its own).
+pub(crate) fn band_rows_apply<T: Texel, E: Entry, const C: usize>(
+    n: usize,
+    k: u32,
+    exact: bool,
+) -> bool {
+    band_types::<T, E, C>()
+        && exact
+        && matches!(k, 8 | 10 | 12 | 14)
+        && n > 0
+        && n.is_multiple_of(32)
+        && Kernel::best() == Kernel::Avx512Vnni
+        && vbmi()
+}
+
+/// [`band_row`] for a run of consecutive band rows of one tile row (`rows`, each `n` texels),
+/// on the path that packs in the pass only: AVX-512BW and VBMI, whole pairs of blocks (`n` a
+/// multiple of 32), exact fields of 8, 10, 12 or 14 bits from a byte-aligned `bit`;
+/// `band512::row_packed` on each row in turn, the checks and constants once for the run. Row
+/// `j`'s local sums are packed at `bit + j stride_bits` of `out` (the rows of component `(0,
+/// 0)` follow each other: `stride_bits = 28 (n / 32) k`), its `n / 8` boundaries stored at
+/// `bnd[j n / 8..]` (the caller packs them, one call for the run). `ahead`: the words of the
+/// run's boundaries' rows, asked for a row's share with each row (with the row's own packed
+/// bytes), when the layout is large enough. Returns whether it ran; `false` (nothing written)
+/// for other types, CPUs, widths or short slices: the caller then takes the rows one by one.
+pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
+    rows: &[&[T]],
+    acc0: &mut [E],
+    bnd: &mut [E],
+    ahead: Option<(*const u32, usize)>,
+    out: PackTo<'_>,
+) -> bool {
+    let n = acc0.len();
+    let r = rows.len();
+    let PackTo {
+        words,
+        bit,
+        k,
+        exact,
+    } = out;
+    if !band_rows_apply::<T, E, C>(n, k, exact) || bit % 8 != 0 || bit >= 32 {
+        return false;
+    }
+    let (pairs, nb) = (n / 32, n / 8);
+    let stride = 7 * k as usize / 2 * pairs;
+    let skip = bit as usize / 8;
+    let (Some(acc0), Some(bnd)) = (as_u32_mut::<E, C>(acc0), as_u32_mut::<E, C>(bnd)) else {
+        return false;
+    };
+    let fits = r
+        .checked_mul(stride)
+        .and_then(|b| b.checked_add(skip))
+        .is_some_and(|b| b <= 4 * words.len());
+    if r.checked_mul(nb).is_none_or(|b| b > bnd.len()) || !fits {
+        return false;
+    }
+    if rows
+        .iter()
+        .any(|row| as_u8(row).is_none_or(|b| b.len() != n))
+    {
+        return false;
+    }
+    let cs = acc0.as_mut_ptr().cast::<u16>().wrapping_add(n);
+    let out = words.as_mut_ptr().cast::<u8>().wrapping_add(skip);
+    // Each row's share of the boundaries' words (a hint: never read).
+    let share = ahead.map(|(p, len)| (p, len / r.max(1)));
+    for (j, row) in rows.iter().enumerate() {
+        let Some(t) = as_u8(row) else {
+            return false;
+        };
+        let to = out.wrapping_add(j * stride);
+        let lines: Ahead = match share {
+            Some((p, len)) => [
+                (to.cast::<u32>().cast_const(), stride / 4),
+                (p.wrapping_add(j * len), len),
+            ],
+            None => [(core::ptr::null(), 0); 2],
+        };
+        // SAFETY: AVX-512F, BW and VBMI are available (Kernel::best is AVX-512 VNNI, whose
+        // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum
+        // below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (= n, checked
+        // above), reads and writes the column sums cs[..32 pairs] (u16 n..2 n of acc0's n
+        // words), writes bnd[j nb..j nb + 4 pairs] (4 pairs = nb, r nb <= bnd.len()) and
+        // out[j stride..(j + 1) stride] (7 k / 2 pairs = stride, inside the words from byte
+        // skip: skip + r stride <= 4 words.len()); distinct slices.
+        unsafe {
+            band512::row_packed(
+                t.as_ptr(),
+                cs,
+                bnd.as_mut_ptr().add(j * nb),
+                pairs,
+                to,
+                k,
+                lines,
+            );
+        }
+    }
+    #[cfg(test)]
+    RUN_ROWS.with(|c| c.set(c.get() + r));
+    true
 }
 
 /// The rows of components `(0, 1)` and `(1, 1)` that [`band_end_row`] may pack into as it
@@ -5216,6 +5327,137 @@ mod tests {
                         &want_l[want_kp..],
                         "{len} words, {kernel:?}"
                     );
+                }
+            });
+        }
+    }
+
+    /// [`band_rows`] against [`band_row`] on each row in turn: the same packed words (every
+    /// bit, from byte offsets 0, 1 and 3 of a word; the words around the rows untouched), the
+    /// same boundaries, the same column sums after the run; runs of 2, 3 and 7 rows, fields of
+    /// 8 to 14 bits (texels bounded so that every local sum is below `2^k`). Where it does not
+    /// apply (no AVX-512 VBMI, a row not a whole number of pairs, inexact fields, too few
+    /// words) it returns `false` and writes nothing.
+    #[test]
+    fn band_rows_equal_band_row() {
+        extern crate std;
+        use std::vec::Vec;
+        fn check(n: usize, r: usize, k: u32, skip: usize, seed: &mut u64) {
+            let (pairs, nb, nl) = (n / 32, n / 8, n - n / 8);
+            // Local sums at most 7 columns of r rows of texels up to `top`: below 2^k.
+            let top = (((1u32 << k) - 1) / (7 * r as u32)).min(255) as u8;
+            let rows: Vec<Vec<u8>> = (0..r)
+                .map(|_| {
+                    (0..n)
+                        .map(|_| (u16::from(rng(seed)) % (u16::from(top) + 1)) as u8)
+                        .collect()
+                })
+                .collect();
+            let refs: Vec<&[u8]> = rows.iter().map(|v| v.as_slice()).collect();
+            // A row's bits (for a whole number of pairs, 8 times the kernel's stride).
+            let (stride, row_bits) = (7 * k as usize / 2 * pairs, nl * k as usize);
+            let len = (8 * skip + r * row_bits).div_ceil(32) + 2;
+            let noise: Vec<u32> = (0..len as u32)
+                .map(|i| 0x9e37_79b9u32.rotate_left(i))
+                .collect();
+            let bit = 8 * skip as u64;
+            // The reference: band_row on each row, its fields from bit + j row_bits.
+            let (_, mut acc_ref) = band_storage(&std::vec![0u16; n]);
+            let mut want_w = noise.clone();
+            let mut want_b = std::vec![0u32; r * nb];
+            for (j, row) in rows.iter().enumerate() {
+                let mut local = std::vec![0u32; nl];
+                let at = bit + (j * row_bits) as u64;
+                let (w0, b0) = ((at / 32) as usize, at % 32);
+                let got = band_row::<u8, u32, 1>(
+                    row,
+                    &mut acc_ref,
+                    &mut want_b[j * nb..(j + 1) * nb],
+                    &mut local,
+                    [(core::ptr::null(), 0); 2],
+                    Some(PackTo {
+                        words: &mut want_w[w0..],
+                        bit: b0,
+                        k,
+                        exact: true,
+                    }),
+                )
+                .unwrap();
+                assert_eq!((got.0, got.1), (nb, nl));
+                // Whatever band_row left unpacked, field by field.
+                for (i, &f) in local.iter().enumerate().skip(got.2) {
+                    let b = at + i as u64 * u64::from(k);
+                    assert!(crate::layouts::packed::write_bits(
+                        &mut want_w,
+                        b,
+                        k,
+                        u64::from(f)
+                    ));
+                }
+            }
+            let applies = band_rows_apply::<u8, u32, 1>(n, k, true);
+            for exact in [true, false] {
+                let (_, mut acc) = band_storage(&std::vec![0u16; n]);
+                let mut words = noise.clone();
+                let mut bnd = std::vec![0u32; r * nb];
+                let hint = Some((words.as_ptr(), words.len()));
+                let out = PackTo {
+                    words: &mut words,
+                    bit,
+                    k,
+                    exact,
+                };
+                let ran = band_rows::<u8, u32, 1>(&refs, &mut acc, &mut bnd, hint, out);
+                let what = std::format!("n {n}, {r} rows, k {k}, skip {skip}, exact {exact}");
+                assert_eq!(ran, applies && exact, "{what}");
+                if ran {
+                    assert_eq!(words, want_w, "{what}");
+                    assert_eq!(bnd, want_b, "{what}");
+                    assert_eq!(acc, acc_ref, "{what}");
+                } else {
+                    assert_eq!(words, noise, "{what}");
+                    assert!(bnd.iter().all(|&b| b == 0), "{what}");
+                }
+            }
+            // Too few words for the run: refused, nothing written.
+            if applies {
+                let (_, mut acc) = band_storage(&std::vec![0u16; n]);
+                let short = (skip + r * stride).div_ceil(4) - 1;
+                let mut words = noise[..short].to_vec();
+                let mut bnd = std::vec![0u32; r * nb];
+                let out = PackTo {
+                    words: &mut words,
+                    bit,
+                    k,
+                    exact: true,
+                };
+                assert!(!band_rows::<u8, u32, 1>(
+                    &refs, &mut acc, &mut bnd, None, out
+                ));
+                assert_eq!(words, noise[..short]);
+            }
+        }
+        let sizes: &[usize] = if cfg!(miri) {
+            &[32, 64]
+        } else {
+            &[32, 64, 96, 256, 40]
+        };
+        let runs: &[usize] = if cfg!(miri) { &[2] } else { &[2, 3, 7] };
+        let mut seed = 0x0b5e_55ed_2718_2818u64;
+        // (band_row, the reference, needs AVX2.)
+        for kernel in [Kernel::Avx2, Kernel::Avx512Vnni]
+            .into_iter()
+            .filter(|k| k.available())
+        {
+            kernel.cap(|| {
+                for &n in sizes {
+                    for &r in runs {
+                        for k in [8u32, 10, 12, 14] {
+                            for skip in [0usize, 1, 3] {
+                                check(n, r, k, skip, &mut seed);
+                            }
+                        }
+                    }
                 }
             });
         }

@@ -1253,3 +1253,66 @@ fn tiled_end_rows_under_every_kernel() {
         });
     }
 }
+
+/// `Tiled::build`, which takes the band rows of a tile row in runs where it can
+/// (`TiledBuilder::push_band_rows`, `simd::band_rows`: AVX-512 VBMI, whole pairs of blocks,
+/// local sums of 8 to 14 bits), against `TiledBuilder::push_row` row by row: the same words,
+/// every bit, for tiles 8 wide and 2 to 16 high (runs of 3 and 7 band rows; 8-bit texels give
+/// local sums of 11, 13, 14 and 15 bits, 7-bit texels in tiles 16 high 14 bits: runs of 15,
+/// cut by the scratch row to 8 and 7), widths with whole pairs and without (40, 520), heights
+/// with a partial tile row last, noise and saturated textures, under every build kernel this
+/// CPU runs; the rows taken in runs counted.
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+#[test]
+fn tiled_band_runs_equal_row_by_row() {
+    fn check(spec: TiledSpec, (w, h): (usize, usize), bits: u32, full: bool) -> (usize, u32) {
+        let top = (1u16 << bits) - 1;
+        let texels: Vec<u8> = if full {
+            std::vec![top as u8; w * h]
+        } else {
+            let n = noise_bytes(w * h, w as u64 * 7 + h as u64);
+            n.into_iter().map(|t| (u16::from(t) & top) as u8).collect()
+        };
+        let tex = Texture::<u8>::new(&texels, w, h).unwrap();
+        let need = Tiled::<u32>::words_needed(spec, w, h, bits).unwrap();
+        let mut scratch = std::vec![0u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
+        let mut want = std::vec![0x5a5a_5a5au32; need + 2];
+        let mut b = TiledBuilder::<u32>::new(spec, w, h, bits, &mut want, &mut scratch).unwrap();
+        for y in 0..h {
+            b.push_row(&texels[y * w..(y + 1) * w]).unwrap();
+        }
+        b.finish().unwrap();
+        let mut words = std::vec![0x5a5a_5a5au32; need + 2];
+        let before = crate::simd::RUN_ROWS.with(|c| c.get());
+        let mut b = TiledBuilder::<u32>::new(spec, w, h, bits, &mut words, &mut scratch).unwrap();
+        b.push_texture(&tex).unwrap();
+        b.finish().unwrap();
+        let runs = crate::simd::RUN_ROWS.with(|c| c.get()) - before;
+        let what = std::format!("{spec:?} {w}x{h}, {bits} bits, full {full}");
+        assert_eq!(words, want, "{what}");
+        let t = Tiled::<u32>::from_words(&words, spec, w, h, bits).unwrap();
+        (runs, t.field_bits(0, 0).unwrap())
+    }
+    let fused =
+        crate::simd::Kernel::best() == crate::simd::Kernel::Avx512Vnni && crate::simd::vbmi();
+    for kernel in crate::simd::Kernel::ALL
+        .into_iter()
+        .filter(|k| k.available())
+    {
+        kernel.cap(|| {
+            for (th, bits) in [(2u32, 8u32), (4, 8), (8, 8), (16, 8), (16, 7)] {
+                let spec = TiledSpec::tiles(8, th).unwrap();
+                for size in [(32, 16), (64, 21), (256, 35), (512, 17), (40, 16), (520, 9)] {
+                    for full in [false, true] {
+                        let (runs, k) = check(spec, size, bits, full);
+                        // Local sums of 8 to 14 bits, whole pairs, runs of 2 rows or more.
+                        let fits = matches!(k, 8 | 10 | 12 | 14) && size.0 % 32 == 0 && th > 2;
+                        let packs = fused && kernel == crate::simd::Kernel::Avx512Vnni;
+                        let what = std::format!("8 x {th}, {size:?}, k {k} under {kernel:?}");
+                        assert_eq!(runs > 0, packs && fits, "{what}");
+                    }
+                }
+            }
+        });
+    }
+}

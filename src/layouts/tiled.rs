@@ -942,7 +942,9 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
 
     /// Builds the layout of `texture` into `words` (see [`Tiled::words_needed`]) using `scratch`
     /// (see [`Tiled::scratch_needed`]); refuses, before writing, a texture whose worst-case
-    /// total does not fit `E`.
+    /// total does not fit `E`. The same words as a [`TiledBuilder`] fed row by row; with
+    /// `simd` it takes the band rows of each tile row in one step where they apply
+    /// (`TiledBuilder::push_texture`), which a caller streaming rows cannot.
     pub fn build<T: Texel>(
         texture: &Texture<'_, T, C>,
         spec: TiledSpec,
@@ -957,9 +959,7 @@ impl<'a, E: Entry, const C: usize> Tiled<'a, E, C> {
             words,
             scratch,
         )?;
-        for y in 0..texture.height() {
-            b.push_row(texture.row(y).ok_or(Error::EmptyTexture)?)?;
-        }
+        b.push_texture(texture)?;
         b.finish()
     }
 
@@ -2900,6 +2900,169 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             *rows_done += 1;
         }
         Ok(())
+    }
+
+    /// Every row of `texture` from the next one on ([`Tiled::build`]'s rows): with `simd`, the
+    /// band rows of a tile row in runs where they apply ([`TiledBuilder::push_band_rows`]),
+    /// the others (and all without `simd`) by [`TiledBuilder::push_row`]. The same table.
+    pub(super) fn push_texture<T: Texel>(
+        &mut self,
+        texture: &Texture<'_, T, C>,
+    ) -> Result<(), Error> {
+        let mut y = self.rows_done;
+        while y < texture.height() {
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            {
+                let took = self.push_band_rows(texture)?;
+                if took > 0 {
+                    y = y.saturating_add(took);
+                    continue;
+                }
+            }
+            self.push_row(texture.row(y).ok_or(Error::EmptyTexture)?)?;
+            y = y.saturating_add(1);
+        }
+        Ok(())
+    }
+
+    /// [`Tiled::build`]'s step for a run of the texture's next rows when they are band rows of
+    /// one tile row (`q = 0`) and the band form applies with one level of tiles on x
+    /// ([`BandPlan`]), on the AVX-512 path that packs in the pass (`simd::band_rows`: whole
+    /// pairs of blocks, the local sums' rows from a byte): the rest of the tile row's band
+    /// rows, at least two, as many as `simd::MAX_BAND_ROWS` and the scratch row (their
+    /// boundaries) hold. The same values and fields as [`TiledBuilder::push_row`] on each in
+    /// turn (each row its own pass, in order), with the builder's per-row work (the plan's
+    /// rows, the prefetch ranges, the checks, the packer's call for the boundaries: the
+    /// component's rows follow each other) once per run: a tiled build of 1,024^2 in cache
+    /// took about 0.87x the time, of 4,096^2 about 0.95x (docs/benchmarks.md, thirteenth
+    /// session). Row by row inside the run, not 32 columns of every row in turn: that saves
+    /// the column sums' store and load between the rows, but a cold build of 1,024^2 took
+    /// 1.3x the time (the interleaved rows' lines). Returns how many rows it took; 0 (nothing
+    /// changed) when the run does not apply, and the caller pushes the next row with
+    /// `push_row`. A refused row (wrong length, a texel too wide) refuses the run before
+    /// anything is written, with the error `push_row` gives for it.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    fn push_band_rows<T: Texel>(&mut self, texture: &Texture<'_, T, C>) -> Result<usize, Error> {
+        let TiledBuilder {
+            words,
+            scratch,
+            geo: g,
+            row_len,
+            rows_done,
+            band,
+            band_fits,
+            band_one,
+            ..
+        } = self;
+        let (Some(plan), true) = (band_one.as_ref(), *band_fits) else {
+            return Ok(0);
+        };
+        if !crate::simd::band_rows_apply::<T, E, C>(g.width, plan.local.bits, plan.exact) {
+            return Ok(0);
+        }
+        #[allow(
+            clippy::as_conversions,
+            reason = "u32 -> usize is lossless (MAX_DIMENSION)"
+        )]
+        let b1 = g.ay.block(1) as usize;
+        // Row rows_done + 1 + j is a band row while rows_done + 1 + j is not a multiple of b1:
+        // b1 - 1 - pos of them are left in this tile row (b1 >= 2).
+        let Some(pos) = rem_by(*rows_done, b1) else {
+            return Ok(0);
+        };
+        if pos != 0 && !*band {
+            return Ok(0);
+        }
+        let left = b1.saturating_sub(pos.saturating_add(1));
+        let y = *rows_done;
+        // As many as the texels' array and the scratch row (their boundaries) hold.
+        let r = left
+            .min(crate::simd::MAX_BAND_ROWS)
+            .min(g.height.saturating_sub(y))
+            .min(div_by(*row_len, plan.nb).unwrap_or(0));
+        if r < 2 {
+            return Ok(0);
+        }
+        let mut texels: [&[T]; crate::simd::MAX_BAND_ROWS] = [&[]; crate::simd::MAX_BAND_ROWS];
+        for (j, t) in texels.iter_mut().enumerate().take(r) {
+            *t = texture
+                .row(y.saturating_add(j))
+                .ok_or(Error::EmptyTexture)?;
+        }
+        let rows = texels.get(..r).unwrap_or(&[]);
+        let n = g.width;
+        let expected = n.checked_mul(C).ok_or(Error::TooManyRows)?;
+        for row in rows {
+            if row.len() != expected {
+                return Err(Error::RowLength {
+                    expected,
+                    got: row.len(),
+                });
+            }
+            check_texel_width(row, g.texel_bits)?;
+        }
+        // The rows' indices in components (0, 0) and (1, 0): consecutive (one tile row).
+        #[allow(
+            clippy::arithmetic_side_effects,
+            clippy::as_conversions,
+            reason = "rows_done + r <= h < 2^31 (MAX_DIMENSION): no wrap, lossless"
+        )]
+        let (y0, y1) = ((*rows_done + 1) as u32, (*rows_done + r) as u32);
+        let (Some((0, iy0)), Some((0, iy1))) = (g.ay.lowest(y0), g.ay.lowest(y1)) else {
+            return Ok(0);
+        };
+        #[allow(
+            clippy::as_conversions,
+            reason = "usize -> u64 is lossless; r <= MAX_BAND_ROWS"
+        )]
+        let rn = r as u64;
+        if Some(u64::from(iy1)) != u64::from(iy0).checked_add(rn.saturating_sub(1)) {
+            return Ok(0);
+        }
+        let short = Error::StorageTooSmall {
+            needed: *row_len,
+            got: scratch.len(),
+        };
+        let (buf, accs) = scratch.split_at_mut_checked(*row_len).ok_or(short)?;
+        let acc = accs.get_mut(C..*row_len).ok_or(short)?;
+        let too_small = plan.too_small(words.len());
+        // Both components' rows iy0..=iy1: their first bits and the words they span.
+        let span = |c: &Component| {
+            let at = c.offset(0, iy0);
+            let bits = c.row_bits.checked_mul(rn)?;
+            let from = usize::try_from(at / 32).ok()?;
+            let to = usize::try_from(at.checked_add(bits)?.div_ceil(32)).ok()?;
+            (from <= to && to <= words.len()).then_some((at, from..to))
+        };
+        let ((at0, row0), (at1, row1)) = (
+            span(&plan.local).ok_or(too_small)?,
+            span(&plan.bnd).ok_or(too_small)?,
+        );
+        let [_, bnd_lines] = plan.ahead(words, &[(at0, row0.clone()), (at1, row1)]);
+        let ahead = (!bnd_lines.0.is_null()).then_some(bnd_lines);
+        let nb = r.checked_mul(plan.nb).ok_or(short)?;
+        let bnd = buf.get_mut(..nb).ok_or(short)?;
+        let out = crate::simd::PackTo {
+            words: words.get_mut(row0).ok_or(too_small)?,
+            bit: at0 % 32,
+            k: plan.local.bits,
+            exact: plan.exact,
+        };
+        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, ahead, out) {
+            return Ok(0);
+        }
+        if !pack_fields(words, at1, bnd, plan.bnd.bits) {
+            return Err(too_small);
+        }
+        *band = true;
+        #[allow(
+            clippy::arithmetic_side_effects,
+            reason = "rows_done + r <= h (r bounded above)"
+        )]
+        {
+            *rows_done += r;
+        }
+        Ok(r)
     }
 
     /// [`TiledBuilder::push_row`]'s step for a row in the band form (`q = 0`,
