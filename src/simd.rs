@@ -2646,9 +2646,10 @@ fn tile_walk(
 /// at a time (4 fields of `k` bits per 64-bit lane, `7 k / 2` bytes).
 const PAIR: usize = 28;
 
-/// The most band rows [`band_rows`] takes at once: a tile row of 16 has 15 (the sixteenth
-/// ends it).
-pub(crate) const MAX_BAND_ROWS: usize = 15;
+/// The most band rows [`band_rows`] takes at once: the builder's scratch row holds the
+/// boundaries of `(n + 1) / (n / 8)` rows, 8 for every width `band_rows` takes (a multiple of
+/// 32): a tile row of 8 (7 band rows) in one run, of 16 (15) in two.
+pub(crate) const MAX_BAND_ROWS: usize = 8;
 
 /// [`tiled_row`]'s lane pattern for one tile width: lane `l` of a block holds position `x =
 /// 16 b + l + 1`, texel `j` of the block (`16 b + j`) counts in every `x > 16 b + j`. With `r =
@@ -4539,18 +4540,18 @@ mod tests {
                     ran += usize::from(done > 0);
                     let want = field_by_field(noise.clone(), &fields[..done], k);
                     assert_eq!(words, want, "{name} k {k} n {n}");
-                    // Words exactly as long as the whole groups: the same words, none written
-                    // past them (Miri checks each store; `pack512::pack_k` stores whole
-                    // vectors for every group but the last).
+                    // Words exactly as long as the whole groups, guard words after them: the
+                    // same words, the guards untouched (`pack512::pack_k` stores whole
+                    // vectors for every group but the last; Miri checks each store too).
                     let len = n / 32 * k as usize;
-                    let mut exact = noise[..len].to_vec();
+                    let mut guarded = noise.clone();
                     let done = match kernel {
                         // SAFETY: as above.
-                        Some(kr) => unsafe { pack_u32_with(kr, &mut exact, &fields, k) },
-                        None => pack_u32(&mut exact, &fields, k),
+                        Some(kr) => unsafe { pack_u32_with(kr, &mut guarded[..len], &fields, k) },
+                        None => pack_u32(&mut guarded[..len], &fields, k),
                     };
-                    let fit = field_by_field(noise[..len].to_vec(), &fields[..done], k);
-                    assert_eq!(exact, fit, "{name} k {k} n {n}, exact words");
+                    let fit = field_by_field(noise.clone(), &fields[..done], k);
+                    assert_eq!(guarded, fit, "{name} k {k} n {n}, exact words");
                 }
             }
         }

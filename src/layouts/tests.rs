@@ -1229,90 +1229,155 @@ fn tiled_end_rows_under_every_kernel() {
         (520, 24, 0),
         (136, 16, 0),
     ];
+    under_every_kernel(|kernel, packs| {
+        for &(w, h, per_row) in &sizes {
+            for full in [false, true] {
+                let chunks = check(w, h, full);
+                // Where both components' rows all start on a word (7/8 of 256 columns are 224 k
+                // bits, their boundaries 32 k; 384 x 24: 336 fields of 16 bits and 48 of 22),
+                // every row that ends a tile row packs all its chunks in the pass, and the 128
+                // columns after them go to the packer (384); where they do not (808 x 27, 520 x
+                // 24: 707 and 455 fields of 16 bits per row of `(0, 1)`), or without a whole
+                // chunk (136), none.
+                let want = if packs { h / 8 * per_row } else { 0 };
+                assert_eq!(chunks, want, "{w}x{h}, full {full}, under {kernel:?}");
+            }
+        }
+    });
+}
+
+/// Runs `f(kernel, packs)` under every build kernel this CPU runs ([`Kernel::cap`]), `packs`
+/// telling whether that kernel takes the paths that pack in the pass (AVX-512 with VBMI).
+///
+/// [`Kernel::cap`]: crate::simd::Kernel::cap
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+fn under_every_kernel(mut f: impl FnMut(crate::simd::Kernel, bool)) {
     let fused =
         crate::simd::Kernel::best() == crate::simd::Kernel::Avx512Vnni && crate::simd::vbmi();
     for kernel in crate::simd::Kernel::ALL
         .into_iter()
         .filter(|k| k.available())
     {
-        kernel.cap(|| {
-            for &(w, h, per_row) in &sizes {
-                for full in [false, true] {
-                    let chunks = check(w, h, full);
-                    // Where both components' rows all start on a word (7/8 of 256 columns are
-                    // 224 k bits, their boundaries 32 k; 384 x 24: 336 fields of 16 bits and
-                    // 48 of 22), every row that ends a tile row packs all its chunks in the
-                    // pass, and the 128 columns after them go to the packer (384); where they
-                    // do not (808 x 27, 520 x 24: 707 and 455 fields of 16 bits per row of
-                    // `(0, 1)`), or without a whole chunk (136), none.
-                    let packs = fused && kernel == crate::simd::Kernel::Avx512Vnni;
-                    let want = if packs { h / 8 * per_row } else { 0 };
-                    assert_eq!(chunks, want, "{w}x{h}, full {full}, under {kernel:?}");
-                }
-            }
-        });
+        kernel.cap(|| f(kernel, fused && kernel == crate::simd::Kernel::Avx512Vnni));
     }
 }
 
 /// `Tiled::build`, which takes the band rows of a tile row in runs where it can
-/// (`TiledBuilder::push_band_rows`, `simd::band_rows`: AVX-512 VBMI, whole pairs of blocks,
-/// local sums of 8 to 14 bits), against `TiledBuilder::push_row` row by row: the same words,
-/// every bit, for tiles 8 wide and 2 to 16 high (runs of 3 and 7 band rows; 8-bit texels give
-/// local sums of 11, 13, 14 and 15 bits, 7-bit texels in tiles 16 high 14 bits: runs of 15,
-/// cut by the scratch row to 8 and 7), widths with whole pairs and without (40, 520), heights
-/// with a partial tile row last, noise and saturated textures, under every build kernel this
-/// CPU runs; the rows taken in runs counted.
+/// (`TiledBuilder::push_band_rows`, `simd::band_rows`: AVX-512 VBMI, one level of tiles 8 wide,
+/// whole pairs of blocks, local sums of 8 to 14 bits), against `TiledBuilder::push_row` row by
+/// row: the same words, every bit, and exactly the rows the runs should take (the rest of each
+/// tile row's band rows, at most 8: the scratch row; at least 2). Tiles 8 wide and 2 to 16
+/// high: runs of 7 band rows (8 x 8, 8-bit texels: local sums of 14 bits), of 3 (8 x 4, 7-bit
+/// texels: 12 bits) and of 15 split 8 + 7 (8 x 16, 7-bit texels: 14 bits), none for local sums
+/// of 11, 13 and 15 bits (8 x 2, 8 x 4 and 8 x 16 with 8-bit texels); two levels on y (8 and
+/// 32, 8 and 64); widths with whole pairs and without (40, 520); heights with a partial tile
+/// row last (shorter runs); rows a stride apart wider than the texture; the first rows pushed
+/// one by one before the rest (a run starting inside a tile row); noise and saturated
+/// textures; under every build kernel this CPU runs.
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 #[test]
 fn tiled_band_runs_equal_row_by_row() {
-    fn check(spec: TiledSpec, (w, h): (usize, usize), bits: u32, full: bool) -> (usize, u32) {
+    struct Case {
+        spec: TiledSpec,
+        w: usize,
+        h: usize,
+        bits: u32,
+        pad: usize,
+        first: usize,
+    }
+    fn check(c: &Case, full: bool, packs: bool) {
+        let Case {
+            spec,
+            w,
+            h,
+            bits,
+            pad,
+            first,
+        } = *c;
         let top = (1u16 << bits) - 1;
+        let stride = w + pad;
         let texels: Vec<u8> = if full {
-            std::vec![top as u8; w * h]
+            std::vec![top as u8; stride * h]
         } else {
-            let n = noise_bytes(w * h, w as u64 * 7 + h as u64);
+            let n = noise_bytes(stride * h, w as u64 * 7 + h as u64);
             n.into_iter().map(|t| (u16::from(t) & top) as u8).collect()
         };
-        let tex = Texture::<u8>::new(&texels, w, h).unwrap();
+        let tex = Texture::<u8>::with_stride(&texels, w, h, stride).unwrap();
         let need = Tiled::<u32>::words_needed(spec, w, h, bits).unwrap();
         let mut scratch = std::vec![0u32; Tiled::<u32>::scratch_needed(spec, w).unwrap()];
         let mut want = std::vec![0x5a5a_5a5au32; need + 2];
         let mut b = TiledBuilder::<u32>::new(spec, w, h, bits, &mut want, &mut scratch).unwrap();
         for y in 0..h {
-            b.push_row(&texels[y * w..(y + 1) * w]).unwrap();
+            b.push_row(tex.row(y).unwrap()).unwrap();
         }
         b.finish().unwrap();
         let mut words = std::vec![0x5a5a_5a5au32; need + 2];
         let before = crate::simd::RUN_ROWS.with(|c| c.get());
         let mut b = TiledBuilder::<u32>::new(spec, w, h, bits, &mut words, &mut scratch).unwrap();
+        for y in 0..first {
+            b.push_row(tex.row(y).unwrap()).unwrap();
+        }
         b.push_texture(&tex).unwrap();
         b.finish().unwrap();
         let runs = crate::simd::RUN_ROWS.with(|c| c.get()) - before;
-        let what = std::format!("{spec:?} {w}x{h}, {bits} bits, full {full}");
-        assert_eq!(words, want, "{what}");
+        let what = std::format!("{spec:?} {w}x{h} (+{pad}), {bits} bits, from {first}");
+        assert_eq!(words, want, "{what}, full {full}");
+        // The rows the runs should take: from each row on, the rest of its tile row's band
+        // rows (th: the lowest y level), at most 8, when 2 or more.
         let t = Tiled::<u32>::from_words(&words, spec, w, h, bits).unwrap();
-        (runs, t.field_bits(0, 0).unwrap())
-    }
-    let fused =
-        crate::simd::Kernel::best() == crate::simd::Kernel::Avx512Vnni && crate::simd::vbmi();
-    for kernel in crate::simd::Kernel::ALL
-        .into_iter()
-        .filter(|k| k.available())
-    {
-        kernel.cap(|| {
-            for (th, bits) in [(2u32, 8u32), (4, 8), (8, 8), (16, 8), (16, 7)] {
-                let spec = TiledSpec::tiles(8, th).unwrap();
-                for size in [(32, 16), (64, 21), (256, 35), (512, 17), (40, 16), (520, 9)] {
-                    for full in [false, true] {
-                        let (runs, k) = check(spec, size, bits, full);
-                        // Local sums of 8 to 14 bits, whole pairs, runs of 2 rows or more.
-                        let fits = matches!(k, 8 | 10 | 12 | 14) && size.0 % 32 == 0 && th > 2;
-                        let packs = fused && kernel == crate::simd::Kernel::Avx512Vnni;
-                        let what = std::format!("8 x {th}, {size:?}, k {k} under {kernel:?}");
-                        assert_eq!(runs > 0, packs && fits, "{what}");
-                    }
-                }
+        let k = t.field_bits(0, 0).unwrap();
+        let th = spec.y.blocks()[0] as usize;
+        let fits =
+            packs && spec.x.blocks().len() == 1 && matches!(k, 8 | 10 | 12 | 14) && w % 32 == 0;
+        let mut expect = 0;
+        let mut y = first;
+        while fits && y < h {
+            let r = (th - 1 - y % th).min(h - y).min(8);
+            if r >= 2 {
+                expect += r;
+                y += r;
+            } else {
+                y += 1;
             }
-        });
+        }
+        assert_eq!(runs, expect, "{what}, k {k}");
     }
+    let spec = |x: &[u32], y: &[u32]| TiledSpec {
+        x: AxisLevels::new(x).unwrap(),
+        y: AxisLevels::new(y).unwrap(),
+        modulus: None,
+    };
+    let mut cases = Vec::new();
+    for (th, bits) in [(2u32, 8u32), (4, 8), (4, 7), (8, 8), (16, 8), (16, 7)] {
+        for (w, h) in [(32, 16), (64, 21), (256, 35), (512, 17), (40, 16), (520, 9)] {
+            let (pad, first) = (0, 0);
+            cases.push(Case {
+                spec: spec(&[8], &[th]),
+                w,
+                h,
+                bits,
+                pad,
+                first,
+            });
+        }
+    }
+    for (y, bits) in [(&[8u32, 32][..], 6u32), (&[8, 64][..], 6), (&[8][..], 8)] {
+        for (w, h, pad, first) in [(64, 75, 0, 0), (96, 40, 5, 3), (128, 33, 32, 10)] {
+            cases.push(Case {
+                spec: spec(&[8], y),
+                w,
+                h,
+                bits,
+                pad,
+                first,
+            });
+        }
+    }
+    under_every_kernel(|_, packs| {
+        for c in &cases {
+            for full in [false, true] {
+                check(c, full, packs);
+            }
+        }
+    });
 }

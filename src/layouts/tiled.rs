@@ -2909,10 +2909,16 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         &mut self,
         texture: &Texture<'_, T, C>,
     ) -> Result<(), Error> {
+        // Whether runs can apply at all (the geometry, the types, the CPU): asked once.
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let runs = self.band_fits
+            && self.band_one.is_some_and(|plan| {
+                crate::simd::band_rows_apply::<T, E, C>(self.geo.width, plan.local.bits, plan.exact)
+            });
         let mut y = self.rows_done;
         while y < texture.height() {
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-            {
+            if runs {
                 let took = self.push_band_rows(texture)?;
                 if took > 0 {
                     y = y.saturating_add(took);
@@ -2940,7 +2946,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
     /// 1.3x the time (the interleaved rows' lines). Returns how many rows it took; 0 (nothing
     /// changed) when the run does not apply, and the caller pushes the next row with
     /// `push_row`. A refused row (wrong length, a texel too wide) refuses the run before
-    /// anything is written, with the error `push_row` gives for it.
+    /// anything is written, with the error `push_row` gives for it (the rows before it in the
+    /// run are not taken either, where `push_row` would have taken them: `Tiled::build`'s rows,
+    /// whole rows of texels of `T::BITS`, are never refused).
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     fn push_band_rows<T: Texel>(&mut self, texture: &Texture<'_, T, C>) -> Result<usize, Error> {
         let TiledBuilder {
