@@ -2909,12 +2909,12 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         &mut self,
         texture: &Texture<'_, T, C>,
     ) -> Result<(), Error> {
-        // Whether runs can apply at all (the geometry, the types, the CPU): asked once.
+        // Whether runs can apply at all (the geometry, the types, the CPU): asked once here,
+        // not per run (`band_one` is a plan only where the band form fits).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        let runs = self.band_fits
-            && self.band_one.is_some_and(|plan| {
-                crate::simd::band_rows_apply::<T, E, C>(self.geo.width, plan.local.bits, plan.exact)
-            });
+        let runs = self.band_one.is_some_and(|plan| {
+            crate::simd::band_rows_apply::<T, E, C>(self.geo.width, plan.local.bits, plan.exact)
+        });
         let mut y = self.rows_done;
         while y < texture.height() {
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
@@ -2958,16 +2958,14 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             row_len,
             rows_done,
             band,
-            band_fits,
             band_one,
             ..
         } = self;
-        let (Some(plan), true) = (band_one.as_ref(), *band_fits) else {
+        // (Whether the runs apply at all was asked by `push_texture`; `simd::band_rows` checks
+        // again before its kernel.)
+        let Some(plan) = band_one.as_ref() else {
             return Ok(0);
         };
-        if !crate::simd::band_rows_apply::<T, E, C>(g.width, plan.local.bits, plan.exact) {
-            return Ok(0);
-        }
         #[allow(
             clippy::as_conversions,
             reason = "u32 -> usize is lossless (MAX_DIMENSION)"
