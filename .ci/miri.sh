@@ -67,7 +67,7 @@ step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512
 # src/simd.rs is the crate's only unsafe code: its exhaustive small-size tests under Miri, which
 # emulates the intrinsics (the CPU need not have them) but not CPUID, so the kernels are those the
 # target features enable: each run tests every kernel up to its flags, in its own target dir.
-# The last set adds AVX-512BW and VBMI: the tiled kernels that pack their local sums in the row
+# The last set adds AVX-512BW, DQ and VBMI: the tiled kernels that pack their local sums in the row
 # step, tiled512::kernel8_packed, band512::row_packed and band512::end_row_packed (Miri emulates
 # their loads and stores; the word and byte permutes it cannot emulate are computed field by
 # field under cfg(miri), src/simd.rs). Miri is single-threaded: two sets at a time, each in its
@@ -95,7 +95,7 @@ pair() {
   if [ "$sa" -ne 0 ] || [ "$sb" -ne 0 ]; then failed=1; fi
 }
 pair "" "-C target-feature=+avx2"
-pair "-C target-feature=+avx512f,+avx512vl,+avx512vnni" "-C target-feature=+avx512f,+avx512vl,+avx512vnni,+avx512bw,+avx512vbmi"
+pair "-C target-feature=+avx512f,+avx512vl,+avx512vnni" "-C target-feature=+avx512f,+avx512vl,+avx512vnni,+avx512bw,+avx512dq,+avx512vbmi"
 if [ "$failed" -ne 0 ]; then
   echo "miri: the simd kernels FAILED under Miri (logs above)"
   exit 1
