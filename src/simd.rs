@@ -30,10 +30,10 @@
 //! without a modulus whose tiles' sums fit 16 bits),
 //! the level-0 accumulator kept as 16-bit column sums and the local sums packed from 16 bits
 //! ([`pack256::even`], which also packs `u32` fields of 12 and 14 bits for [`pack_u32`]; with
-//! AVX-512BW and VBMI as well, `band512::row_packed` packs them in the row step itself, 32
-//! columns at a time, and stores no 16-bit values); [`band_end_row`]: the rows that end a tile
-//! row, which add the column sums' form into the level above (with AVX-512BW as well,
-//! `band512::end_row_packed` packs both components' rows in the same pass, 256 columns at a
+//! AVX-512BW, DQ and VBMI as well, `band512::row_packed` packs them in the row step itself,
+//! 32 columns at a time, and stores no 16-bit values); [`band_end_row`]: the rows that end a
+//! tile row, which add the column sums' form into the level above (with AVX-512BW and DQ as
+//! well, `band512::end_row_packed` packs both components' rows in the same pass, 256 columns at a
 //! time); [`band_flush`] turns the column sums back into the accumulator. The kernel is the
 //! widest this CPU runs, detected once at run time from CPUID and XGETBV (no `std` needed), as
 //! OpenCV and the standard
@@ -81,9 +81,11 @@
 //!    XGETBV, after CPUID reports OSXSAVE) is the only reason for `unsafe` beyond the memory
 //!    accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its AVX-512 kernel `groups` with `32 groups <=
-//!    fields.len()` and `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]`
-//!    and writes `words[g k..g k + k]` (16 words and a masked store of the rest) for `g <
-//!    groups` only. It passes its AVX2 kernel `runs` (of 16 fields, `2 k` bytes) with `16
+//!    fields.len()` and `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and
+//!    writes `words[g k..g k + k]` for `g < groups` (16 words, then the rest: 16 words, or 8 for
+//!    `k` = 17 to 24; a whole store past `g k + k` reaches the next group's words, inside
+//!    `words[..groups k]`, which that group rewrites after; the last group's last store is masked
+//!    to its own words) only. It passes its AVX2 kernel `runs` (of 16 fields, `2 k` bytes) with `16
 //!    runs <= fields.len()` and `2 k runs <= 4 words.len()` bytes; the kernel reads
 //!    `fields[..16 runs]` and writes the first `2 k runs` bytes of `words` only (8 words at a
 //!    time, then a group's last 4 or 8 words, some of them a second time with the same value;
@@ -1145,11 +1147,10 @@ unsafe fn pack_u32_with<E: Entry>(
     if groups == 0 {
         return 0;
     }
-    // SAFETY: AVX-512F and VL are available (`kernel` is Avx512Vnni, whose detection includes
-    // them, and
-    // available: the caller's contract); `f` holds at least 32 groups values and `words` at
-    // least groups k words (above); the kernel reads f[0..32 groups] and writes
-    // words[0..groups k] only; 11 <= k <= 32 (above).
+    // SAFETY: AVX-512F and VL are available (`kernel` is Avx512Vnni, whose detection includes them,
+    // and available: the caller's contract); `f` holds at least 32 groups values and `words` at
+    // least groups k words (above); the kernel reads f[0..32 groups] and writes words[0..groups k]
+    // only; 11 <= k <= 32 (above).
     unsafe { pack512::pack(f.as_ptr(), words.as_mut_ptr(), groups, k) };
     groups * 32
 }
@@ -1231,8 +1232,7 @@ mod pack512 {
     ///
     /// # Safety
     /// The CPU has AVX-512F and VL; `f` is valid for reads of `32 groups` values and `w` for
-    /// writes of
-    /// `groups k` words; `11 <= k <= 32` (any other width packs nothing).
+    /// writes of `groups k` words; `11 <= k <= 32` (any other width packs nothing).
     #[target_feature(enable = "avx512f,avx512vl")]
     pub(super) unsafe fn pack(f: *const u32, w: *mut u32, groups: usize, k: u32) {
         // SAFETY: the caller's contract, with K = k.
@@ -1305,14 +1305,14 @@ mod pack512 {
     /// `k`, they went through the stack: the call's fixed cost about halved on a Zen 4, where
     /// a tiled band row's boundaries are 4 groups; docs/benchmarks.md, thirteenth session).
     /// Every group but the last stores whole vectors: the words past its own
-    /// `K` that a 16-word store writes belong to the next group, which writes them after it
-    /// (for `K >= 16` they lie inside the next group's first 16 words, for `K < 16` inside
-    /// its `K`); the last group stores its own words only.
+    /// `K` that a 16-word (or, for words 16..K with `K` = 17 to 24, 8-word) store writes
+    /// belong to the next group, which writes them after it (for `K >= 16` they lie inside the
+    /// next group's first 16 words, for `K < 16` inside its `K`); the last group stores its own
+    /// words only.
     ///
     /// # Safety
     /// The CPU has AVX-512F and VL; `f` is valid for reads of `32 groups` values and `w` for
-    /// writes of
-    /// `groups K` words; `11 <= K <= 32`.
+    /// writes of `groups K` words; `11 <= K <= 32`.
     #[target_feature(enable = "avx512f,avx512vl")]
     pub(super) unsafe fn pack_k<const K: usize>(f: *const u32, w: *mut u32, groups: usize) {
         let wide = const { wide_table::<K>() };
@@ -3332,7 +3332,7 @@ mod tiled256 {
 /// Whether the band rows ([`band_row`], [`band_flush`]) can take a tiled build's rows that end
 /// no tile row, entries `E`, `C` channels (with texels of [`band_types`]): `u32` entries, one
 /// channel; with AVX2, on an AVX-512 CPU too (there the rows that end a tile row take
-/// [`band_end_row`], with AVX-512BW its packing step `band512::end_row_packed`, and only the
+/// [`band_end_row`], with AVX-512BW and DQ its packing step `band512::end_row_packed`, and only the
 /// rows that end a level above the tiles the AVX-512 row kernel; the boundaries go to the
 /// widest packer; on a Zen 4 guest the tiled build of 1,024^2 took 0.80x the time with the
 /// band rows, 4,096^2 about the same:
@@ -3386,7 +3386,8 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// byte-aligned `bit`: `kp` fields, a multiple of 16 on this path), the rest widened into
 /// `local`.
 ///
-/// With AVX-512BW and VBMI, fields below `2^k` (`exact`) and room for them, the pairs of blocks
+/// With AVX-512BW, DQ and VBMI, fields below `2^k` (`exact`) and room for them, the pairs of
+/// blocks
 /// go through `band512::row_packed` instead, which packs their local sums in the same pass
 /// (`28 (n / 32)` fields, `7 k / 2` bytes per pair) and stores no 16-bit values;
 /// `pack256::even` then packs whole steps of 16 of the tail's after them where the target's
@@ -3570,7 +3571,7 @@ pub(crate) fn band_rows_apply<T: Texel, E: Entry, const C: usize>(
 }
 
 /// [`band_row`] for a run of consecutive band rows of one tile row (`rows`, each `n` texels),
-/// on the path that packs in the pass only: AVX-512BW and VBMI, whole pairs of blocks (`n` a
+/// on the path that packs in the pass only: AVX-512BW, DQ and VBMI, whole pairs of blocks (`n` a
 /// multiple of 32), exact fields of 8, 10, 12 or 14 bits from a byte-aligned `bit`;
 /// `band512::row_packed` on each row in turn, the checks and constants once for the run. Row
 /// `j`'s local sums are packed at `bit + j stride_bits` of `out` (the rows of component `(0,
@@ -3734,11 +3735,11 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     let (done, run, ahead) = match fused {
         Some((chunks, (wl, kl), (wb, kb))) => {
             // SAFETY: AVX-512F, VL, BW and DQ are available (the AVX-512 kernel's detection
-            // includes F and VL, `vbmi` BW and DQ); the kernel reads t[..256 chunks] (<= n), reads and
-            // writes the column sums cs[..256 chunks] (u16 n..n + 256 chunks <= 2 n of acc0's
-            // storage) and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb
-            // chunks], inside them (the chunks' bound above); both widths in 11..=32 (above);
-            // distinct slices.
+            // includes F and VL, `vbmi` BW and DQ); the kernel reads t[..256 chunks] (<= n), reads
+            // and writes the column sums cs[..256 chunks] (u16 n..n + 256 chunks <= 2 n of acc0's
+            // storage) and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb chunks],
+            // inside them (the chunks' bound above); both widths in 11..=32 (above); distinct
+            // slices.
             let run = unsafe {
                 band512::end_row_packed(
                     t.as_ptr(),
@@ -4057,8 +4058,8 @@ mod band256 {
     }
 }
 
-/// [`band_row`]'s kernel on CPUs with AVX-512BW and VBMI when the local sums are packed as they
-/// are computed (see [`band512::row_packed`]).
+/// [`band_row`]'s kernel on CPUs with AVX-512BW, DQ and VBMI when the local sums are packed as
+/// they are computed (see [`band512::row_packed`]); [`band_end_row`]'s with BW and DQ.
 mod band512 {
     use super::*;
 
@@ -4099,7 +4100,9 @@ mod band512 {
     /// A 64-bit lane holding `x_0..x_3` (16 bits each, `x_0` lowest) times `1 + 2^16 + 2^32 +
     /// 2^48` (`vpmullq`, the product's low 64 bits) is `sum_j 2^(16 j) (x_0 + ... + x_j)`: lane
     /// `j` of the product is the prefix `x_0 + ... + x_j` as long as no prefix carries past 16
-    /// bits, and none does when the tile's sum fits 16 bits. Then lane 3 (the low half's total)
+    /// bits, and none does when the tile's sum fits 16 bits (a carry can leave lanes 0 to 2 and
+    /// 4 to 6 only: lanes 3 and 7 wrap as the 16-bit adds did, so the local sums' bound is
+    /// what matters). Then lane 3 (the low half's total)
     /// is broadcast into lanes 4..8 (`vpshufb`, zeros into lanes 0..4) and added. One multiply
     /// and one shuffle instead of three byte shifts (shuffles) and three adds: on a Zen 4,
     /// `band512::row_packed` took 0.87x the time per row and a tiled build of 1,024^2 0.88x
@@ -4214,7 +4217,7 @@ mod band512 {
     /// pairs', rewritten by their stores in order; then a masked store of exactly its bytes);
     /// the 4 tiles' totals ([`totals`]) prefix-summed onto the running sum and stored as the 4
     /// boundaries. The 16-bit local sums of [`band256::row`] are neither stored nor read back
-    /// by [`pack256::even`]: per 32 columns about 25 instructions instead of about 55. The
+    /// by [`pack256::even`]: per 32 columns about 22 instructions instead of about 55. The
     /// lines of `ahead` asked for at the row's pace, 16 blocks ahead ([`Prefetch::paced`]: the
     /// pairs pack as they go), a group of 4 pairs at a time.
     ///
@@ -4336,7 +4339,7 @@ mod band512 {
     /// kb chunk` ([`pack512::pack`]: its constants are the code's, loaded from memory per
     /// call; with the kernel's own they would pass the 32 registers). The 32-bit local
     /// sums and boundaries are not written to the builder's scratch and read back by a second
-    /// pass, and the step itself takes about 40 instructions per 32 columns instead of about
+    /// pass, and the step itself takes about 37 instructions per 32 columns instead of about
     /// 75 ([`band256::end_row`]). The lines of `ahead` asked for a chunk ahead, a chunk (16
     /// blocks) at a time ([`Prefetch::paced`]: all of them by the middle of the row, as
     /// [`band256::end_row`] asks, took 1.06x to 1.08x the time of the tiled build of
@@ -5603,14 +5606,14 @@ mod tests {
         (halves, words)
     }
 
-    /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256,
-    /// 512, 537, 968 and 1,000 (a few under Miri, 280 and 536 the longest), saturated and
-    /// random texels, dirty column sums of up to 7 rows of 255 (with the row: a tile row of 8)
-    /// and of 31 rows of 255 (a tile row of 32: a tile's sum of 65,280, at the 16-bit bound of
-    /// the prefix sums; not under Miri without packing), a dirty level above (values near 2^32: the adds wrap). Checked: the level above plus the
-    /// column sums' form, its split into boundaries and local sums (nothing written past
-    /// them), the column sums cleared, the lower half of acc_0's storage untouched; `None`
-    /// without AVX2.
+    /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256, 512,
+    /// 537, 968 and 1,000 (a few under Miri, 280 and 536 the longest), saturated and random texels,
+    /// dirty column sums of up to 7 rows of 255 (with the row: a tile row of 8) and of 31 rows of
+    /// 255 (a tile row of 32: a tile's sum of 65,280, at the 16-bit bound of the prefix sums; not
+    /// under Miri without packing), a dirty level above (values near 2^32: the adds wrap). Checked:
+    /// the level above plus the column sums' form, its split into boundaries and local sums
+    /// (nothing written past them), the column sums cleared, the lower half of acc_0's storage
+    /// untouched; `None` without AVX2.
     ///
     /// Under each kernel this CPU runs, and each way of packing: none (the fields in `local`
     /// and `bnd`), and both component rows packed from their first word, with widths (local,

@@ -2301,10 +2301,10 @@ const PREFETCH_MIN_WORDS: usize = 1 << 16;
 /// local sum at `X` is the prefix of the column sums inside the tile, and a boundary the
 /// prefix of the tiles' column totals, so one 16-bit addition per texel and a prefix within
 /// each tile give the row's fields, and the local sums are packed from 16 bits (with
-/// AVX-512BW and VBMI, in the same pass, 32 columns at a time: tiled over flat 0.82x to 1.25x
+/// AVX-512BW, DQ and VBMI, in the same pass, 32 columns at a time: tiled over flat 0.82x to 1.25x
 /// at 1,024^2 and 1.06x to 1.23x at 4,096^2 in 20 of 25 runs on a Zen 4 guest, against 1.22x to
 /// 1.65x at 4,096^2 before; docs/benchmarks.md, eleventh session). A row that ends a tile row
-/// adds the column sums' form into acc_1 in one pass (`simd::band_end_row`; with AVX-512BW
+/// adds the column sums' form into acc_1 in one pass (`simd::band_end_row`; with AVX-512BW and DQ
 /// and one level of tiles on x it packs components `(0, 1)` and `(1, 1)` in the same pass
 /// when both rows start on a word, `band_end_step`: with the kernels' lines asked for at
 /// their own pace, the tiled build of 4,096^2 took about 0.90x the time, 1.03x to 1.15x the
@@ -3116,10 +3116,10 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
     /// = 1`, `simd::band_end_row`) when the x axis has one level of tiles: it writes
     /// components `(0, 1)` (the local sums) and `(1, 1)` (the boundaries) only, the same
     /// values, fields and refusals as the general step, with the plan's constants
-    /// ([`BandPlan`]). When both rows start on a word, the kernel packs them as it computes
-    /// them (with AVX-512BW: `simd::band512::end_row_packed`); the fields it leaves go to the
-    /// packer. `acc0` is acc_0's row (its column sums, `n` positions), `acc` acc_1's, `buf`
-    /// the row of fields.
+    /// ([`BandPlan`]). When both rows start on a word, the kernel packs them as it computes them
+    /// (with AVX-512BW and DQ: `simd::band512::end_row_packed`); the fields it leaves go to the
+    /// packer. `acc0` is acc_0's row (its column sums, `n` positions), `acc` acc_1's, `buf` the row
+    /// of fields.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     #[allow(
         clippy::too_many_arguments,
