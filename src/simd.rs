@@ -76,10 +76,10 @@
 //!    features enable. The AVX-512 build kernel's 256-bit `vpdpbusd` needs AVX-512 VL, which
 //!    its detection includes (CPUID leaf 7 EBX bit 31). The helpers with target features of
 //!    their own ([`lane7`], `modular256::field_mask`, `pack256::rows8x8`: AVX2;
-//!    `modular256::perm2`: AVX2, AVX-512F and VL) are called only from functions that enable
-//!    them (the compiler refuses other callers without `unsafe`). Calling the kernels (and
-//!    XGETBV, after CPUID reports OSXSAVE) is the only reason for `unsafe` beyond the memory
-//!    accesses below.
+//!    `modular256::perm2`: AVX2, AVX-512F and VL; `pack512::pack_k` uses it too) are called only
+//!    from functions that enable them (the compiler refuses other callers without `unsafe`).
+//!    Calling the kernels (and XGETBV, after CPUID reports OSXSAVE) is the only reason for `unsafe`
+//!    beyond the memory accesses below.
 //! 2. *Memory.* [`pack_u32`] passes its AVX-512 kernel `groups` with `32 groups <=
 //!    fields.len()` and `groups k <= words.len()`; the kernel reads `fields[32 g..32 g + 32]` and
 //!    writes `words[g k..g k + k]` for `g < groups` (16 words, then the rest: 16 words, or 8 for
@@ -1261,22 +1261,6 @@ mod pack512 {
         out
     }
 
-    /// [`perm2`] on 256-bit vectors (AVX-512 VL `vpermt2d`, lanes 0..16 of `a` then `b`);
-    /// under Miri by two `vpermd` and a blend, as there.
-    #[inline]
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn perm2_256(a: __m256i, idx: __m256i, b: __m256i) -> __m256i {
-        #[cfg(not(miri))]
-        let v = _mm256_permutex2var_epi32(a, idx, b);
-        #[cfg(miri)]
-        let v = _mm256_blendv_epi8(
-            _mm256_permutevar8x32_epi32(a, idx),
-            _mm256_permutevar8x32_epi32(b, idx),
-            _mm256_cmpgt_epi32(idx, _mm256_set1_epi32(7)),
-        );
-        v
-    }
-
     /// Words 16..24 of a group (the second half for `K <= 24`) as [`wide_table`]'s second
     /// half has them, the field indices less 16: rows 0, 1 and 2 index the fields 16..32 of
     /// the group (those words' terms start at field `floor(512 / K) >= 21`; the fourth term,
@@ -1358,7 +1342,7 @@ mod pack512 {
                             _mm256_and_si256(load(16), m8),
                             _mm256_and_si256(load(24), m8),
                         );
-                        let t = |i: usize| perm2_256(a8, yix[i], b8);
+                        let t = |i: usize| modular256::perm2(a8, yix[i], b8);
                         let v = _mm256_or_si256(
                             _mm256_or_si256(
                                 _mm256_srlv_epi32(t(0), yc[0]),
@@ -2398,7 +2382,7 @@ mod modular256 {
     /// it, two `vpermd` and a blend (the same lanes).
     #[inline]
     #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn perm2(a: __m256i, idx: __m256i, b: __m256i) -> __m256i {
+    pub(super) fn perm2(a: __m256i, idx: __m256i, b: __m256i) -> __m256i {
         #[cfg(not(miri))]
         let v = _mm256_permutex2var_epi32(a, idx, b);
         #[cfg(miri)]
