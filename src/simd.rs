@@ -3371,8 +3371,7 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// `local`.
 ///
 /// With AVX-512BW, DQ and VBMI, fields below `2^k` (`exact`) and room for them, the pairs of
-/// blocks
-/// go through `band512::row_packed` instead, which packs their local sums in the same pass
+/// blocks go through `band512::row_packed` instead, which packs their local sums in the same pass
 /// (`28 (n / 32)` fields, `7 k / 2` bytes per pair) and stores no 16-bit values;
 /// `pack256::even` then packs whole steps of 16 of the tail's after them where the target's
 /// words hold them (`kp = 28 (n / 32) + 16 steps`; the rest is the caller's). (A tiled build
@@ -4085,13 +4084,12 @@ mod band512 {
     /// 2^48` (`vpmullq`, the product's low 64 bits) is `sum_j 2^(16 j) (x_0 + ... + x_j)`: lane
     /// `j` of the product is the prefix `x_0 + ... + x_j` as long as no prefix carries past 16
     /// bits, and none does when the tile's sum fits 16 bits (a carry can leave lanes 0 to 2 and
-    /// 4 to 6 only: lanes 3 and 7 wrap as the 16-bit adds did, so the local sums' bound is
-    /// what matters). Then lane 3 (the low half's total)
-    /// is broadcast into lanes 4..8 (`vpshufb`, zeros into lanes 0..4) and added. One multiply
-    /// and one shuffle instead of three byte shifts (shuffles) and three adds: on a Zen 4,
-    /// `band512::row_packed` took 0.87x the time per row and a tiled build of 1,024^2 0.88x
-    /// (docs/benchmarks.md, fourteenth session). Intel's `vpmullq` is slower (three uops);
-    /// not measured here.
+    /// 4 to 6 only: lanes 3 and 7 wrap as the 16-bit adds did, so the local sums' bound is what
+    /// matters). Then lane 3 (the low half's total) is broadcast into lanes 4..8 (`vpshufb`,
+    /// zeros into lanes 0..4) and added. One multiply and one shuffle instead of three byte
+    /// shifts (shuffles) and three adds: on a Zen 4, `band512::row_packed` took 0.87x the time
+    /// per row and a tiled build of 1,024^2 0.88x (docs/benchmarks.md, fourteenth session).
+    /// Intel's `vpmullq` is slower (three uops); not measured here.
     #[cfg(not(miri))]
     #[inline]
     #[target_feature(enable = "avx512f,avx512bw,avx512dq")]
