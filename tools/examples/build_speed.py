@@ -33,6 +33,14 @@ printed as well):
 Every method's table is compared with `Sat::build`'s before it is timed (in the server), and
 OpenCV's with the texsat table (here).
 
+Pages: numpy advises transparent huge pages (MADV_HUGEPAGE) for arrays of 4 MiB and more, so
+OpenCV's output (and at 4096^2 its image) lies in 2 MiB pages wherever the kernel's THP setting
+is `madvise` or `always`, while a Rust `Vec` lies in 4 KiB pages under `madvise`. By default
+(`--pages 4k`) this script turns numpy's advice off, so that both sides run on the same pages;
+`--pages thp` leaves it on and has the servers advise their timed buffers of 4 MiB and more
+the same way (`TEXSAT_BS_PAGES=thp`). The report prints how much of each side's memory the
+kernel gave huge pages (/proc/<pid>/smaps).
+
 On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
 2-vCPU machine of 2026-11-28 a server that the scheduler kept on CPU 0 ran the same code up to
 1.4x slower than one on CPU 1 (median of the best of 5 builds), which made binaries and
@@ -105,6 +113,27 @@ def schedstat(pid):
         return None
 
 
+def huge_kb(pid, ranges=None):
+    """(kB in huge pages, kB resident) of a process's anonymous memory overlapping `ranges`
+    ([(start, end)] addresses; all of it if None), from /proc/<pid>/smaps; None if unreadable."""
+    huge = rss = 0
+    inside = False
+    try:
+        with open(f"/proc/{pid}/smaps") as f:
+            for line in f:
+                head = line.split(" ", 1)[0]
+                if "-" in head and not head.endswith(":"):
+                    lo, hi = (int(x, 16) for x in head.split("-"))
+                    inside = ranges is None or any(lo < b and hi > a for a, b in ranges)
+                elif inside and head == "AnonHugePages:":
+                    huge += int(line.split()[1])
+                elif inside and head == "Rss:":
+                    rss += int(line.split()[1])
+    except OSError:
+        return None
+    return huge, rss
+
+
 def loadavg():
     try:
         with open("/proc/loadavg") as f:
@@ -127,6 +156,10 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--servers", help="NAME=PATH,... of prebuilt build_speed binaries to time "
                     "instead of building --variants (e.g. two commits' binaries)")
+    ap.add_argument("--pages", choices=["4k", "thp"], default="4k",
+                    help="4k: numpy's huge-page advice off, the servers on heap memory (both "
+                    "sides on 4 KiB pages); thp: numpy's advice on and the servers' buffers of "
+                    "4 MiB and more advised the same way (see Pages above)")
     ap.add_argument("--cpu", type=int, default=None,
                     help="run this script, OpenCV and every server on this one CPU (they take "
                     "turns: one measurement at a time), so that all figures share one core")
@@ -141,6 +174,7 @@ def main():
     if args.cpu is not None:
         # After the builds (cargo keeps every CPU); inherited by the servers started below.
         os.sched_setaffinity(0, {args.cpu})
+    os.environ["TEXSAT_BS_PAGES"] = args.pages  # inherited by the servers
     servers = [Server(name, path) for name, path in paths]
     for s in servers:
         unknown = set(methods) - set(s.methods)
@@ -155,6 +189,12 @@ def main():
         except ImportError:
             sys.exit("OpenCV missing: pip install opencv-python-headless numpy (or --no-opencv)")
         cv2.setNumThreads(1)  # integral is single-threaded anyway; keep it so
+        advice = getattr(getattr(np, "_core", getattr(np, "core", None)), "multiarray", None)
+        if hasattr(advice, "_set_madvise_hugepage"):
+            advice._set_madvise_hugepage(args.pages == "thp")
+        else:
+            print(f"numpy {np.__version__} cannot set its huge-page advice: OpenCV's arrays "
+                  "follow its default (see the pages line)", file=sys.stderr)
 
     # The same texture as the server's: it writes it to a file on request.
     def texture(n):
@@ -206,6 +246,17 @@ def main():
             samples[(s.variant if s else "opencv", m, n)].append(run(job))
     wall = time.monotonic_ns() - wall0
     load1, sched1 = loadavg(), {p: schedstat(p) for p in pids}
+    # (who, kB in huge pages, kB of memory it is out of): a server's resident memory, the
+    # arrays' own size for OpenCV (the maps around them hold the interpreter's memory too).
+    pages = []
+    for s in servers:
+        p = huge_kb(s.proc.pid)
+        pages.append((s.variant, p[0] if p else None, p[1] if p else None))
+    if cv2 is not None:
+        arrays = [a for n in sides for a in (images[n], outs[n])]
+        p = huge_kb("self", [(a.ctypes.data, a.ctypes.data + a.nbytes) for a in arrays])
+        pages.append(("opencv's arrays", min(p[0], sum(a.nbytes for a in arrays) // 1024)
+                      if p else None, sum(a.nbytes for a in arrays) // 1024))
     for s in servers:
         s.close()
 
@@ -215,6 +266,9 @@ def main():
           f"wall {wall / 1e9:.1f} s")
     print(f"loadavg before: {load0}; after: {load1}")
     print("cpus: " + (f"all on CPU {args.cpu}" if args.cpu is not None else "any (no --cpu)"))
+    print(f"pages ({args.pages}), MiB in 2 MiB pages: " + "; ".join(
+        f"{who} {h / 1024:.0f} of {t / 1024:.0f}" if h is not None else f"{who} n/a"
+        for who, h, t in pages))
     for p in pids:
         a, b = sched0.get(p), sched1.get(p)
         if a and b:
@@ -275,6 +329,8 @@ def main():
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"kernels": {s.variant: s.kernel for s in servers},
+                       "pages": {"mode": args.pages,
+                                 "huge_kb_of_kb": {who: [h, t] for who, h, t in pages}},
                        "loadavg": [load0, load1],
                        "medians": {f"{v}/{m}/{n}": x for (v, m, n), x in med.items()},
                        "samples": {f"{v}/{m}/{n}": x for (v, m, n), x in samples.items()}},

@@ -9,6 +9,12 @@
 //! is compared with `Sat::build`'s (or, for the layouts, their corners with its entries) before
 //! its first timing. Storage is allocated and touched once per side and reused.
 //!
+//! Pages: with `TEXSAT_BS_PAGES=thp` in its environment, every timed buffer of 4 MiB and more
+//! (the texture, the table, the layouts' words) is an anonymous map advised
+//! `MADV_HUGEPAGE`, as numpy advises its arrays of 4 MiB and more (OpenCV's output and image in
+//! the driver); otherwise (`4k`, the driver's default, which turns numpy's advice off) all
+//! storage is plain heap memory. The driver reports how much of each side lay in huge pages.
+//!
 //! Methods:
 //! * `floor`: the widen-copy floor, `out[i] = u32::from(texel[i])` (reads 1 byte and writes 4 per
 //!   texel, as any build must; the compiler vectorizes it).
@@ -29,7 +35,11 @@
 use std::collections::HashMap;
 use std::hint::black_box;
 use std::io::{BufRead, Write};
+use std::ops::{Deref, DerefMut};
 use std::time::Instant;
+
+use bytemuck::Pod;
+use memmap2::MmapMut;
 
 use image::GrayImage;
 use texsat::layouts::{modulus_bits_for, Modular, Tiled, TiledSpec};
@@ -58,24 +68,77 @@ fn floor(t: &[u8], out: &mut [u32]) {
     }
 }
 
+/// numpy's threshold for advising huge pages: it calls `madvise(MADV_HUGEPAGE)` on the data
+/// of every array of at least 4 MiB (as numpy 2.4 does; see `--pages` in the driver).
+const HUGE_MIN_BYTES: usize = 1 << 22;
+
+/// A timed buffer: heap memory, or with `thp` pages and at least [`HUGE_MIN_BYTES`] an
+/// anonymous map advised `MADV_HUGEPAGE` (page-aligned, so any `Pod` view of it is aligned).
+enum Buf<T> {
+    Heap(Vec<T>),
+    Map(MmapMut, usize),
+}
+
+impl<T: Pod> Buf<T> {
+    /// `len` copies of `fill`, every page touched.
+    fn new(len: usize, fill: T, thp: bool) -> Self {
+        let bytes = len * std::mem::size_of::<T>();
+        if !thp || bytes < HUGE_MIN_BYTES {
+            return Buf::Heap(vec![fill; len]);
+        }
+        let map = MmapMut::map_anon(bytes).expect("anonymous map");
+        #[cfg(target_os = "linux")]
+        map.advise(memmap2::Advice::HugePage)
+            .expect("madvise(MADV_HUGEPAGE)");
+        let mut b = Buf::Map(map, len);
+        b.fill(fill);
+        b
+    }
+
+    fn from_slice(v: &[T], thp: bool) -> Self {
+        let mut b = Buf::new(v.len(), T::zeroed(), thp);
+        b.copy_from_slice(v);
+        b
+    }
+}
+
+impl<T: Pod> Deref for Buf<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        match self {
+            Buf::Heap(v) => v,
+            Buf::Map(m, len) => &bytemuck::cast_slice(&m[..])[..*len],
+        }
+    }
+}
+
+impl<T: Pod> DerefMut for Buf<T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        match self {
+            Buf::Heap(v) => v,
+            Buf::Map(m, len) => &mut bytemuck::cast_slice_mut(&mut m[..])[..*len],
+        }
+    }
+}
+
 /// One side's texture and reused storage.
 struct Case {
     side: usize,
-    tex: Vec<u8>,
+    tex: Buf<u8>,
     gray: GrayImage,
     reference: Vec<u32>,
-    table: Vec<u32>,
+    table: Buf<u32>,
     row: Vec<u32>,
     spec: TiledSpec,
-    words: Vec<u32>,
-    scratch: Vec<u32>,
+    words: Buf<u32>,
+    scratch: Buf<u32>,
     k: u32,
-    mwords: Vec<u32>,
+    mwords: Buf<u32>,
     checked: HashMap<&'static str, bool>,
 }
 
 impl Case {
-    fn new(side: usize) -> Self {
+    fn new(side: usize, thp: bool) -> Self {
         // xorshift64 noise, uniform bytes (the same generator as benches/sat.rs's texels).
         let mut s = 0x9E37_79B9_7F4A_7C15u64;
         let tex: Vec<u8> = (0..side * side)
@@ -91,16 +154,19 @@ impl Case {
         let texture = Texture::<u8>::new(&tex, side, side).expect("texture");
         Sat::build(&texture, &mut reference).expect("build");
         let spec = TiledSpec::tiles(8, 8).expect("spec");
-        let words = vec![0u32; Tiled::<u32>::words_needed(spec, side, side, 8).expect("words")];
-        let scratch = vec![0u32; Tiled::<u32>::scratch_needed(spec, side).expect("scratch")];
+        let words_needed = Tiled::<u32>::words_needed(spec, side, side, 8).expect("words");
+        let words = Buf::new(words_needed, 0, thp);
+        let scratch_needed = Tiled::<u32>::scratch_needed(spec, side).expect("scratch");
+        let scratch = Buf::new(scratch_needed, 0, thp);
         let k = modulus_bits_for(8, 65 * 65);
-        let mwords = vec![0u32; Modular::<u32>::words_needed(side, side, k).expect("words")];
+        let mwords_needed = Modular::<u32>::words_needed(side, side, k).expect("words");
+        let mwords = Buf::new(mwords_needed, 0, thp);
         Case {
             side,
-            tex,
+            tex: Buf::from_slice(&tex, thp),
             gray,
             reference,
-            table: vec![1u32; side * side],
+            table: Buf::new(side * side, 1, thp),
             row: vec![1u32; side],
             spec,
             words,
@@ -191,7 +257,7 @@ impl Case {
         match method {
             "floor" | "stream_nocopy" => {}
             "build" | "checked" | "stream" | "stream_into" | "strips_seq" | "parallel" => {
-                assert!(self.table == self.reference, "{method}: table differs");
+                assert!(*self.table == self.reference[..], "{method}: table differs");
             }
             "tiled" => {
                 let t =
@@ -251,6 +317,11 @@ fn main() {
     let stdin = std::io::stdin();
     let mut stdout = std::io::stdout().lock();
     let mut cases: HashMap<usize, Case> = HashMap::new();
+    let thp = match std::env::var("TEXSAT_BS_PAGES").as_deref() {
+        Ok("thp") => true,
+        Ok("4k") | Err(_) => false,
+        Ok(other) => panic!("TEXSAT_BS_PAGES={other:?}: 4k or thp"),
+    };
     for line in stdin.lock().lines() {
         let line = line.expect("stdin");
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -260,13 +331,13 @@ fn main() {
             ["path"] => std::env::current_exe().expect("exe").display().to_string(),
             ["dump", side, path] => {
                 let side: usize = side.parse().expect("side");
-                let case = cases.entry(side).or_insert_with(|| Case::new(side));
-                std::fs::write(path, &case.tex).expect("write texture");
+                let case = cases.entry(side).or_insert_with(|| Case::new(side, thp));
+                std::fs::write(path, &*case.tex).expect("write texture");
                 "ok".to_string()
             }
             [method, side] => {
                 let side: usize = side.parse().expect("side");
-                let case = cases.entry(side).or_insert_with(|| Case::new(side));
+                let case = cases.entry(side).or_insert_with(|| Case::new(side, thp));
                 format!("{}", case.run(method))
             }
             [] => continue,
