@@ -37,8 +37,9 @@ Pages: numpy advises transparent huge pages (MADV_HUGEPAGE) for arrays of 4 MiB 
 OpenCV's output (and at 4096^2 its image) lies in 2 MiB pages wherever the kernel's THP setting
 is `madvise` or `always`, while a Rust `Vec` lies in 4 KiB pages under `madvise`. By default
 (`--pages 4k`) this script turns numpy's advice off, so that both sides run on the same pages;
-`--pages thp` leaves it on and has the servers advise their timed buffers of 4 MiB and more
-the same way (`TEXSAT_BS_PAGES=thp`). The report prints how much of each side's memory the
+`--pages thp` leaves it on and has the servers advise their outputs (all of them: a tiled
+layout of 1,024^2 is 2.3 MiB) and their textures of 4 MiB and more the same way
+(`TEXSAT_BS_PAGES=thp`). The report prints how much of each side's memory the
 kernel gave huge pages (/proc/<pid>/smaps).
 
 On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
@@ -158,8 +159,8 @@ def main():
                     "instead of building --variants (e.g. two commits' binaries)")
     ap.add_argument("--pages", choices=["4k", "thp"], default="4k",
                     help="4k: numpy's huge-page advice off, the servers on heap memory (both "
-                    "sides on 4 KiB pages); thp: numpy's advice on and the servers' buffers of "
-                    "4 MiB and more advised the same way (see Pages above)")
+                    "sides on 4 KiB pages); thp: numpy's advice on and the servers' outputs and "
+                    "textures of 4 MiB and more advised the same way (see Pages above)")
     ap.add_argument("--cpu", type=int, default=None,
                     help="run this script, OpenCV and every server on this one CPU (they take "
                     "turns: one measurement at a time), so that all figures share one core")

@@ -9,11 +9,14 @@
 //! is compared with `Sat::build`'s (or, for the layouts, their corners with its entries) before
 //! its first timing. Storage is allocated and touched once per side and reused.
 //!
-//! Pages: with `TEXSAT_BS_PAGES=thp` in its environment, every timed buffer of 4 MiB and more
-//! (the texture, the table, the layouts' words) is an anonymous map advised
-//! `MADV_HUGEPAGE`, as numpy advises its arrays of 4 MiB and more (OpenCV's output and image in
-//! the driver); otherwise (`4k`, the driver's default, which turns numpy's advice off) all
-//! storage is plain heap memory. The driver reports how much of each side lay in huge pages.
+//! Pages: with `TEXSAT_BS_PAGES=thp` in its environment, every timed output (the table, the
+//! layouts' words) is an anonymous map advised `MADV_HUGEPAGE`, and so is the texture from 4
+//! MiB on, as numpy advises its arrays of 4 MiB and more (OpenCV's output at both sides, its
+//! image at 4,096^2, in the driver); otherwise (`4k`, the driver's default, which turns
+//! numpy's advice off) all storage is plain heap memory. Every output, not only those of 4 MiB
+//! and more: the tiled layout of 1,024^2 (2.3 MiB) on 4 KiB pages beside a flat table on 2 MiB
+//! ones would compare the pages, not the builds. The driver reports how much of each side lay
+//! in huge pages.
 //!
 //! Methods:
 //! * `floor`: the widen-copy floor, `out[i] = u32::from(texel[i])` (reads 1 byte and writes 4 per
@@ -72,21 +75,34 @@ fn floor(t: &[u8], out: &mut [u32]) {
 /// of every array of at least 4 MiB (as numpy 2.4 does; see `--pages` in the driver).
 const HUGE_MIN_BYTES: usize = 1 << 22;
 
-/// A timed buffer: heap memory, or with `thp` pages and at least [`HUGE_MIN_BYTES`] an
-/// anonymous map advised `MADV_HUGEPAGE` (page-aligned, so any `Pod` view of it is aligned).
+/// A huge page: maps for huge pages are a whole number of them (Linux then places an
+/// anonymous map on a 2 MiB boundary, so that all of it can be huge pages).
+const HUGE_PAGE: usize = 1 << 21;
+
+/// Which page each buffer asks for.
+#[derive(Clone, Copy, PartialEq)]
+enum Pages {
+    /// Heap memory (4 KiB pages where THP is `madvise`).
+    Small,
+    /// Huge pages for the outputs, and for the texture from [`HUGE_MIN_BYTES`] on.
+    Huge,
+}
+
+/// A timed buffer: heap memory, or an anonymous map advised `MADV_HUGEPAGE` (page-aligned, so
+/// any `Pod` view of it is aligned).
 enum Buf<T> {
     Heap(Vec<T>),
     Map(MmapMut, usize),
 }
 
 impl<T: Pod> Buf<T> {
-    /// `len` copies of `fill`, every page touched.
-    fn new(len: usize, fill: T, thp: bool) -> Self {
+    /// `len` copies of `fill`, every page touched; in huge pages if `huge`.
+    fn new(len: usize, fill: T, huge: bool) -> Self {
         let bytes = len * std::mem::size_of::<T>();
-        if !thp || bytes < HUGE_MIN_BYTES {
+        if !huge {
             return Buf::Heap(vec![fill; len]);
         }
-        let map = MmapMut::map_anon(bytes).expect("anonymous map");
+        let map = MmapMut::map_anon(bytes.div_ceil(HUGE_PAGE) * HUGE_PAGE).expect("anonymous map");
         #[cfg(target_os = "linux")]
         map.advise(memmap2::Advice::HugePage)
             .expect("madvise(MADV_HUGEPAGE)");
@@ -95,8 +111,8 @@ impl<T: Pod> Buf<T> {
         b
     }
 
-    fn from_slice(v: &[T], thp: bool) -> Self {
-        let mut b = Buf::new(v.len(), T::zeroed(), thp);
+    fn from_slice(v: &[T], huge: bool) -> Self {
+        let mut b = Buf::new(v.len(), T::zeroed(), huge);
         b.copy_from_slice(v);
         b
     }
@@ -138,7 +154,8 @@ struct Case {
 }
 
 impl Case {
-    fn new(side: usize, thp: bool) -> Self {
+    fn new(side: usize, pages: Pages) -> Self {
+        let out = pages == Pages::Huge;
         // xorshift64 noise, uniform bytes (the same generator as benches/sat.rs's texels).
         let mut s = 0x9E37_79B9_7F4A_7C15u64;
         let tex: Vec<u8> = (0..side * side)
@@ -155,18 +172,18 @@ impl Case {
         Sat::build(&texture, &mut reference).expect("build");
         let spec = TiledSpec::tiles(8, 8).expect("spec");
         let words_needed = Tiled::<u32>::words_needed(spec, side, side, 8).expect("words");
-        let words = Buf::new(words_needed, 0, thp);
+        let words = Buf::new(words_needed, 0, out);
         let scratch_needed = Tiled::<u32>::scratch_needed(spec, side).expect("scratch");
-        let scratch = Buf::new(scratch_needed, 0, thp);
+        let scratch = Buf::new(scratch_needed, 0, false);
         let k = modulus_bits_for(8, 65 * 65);
         let mwords_needed = Modular::<u32>::words_needed(side, side, k).expect("words");
-        let mwords = Buf::new(mwords_needed, 0, thp);
+        let mwords = Buf::new(mwords_needed, 0, out);
         Case {
             side,
-            tex: Buf::from_slice(&tex, thp),
+            tex: Buf::from_slice(&tex, out && side * side >= HUGE_MIN_BYTES),
             gray,
             reference,
-            table: Buf::new(side * side, 1, thp),
+            table: Buf::new(side * side, 1, out),
             row: vec![1u32; side],
             spec,
             words,
@@ -317,9 +334,9 @@ fn main() {
     let stdin = std::io::stdin();
     let mut stdout = std::io::stdout().lock();
     let mut cases: HashMap<usize, Case> = HashMap::new();
-    let thp = match std::env::var("TEXSAT_BS_PAGES").as_deref() {
-        Ok("thp") => true,
-        Ok("4k") | Err(_) => false,
+    let pages = match std::env::var("TEXSAT_BS_PAGES").as_deref() {
+        Ok("thp") => Pages::Huge,
+        Ok("4k") | Err(_) => Pages::Small,
         Ok(other) => panic!("TEXSAT_BS_PAGES={other:?}: 4k or thp"),
     };
     for line in stdin.lock().lines() {
@@ -331,13 +348,13 @@ fn main() {
             ["path"] => std::env::current_exe().expect("exe").display().to_string(),
             ["dump", side, path] => {
                 let side: usize = side.parse().expect("side");
-                let case = cases.entry(side).or_insert_with(|| Case::new(side, thp));
+                let case = cases.entry(side).or_insert_with(|| Case::new(side, pages));
                 std::fs::write(path, &*case.tex).expect("write texture");
                 "ok".to_string()
             }
             [method, side] => {
                 let side: usize = side.parse().expect("side");
-                let case = cases.entry(side).or_insert_with(|| Case::new(side, thp));
+                let case = cases.entry(side).or_insert_with(|| Case::new(side, pages));
                 format!("{}", case.run(method))
             }
             [] => continue,
