@@ -115,7 +115,7 @@ def schedstat(pid):
 
 
 def huge_kb(pid, ranges=None):
-    """(kB in huge pages, kB resident) of a process's anonymous memory overlapping `ranges`
+    """(kB in huge pages, kB resident) of a process's maps overlapping `ranges`
     ([(start, end)] addresses; all of it if None), from /proc/<pid>/smaps; None if unreadable."""
     huge = rss = 0
     inside = False
@@ -247,8 +247,10 @@ def main():
             samples[(s.variant if s else "opencv", m, n)].append(run(job))
     wall = time.monotonic_ns() - wall0
     load1, sched1 = loadavg(), {p: schedstat(p) for p in pids}
-    # (who, kB in huge pages, kB of memory it is out of): a server's resident memory, the
-    # arrays' own size for OpenCV (the maps around them hold the interpreter's memory too).
+    # (who, kB in huge pages, kB of memory it is out of): a server's resident memory (its
+    # untimed reference table and imageproc's image, on 4 KiB pages, included), the arrays' own
+    # size for OpenCV (the maps around them hold the interpreter's memory too; whole maps are
+    # counted, so its figure is an upper bound).
     pages = []
     for s in servers:
         p = huge_kb(s.proc.pid)

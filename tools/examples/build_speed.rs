@@ -75,8 +75,9 @@ fn floor(t: &[u8], out: &mut [u32]) {
 /// of every array of at least 4 MiB (as numpy 2.4 does; see `--pages` in the driver).
 const HUGE_MIN_BYTES: usize = 1 << 22;
 
-/// A huge page: maps for huge pages are a whole number of them (Linux then places an
-/// anonymous map on a 2 MiB boundary, so that all of it can be huge pages).
+/// A huge page: maps for huge pages are a whole number of them (Linux 6.7 and later then
+/// places an anonymous map on a 2 MiB boundary, so that all of it can be huge pages; numpy's
+/// arrays, inside unaligned heap maps, get slightly less: see the driver's report).
 const HUGE_PAGE: usize = 1 << 21;
 
 /// Which page each buffer asks for.
@@ -103,9 +104,12 @@ impl<T: Pod> Buf<T> {
             return Buf::Heap(vec![fill; len]);
         }
         let map = MmapMut::map_anon(bytes.div_ceil(HUGE_PAGE) * HUGE_PAGE).expect("anonymous map");
+        // Refused where the kernel has no THP: then 4 KiB pages, as numpy goes on (the driver
+        // reports the pages each side got).
         #[cfg(target_os = "linux")]
-        map.advise(memmap2::Advice::HugePage)
-            .expect("madvise(MADV_HUGEPAGE)");
+        if let Err(e) = map.advise(memmap2::Advice::HugePage) {
+            eprintln!("build_speed: madvise(MADV_HUGEPAGE) refused ({e}): 4 KiB pages");
+        }
         let mut b = Buf::Map(map, len);
         b.fill(fill);
         b
