@@ -11,7 +11,7 @@
 //!
 //! Pages: with `TEXSAT_BS_PAGES=thp` in its environment, every timed output (the table, the
 //! layouts' words) is an anonymous map advised `MADV_HUGEPAGE`, and so is the texture from 4
-//! MiB on, as numpy advises its arrays of 4 MiB and more (OpenCV's output at both sides, its
+//! MiB on, as numpy advises its arrays of 4 MiB and more (OpenCV's output at both sizes, its
 //! image at 4,096^2, in the driver); otherwise (`4k`, the driver's default, which turns
 //! numpy's advice off) all storage is plain heap memory. Every output, not only those of 4 MiB
 //! and more: the tiled layout of 1,024^2 (2.3 MiB) on 4 KiB pages beside a flat table on 2 MiB
