@@ -3788,25 +3788,20 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
         None => (0, 0, ahead),
     };
     let first = done / BLOCK;
-    // (No call for no blocks: the whole chunks of a row of 256 m columns.)
-    let run = if first < blocks {
-        // SAFETY: AVX2 is available (as in band_row); the kernel reads t[16 first..16 blocks],
-        // reads and writes the column sums cs[16 first..16 blocks] (u16 n..n + 16 blocks <= 2
-        // n of acc0's storage) and acc[16 first..16 blocks] (<= n), writes local[14 first..14
-        // blocks] (<= nl) and bnd[2 first..2 blocks] (<= nb), checked above; distinct slices.
-        unsafe {
-            band256::end_row(
-                t.as_ptr().add(BLOCK * first),
-                cs.add(BLOCK * first),
-                ap.add(BLOCK * first),
-                (bp.add(2 * first), lp.add(14 * first)),
-                blocks - first,
-                ahead,
-                run,
-            )
-        }
-    } else {
-        run
+    // SAFETY: AVX2 is available (as in band_row); the kernel reads t[16 first..16 blocks],
+    // reads and writes the column sums cs[16 first..16 blocks] (u16 n..n + 16 blocks <= 2 n
+    // of acc0's storage) and acc[16 first..16 blocks] (<= n), writes local[14 first..14
+    // blocks] (<= nl) and bnd[2 first..2 blocks] (<= nb), checked above; distinct slices.
+    let run = unsafe {
+        band256::end_row(
+            t.as_ptr().add(BLOCK * first),
+            cs.add(BLOCK * first),
+            ap.add(BLOCK * first),
+            (bp.add(2 * first), lp.add(14 * first)),
+            blocks - first,
+            ahead,
+            run,
+        )
     };
     // The tail, column by column (it starts on a tile boundary).
     let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
@@ -4598,15 +4593,9 @@ mod band512 {
     ) -> u32 {
         const STEPS: usize = CHUNK / 32;
         let mut prefetch = Prefetch::paced(ahead, CHUNK / BLOCK * chunks, CHUNK / BLOCK);
-        // 28 local sums per step, 16 past the last one's start stored: 224 + 4 words. Not
-        // zeroed first (15 stores per row, behind the band rows' stores): each chunk's steps
-        // write words 0..228 and 0..32 before the packer reads words 0..224 and 0..32.
-        let mut buf = core::mem::MaybeUninit::<[u32; PAIR * STEPS + 4]>::uninit();
-        let mut bbuf = core::mem::MaybeUninit::<[u32; 4 * STEPS]>::uninit();
-        let (buf, bbuf) = (
-            buf.as_mut_ptr().cast::<u32>(),
-            bbuf.as_mut_ptr().cast::<u32>(),
-        );
+        // 28 local sums per step, 16 past the last one's start stored: 224 + 4 words.
+        let mut buf = [0u32; PAIR * STEPS + 4];
+        let mut bbuf = [0u32; 4 * STEPS];
         // SAFETY: each table is 64 bytes: one unaligned load.
         let ([ins_lo, ins_hi], [loc_a, loc_b, bnd_ix], total) = unsafe {
             let load = |p: &[u32; 16]| _mm512_loadu_si512(p.as_ptr().cast());
@@ -4651,20 +4640,24 @@ mod band512 {
                     let hi = _mm512_add_epi32(hi, _mm512_loadu_si512(acc.add(i + 16).cast()));
                     _mm512_storeu_si512(acc.add(i).cast(), lo);
                     _mm512_storeu_si512(acc.add(i + 16).cast(), hi);
-                    let b = buf.add(PAIR * st);
+                    let b = buf.as_mut_ptr().add(PAIR * st);
                     _mm512_storeu_si512(b.cast(), pack512::perm2(lo, loc_a, hi));
                     _mm512_storeu_si512(b.add(16).cast(), pack512::perm2(lo, loc_b, hi));
                     let v = _mm512_castsi512_si128(pack512::perm2(lo, bnd_ix, hi));
-                    _mm_storeu_si128(bbuf.add(4 * st).cast(), v);
+                    _mm_storeu_si128(bbuf.as_mut_ptr().add(4 * st).cast(), v);
                 }
             }
-            // SAFETY: the buffers hold 7 and 1 groups of 32 fields, all written by this chunk's
-            // steps (words 28 st..28 st + 32 and 4 st..4 st + 4 for st < 8: 0..228 and 0..32);
-            // c < chunks: words wl[7 kl c..7 kl (c + 1)] and wb[kb c..kb (c + 1)] writable (the
-            // caller's contract).
+            // SAFETY: the buffers hold 7 and 1 groups of 32 fields; c < chunks: words
+            // wl[7 kl c..7 kl (c + 1)] and wb[kb c..kb (c + 1)] writable (the caller's
+            // contract).
             unsafe {
-                pack512::pack(buf, wl.add(7 * kl as usize * c), PAIR * STEPS / 32, kl);
-                pack512::pack(bbuf, wb.add(kb as usize * c), 1, kb);
+                pack512::pack(
+                    buf.as_ptr(),
+                    wl.add(7 * kl as usize * c),
+                    PAIR * STEPS / 32,
+                    kl,
+                );
+                pack512::pack(bbuf.as_ptr(), wb.add(kb as usize * c), 1, kb);
             }
         }
         _mm_cvtsi128_si32(run) as u32
