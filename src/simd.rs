@@ -3335,34 +3335,19 @@ pub(crate) fn band_applies<E: Entry, const C: usize>(
     tile_h: u32,
     texel_bits: u32,
 ) -> bool {
-    E::BITS == 32
-        && C == 1
-        && matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni)
-        && tile_w == 8
-        && tiles_sum_fits16(1, tile_w, tile_h, texel_bits)
-        && width >= BLOCK
-}
-
-/// Whether the band kernels may take a tile row's boundaries by [`band512`]'s multiply
-/// (`band512::boundaries_quad`): the sum of 4 tiles of 8 columns (32 columns of the tile
-/// row, all its rows), `4 tile_w tile_h (2^texel_bits - 1)`, at most `2^16 - 1` (`u8`
-/// texels in tiles of 8 x 8: 65,280). Then the prefix sums of 4 tiles' totals fit 16 bits
-/// each, as the multiply needs; [`band_applies`] alone bounds one tile.
-pub(crate) fn band_quad(tile_w: u32, tile_h: u32, texel_bits: u32) -> bool {
-    tile_w == 8 && tiles_sum_fits16(4, tile_w, tile_h, texel_bits)
-}
-
-/// Whether `tiles` tiles of `tile_w x tile_h` texels of `texel_bits` bits sum to at most
-/// `2^16 - 1`.
-fn tiles_sum_fits16(tiles: u32, tile_w: u32, tile_h: u32, texel_bits: u32) -> bool {
     let texel_max = if texel_bits >= 64 {
         u64::MAX
     } else {
         (1u64 << texel_bits) - 1
     };
-    texel_max
-        .checked_mul(u64::from(tiles) * u64::from(tile_w) * u64::from(tile_h))
-        .is_some_and(|s| s <= u64::from(u16::MAX))
+    E::BITS == 32
+        && C == 1
+        && matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni)
+        && tile_w == 8
+        && texel_max
+            .checked_mul(u64::from(tile_w) * u64::from(tile_h))
+            .is_some_and(|s| s <= u64::from(u16::MAX))
+        && width >= BLOCK
 }
 
 /// The types [`band_row`] takes: `u8` texels, `u32` entries, one channel.
@@ -3396,9 +3381,7 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// The values are [`tiled_row`]'s with the level-0 accumulator the column sums' form and no
 /// level below: `(kb, kl, kp)` as there. Column sums, local sums and the tiles' totals fit 16
 /// bits by [`band_applies`]'s conditions (a tile's sum fits); the 16-bit additions wrap only
-/// past them. `quad`: [`band_quad`] holds for the tiling (the packing kernel then takes the
-/// boundaries by a multiply). `None` (nothing written) for other types, without AVX2, or
-/// short slices.
+/// past them. `None` (nothing written) for other types, without AVX2, or short slices.
 pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     acc0: &mut [E],
@@ -3406,7 +3389,6 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     local: &mut [E],
     ahead: Ahead,
     pack: Option<PackTo<'_>>,
-    quad: bool,
 ) -> Option<(usize, usize, usize)> {
     if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
         return None;
@@ -3471,13 +3453,7 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
         // and writes the column sums cs[..32 pairs] (u16 n..n + 32 pairs <= 2 n of acc0's
         // storage), writes bnd[..4 pairs] (<= nb) and out[..7 k / 2 pairs] (inside the
         // target's words, checked above, not local's storage); distinct slices.
-        let run = unsafe {
-            if quad {
-                band512::row_packed::<true>(t.as_ptr(), cs, bp, pairs, out, k, ahead)
-            } else {
-                band512::row_packed::<false>(t.as_ptr(), cs, bp, pairs, out, k, ahead)
-            }
-        };
+        let run = unsafe { band512::row_packed(t.as_ptr(), cs, bp, pairs, out, k, ahead) };
         (
             run,
             2 * BLOCK * pairs,
@@ -3580,22 +3556,19 @@ pub(crate) fn band_rows_apply<T: Texel, E: Entry, const C: usize>(
 /// [`band_row`] for a run of consecutive band rows of one tile row (`rows`, each `n` texels),
 /// on the path that packs in the pass only: AVX-512BW, DQ and VBMI, whole pairs of blocks (`n` a
 /// multiple of 32), exact fields of 8, 10, 12 or 14 bits from a byte-aligned `bit`;
-/// `band512::row_packed` on each row in turn (with `quad`, [`band_quad`], two rows at a time
-/// by `band512::rows2_packed`, the last of an odd run alone), the checks and constants once
-/// for the run. Row `j`'s local sums are packed at `bit + j stride_bits` of `out` (the rows
-/// of component `(0, 0)` follow each other: `stride_bits = 28 (n / 32) k`), its `n / 8`
-/// boundaries stored at `bnd[j n / 8..]` (the caller packs them, one call for the run).
-/// `ahead`: the words of the run's boundaries' rows, asked for a row's share with each row
-/// (with the row's own packed bytes), when the layout is large enough. Returns whether it
-/// ran; `false` (nothing written) for other types, CPUs, widths or short slices: the caller
-/// then takes the rows one by one.
+/// `band512::row_packed` on each row in turn, the checks and constants once for the run. Row
+/// `j`'s local sums are packed at `bit + j stride_bits` of `out` (the rows of component `(0,
+/// 0)` follow each other: `stride_bits = 28 (n / 32) k`), its `n / 8` boundaries stored at
+/// `bnd[j n / 8..]` (the caller packs them, one call for the run). `ahead`: the words of the
+/// run's boundaries' rows, asked for a row's share with each row (with the row's own packed
+/// bytes), when the layout is large enough. Returns whether it ran; `false` (nothing written)
+/// for other types, CPUs, widths or short slices: the caller then takes the rows one by one.
 pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     rows: &[&[T]],
     acc0: &mut [E],
     bnd: &mut [E],
     ahead: Option<(*const u32, usize)>,
     out: PackTo<'_>,
-    quad: bool,
 ) -> bool {
     let n = acc0.len();
     let r = rows.len();
@@ -3631,52 +3604,36 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     let out = words.as_mut_ptr().cast::<u8>().wrapping_add(skip);
     // Each row's share of the boundaries' words (a hint: never read).
     let share = ahead.map(|(p, len)| (p, len / r.max(1)));
-    let mut j = 0;
-    while j < r {
-        // Two rows at once with `quad`, while two are left.
-        let two = quad && j + 1 < r;
-        let m = if two { 2 } else { 1 };
-        let row = |i: usize| rows.get(i).and_then(|row| as_u8(row));
-        let (Some(t0), Some(t1)) = (row(j), row(j + m - 1)) else {
+    for (j, row) in rows.iter().enumerate() {
+        let Some(t) = as_u8(row) else {
             return false;
         };
         let to = out.wrapping_add(j * stride);
         let lines: Ahead = match share {
             Some((p, len)) => [
-                (to.cast::<u32>().cast_const(), m * stride / 4),
-                (p.wrapping_add(j * len), m * len),
+                (to.cast::<u32>().cast_const(), stride / 4),
+                (p.wrapping_add(j * len), len),
             ],
             None => [(core::ptr::null(), 0); 2],
         };
-        let b = bnd.as_mut_ptr().wrapping_add(j * nb);
-        // SAFETY: AVX-512F, VL, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI,
-        // whose detection includes AVX-512F and VL, and `vbmi`); k is 8, 10, 12 or 14 and
-        // every local sum below 2^k (`exact`: the width proof); with `quad` the sum of 4 tiles
-        // of the tile row fits 16 bits (the caller's `band_quad`); the kernels read t[..32
-        // pairs] of rows j..j + m (= n, checked above), read and write the column sums cs[..32
-        // pairs] (u16 n..2 n of acc0's n words), write bnd[i nb..i nb + 4 pairs] (4 pairs = nb,
-        // r nb <= bnd.len()) and out[i stride..(i + 1) stride] for i in j..j + m (7 k / 2
-        // pairs = stride, inside the words from byte skip: skip + r stride <= 4 words.len());
-        // distinct slices.
+        // SAFETY: AVX-512F, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI, whose
+        // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum
+        // below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (= n, checked
+        // above), reads and writes the column sums cs[..32 pairs] (u16 n..2 n of acc0's n
+        // words), writes bnd[j nb..j nb + 4 pairs] (4 pairs = nb, r nb <= bnd.len()) and
+        // out[j stride..(j + 1) stride] (7 k / 2 pairs = stride, inside the words from byte
+        // skip: skip + r stride <= 4 words.len()); distinct slices.
         unsafe {
-            if two {
-                let bnd = [b, b.add(nb)];
-                band512::rows2_packed(
-                    [t0.as_ptr(), t1.as_ptr()],
-                    cs,
-                    bnd,
-                    pairs,
-                    [to, to.add(stride)],
-                    k,
-                    lines,
-                );
-            } else if quad {
-                band512::row_packed::<true>(t0.as_ptr(), cs, b, pairs, to, k, lines);
-            } else {
-                band512::row_packed::<false>(t0.as_ptr(), cs, b, pairs, to, k, lines);
-            }
+            band512::row_packed(
+                t.as_ptr(),
+                cs,
+                bnd.as_mut_ptr().add(j * nb),
+                pairs,
+                to,
+                k,
+                lines,
+            );
         }
-        j += m;
     }
     #[cfg(test)]
     RUN_ROWS.with(|c| c.set(c.get() + r));
@@ -3712,12 +3669,8 @@ pub(crate) struct EndPackTo<'w> {
 /// as it computes them (written to neither `local` nor `bnd`); the rest as above.
 /// Returns `(kb, kl, pl, pb)`: the boundaries and local sums of the row (`n / 8`, `n - n /
 /// 8`), and how many of each were packed (from the first: those before them in `local` and
-/// `bnd` are not written). `quad`: as for [`band_row`]. `None` (nothing written) for other
-/// types, without AVX2, or short slices (`acc0` must be exactly `n`).
-#[allow(
-    clippy::too_many_arguments,
-    reason = "the row's slices, its hint, its packing target and the tiling's bound"
-)]
+/// `bnd` are not written). `None` (nothing written) for other types, without AVX2, or short
+/// slices (`acc0` must be exactly `n`).
 pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     acc0: &mut [E],
@@ -3726,7 +3679,6 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     local: &mut [E],
     ahead: Ahead,
     pack: Option<EndPackTo<'_>>,
-    quad: bool,
 ) -> Option<(usize, usize, usize, usize)> {
     if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
         return None;
@@ -3771,13 +3723,16 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
             // storage) and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb chunks],
             // inside them (the chunks' bound above); both widths in 11..=32 (above); distinct
             // slices.
-            let (wl, wb) = ((wl.as_mut_ptr(), kl), (wb.as_mut_ptr(), kb));
             let run = unsafe {
-                if quad {
-                    band512::end_row_packed::<true>(t.as_ptr(), cs, ap, chunks, wl, wb, ahead)
-                } else {
-                    band512::end_row_packed::<false>(t.as_ptr(), cs, ap, chunks, wl, wb, ahead)
-                }
+                band512::end_row_packed(
+                    t.as_ptr(),
+                    cs,
+                    ap,
+                    chunks,
+                    (wl.as_mut_ptr(), kl),
+                    (wb.as_mut_ptr(), kb),
+                    ahead,
+                )
             };
             #[cfg(test)]
             END_CHUNKS.with(|c| c.set(c.get() + chunks));
@@ -4121,36 +4076,6 @@ mod band512 {
         ix
     };
 
-    /// `vpermw` indices: the 4 tiles' totals (lanes 7, 15, 23 and 31) into 16-bit lanes 0..4,
-    /// side by side in one 64-bit lane for [`boundaries_quad`] (the other lanes unused).
-    static QUAD_LANES: [u16; 32] = {
-        let mut ix = [0u16; 32];
-        let mut j = 0;
-        while j < 4 {
-            ix[j] = (8 * j + 7) as u16;
-            j += 1;
-        }
-        ix
-    };
-
-    /// `vpermt2w` indices over two rows' prefix sums `a` (0..32) and `b` (32..64): `a`'s 4
-    /// tiles' totals into 16-bit lanes 0..4, `b`'s into lanes 4..8, one 64-bit lane each, for
-    /// [`boundaries_pair`] (the other lanes unused).
-    static PAIR_LANES: [u16; 32] = {
-        let mut ix = [0u16; 32];
-        let mut j = 0;
-        while j < 4 {
-            ix[j] = (8 * j + 7) as u16;
-            ix[4 + j] = (32 + 8 * j + 7) as u16;
-            j += 1;
-        }
-        ix
-    };
-
-    /// `1 + 2^16 + 2^32 + 2^48`: a 64-bit lane times it (the product's low 64 bits) holds the
-    /// prefix sums of the lane's four 16-bit values ([`prefix8`], [`boundaries_quad`]).
-    const ONES16: i64 = 0x0001_0001_0001_0001;
-
     /// The prefix sums of each 128-bit lane's eight 16-bit lanes (one tile of 8 columns), for
     /// lanes whose tile sums fit 16 bits (the band form's bound, [`band_applies`]): each 64-bit
     /// lane's four by one multiply, then the low four's total added to the high four.
@@ -4169,7 +4094,7 @@ mod band512 {
     #[inline]
     #[target_feature(enable = "avx512f,avx512bw,avx512dq")]
     fn prefix8(c: __m512i) -> __m512i {
-        let q = _mm512_mullo_epi64(c, _mm512_set1_epi64(ONES16));
+        let q = _mm512_mullo_epi64(c, _mm512_set1_epi64(0x0001_0001_0001_0001));
         // Bytes 6 and 7 (lane 3) into lanes 4..8 of each 128-bit lane; -128 writes a zero.
         let lane3 = _mm512_broadcast_i32x4(_mm_setr_epi8(
             -128, -128, -128, -128, -128, -128, -128, -128, 6, 7, 6, 7, 6, 7, 6, 7,
@@ -4183,7 +4108,7 @@ mod band512 {
     #[cfg(miri)]
     #[target_feature(enable = "avx512f,avx512bw,avx512dq")]
     fn prefix8(c: __m512i) -> __m512i {
-        let q = _mm512_mullo_epi64(c, _mm512_set1_epi64(ONES16));
+        let q = _mm512_mullo_epi64(c, _mm512_set1_epi64(0x0001_0001_0001_0001));
         let lane3 = _mm512_bslli_epi128::<8>(_mm512_shufflelo_epi16::<0xff>(q));
         _mm512_add_epi16(q, lane3)
     }
@@ -4265,79 +4190,6 @@ mod band512 {
         w
     }
 
-    /// The 4 tiles' totals of the prefix sums `p` as 16-bit lanes 0..4 (`ix` is
-    /// [`QUAD_LANES`]; lanes 4..8 unspecified).
-    #[cfg(not(miri))]
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw")]
-    fn totals16(p: __m512i, ix: __m512i) -> __m128i {
-        _mm512_castsi512_si128(_mm512_permutexvar_epi16(ix, p))
-    }
-
-    /// Under Miri (no `vpermw`): [`totals16`] lane by lane (lanes 4..8 zero).
-    #[cfg(miri)]
-    #[target_feature(enable = "avx512f")]
-    fn totals16(p: __m512i, _ix: __m512i) -> __m128i {
-        let t = tile_totals(p);
-        _mm_setr_epi16(t[0], t[1], t[2], t[3], 0, 0, 0, 0)
-    }
-
-    /// Both rows' 4 tiles' totals: `a`'s as 16-bit lanes 0..4, `b`'s as lanes 4..8 (`ix` is
-    /// [`PAIR_LANES`]).
-    #[cfg(not(miri))]
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw")]
-    fn totals16_pair(a: __m512i, b: __m512i, ix: __m512i) -> __m128i {
-        _mm512_castsi512_si128(_mm512_permutex2var_epi16(a, ix, b))
-    }
-
-    /// Under Miri (no `vpermt2w`): [`totals16_pair`] lane by lane.
-    #[cfg(miri)]
-    #[target_feature(enable = "avx512f")]
-    fn totals16_pair(a: __m512i, b: __m512i, _ix: __m512i) -> __m128i {
-        let (s, t) = (tile_totals(a), tile_totals(b));
-        _mm_setr_epi16(s[0], s[1], s[2], s[3], t[0], t[1], t[2], t[3])
-    }
-
-    /// Lanes 7, 15, 23 and 31 of `p` (Miri's gathers).
-    #[cfg(miri)]
-    #[target_feature(enable = "avx512f")]
-    fn tile_totals(p: __m512i) -> [i16; 4] {
-        let mut lanes = [0i16; 32];
-        // SAFETY: a 64-byte store into `lanes`.
-        unsafe { _mm512_storeu_si512(lanes.as_mut_ptr().cast(), p) };
-        [lanes[7], lanes[15], lanes[23], lanes[31]]
-    }
-
-    /// [`boundaries`] when the sum of the 4 tiles fits 16 bits (`quad`, [`band_quad`]): the
-    /// totals gathered side by side into one 64-bit lane ([`totals16`]), their 4 prefix sums
-    /// by one multiply ([`ONES16`]: lane `j` of the product is `t_0 + ... + t_j`, no carry
-    /// past 16 bits while `t_0 + ... + t_3 <= 2^16 - 1`), widened to 32 bits and added to the
-    /// running sum. Two shuffles and a multiply instead of [`boundaries`]' five shuffles: a
-    /// Zen 4 ran the band rows of a tiled build of 1,024^2 in 0.88x the time
-    /// (docs/benchmarks.md, sixteenth session).
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    fn boundaries_quad(p: __m512i, ix: __m512i, run: &mut __m128i) -> __m128i {
-        let q = _mm_mullo_epi64(totals16(p, ix), _mm_set1_epi64x(ONES16));
-        let w = _mm_add_epi32(_mm_cvtepu16_epi32(q), *run);
-        *run = _mm_shuffle_epi32::<0xff>(w);
-        w
-    }
-
-    /// [`boundaries_quad`] for two rows at once (`run`: `a`'s running sum in lanes 0..4, `b`'s
-    /// in 4..8): both rows' totals by one `vpermt2w` ([`totals16_pair`]), one 64-bit lane
-    /// each, one multiply, one widening; `a`'s boundaries in lanes 0..4 of the result, `b`'s
-    /// in 4..8.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    fn boundaries_pair(a: __m512i, b: __m512i, ix: __m512i, run: &mut __m256i) -> __m256i {
-        let q = _mm_mullo_epi64(totals16_pair(a, b, ix), _mm_set1_epi64x(ONES16));
-        let w = _mm256_add_epi32(_mm256_cvtepu16_epi32(q), *run);
-        *run = _mm256_shuffle_epi32::<0xff>(w);
-        w
-    }
-
     /// [`band_row`]'s kernel over `pairs` pairs of blocks (32 columns, 4 tiles) with the local
     /// sums packed as they are computed; returns the running boundary sum after them. Per
     /// pair: 32 texels widened (`vpmovzxbw`) and added to the column sums `cs`, stored back;
@@ -4349,17 +4201,15 @@ mod band512 {
     /// boundaries. The 16-bit local sums of [`band256::row`] are neither stored nor read back
     /// by [`pack256::even`]: per 32 columns about 22 instructions instead of about 55. The
     /// lines of `ahead` asked for at the row's pace, 16 blocks ahead ([`Prefetch::paced`]: the
-    /// pairs pack as they go), a group of 4 pairs at a time. `QUAD`: the boundaries by
-    /// [`boundaries_quad`], else by [`boundaries`].
+    /// pairs pack as they go), a group of 4 pairs at a time.
     ///
     /// # Safety
-    /// The CPU has AVX-512F, VL, BW, DQ and VBMI; `k` is 8, 10, 12 or 14 and every
-    /// local sum below `2^k`; with `QUAD`, the sum of 4 tiles of the column sums (32 columns)
-    /// below `2^16`; `t` valid for reads of `32 pairs` bytes, `cs` for reads and
+    /// The CPU has AVX-512F, BW, DQ and VBMI; `k` is 8, 10, 12 or 14 and every
+    /// local sum below `2^k`; `t` valid for reads of `32 pairs` bytes, `cs` for reads and
     /// writes of `32 pairs` `u16`, `bnd` for writes of `4 pairs` `u32`, `out` for writes of
     /// `7 k / 2 pairs` bytes; not overlapping.
-    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx512vbmi")]
-    pub(super) unsafe fn row_packed<const QUAD: bool>(
+    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vbmi")]
+    pub(super) unsafe fn row_packed(
         t: *const u8,
         cs: *mut u16,
         bnd: *mut u32,
@@ -4371,10 +4221,23 @@ mod band512 {
         // Prefetching, a group of pairs at a time (the bookkeeping once per group).
         const GROUP: usize = 4;
         let mut prefetch = Prefetch::paced(ahead, 2 * pairs, 16);
-        let c = packing(k);
-        let totals = if QUAD { &QUAD_LANES } else { &TOTAL_LANES };
-        // SAFETY: the table is 64 bytes: one unaligned load.
-        let total = unsafe { _mm512_loadu_si512(totals.as_ptr().cast()) };
+        // SAFETY: each table is 64 bytes: one unaligned load.
+        let (local, total, bytes) = unsafe {
+            (
+                _mm512_loadu_si512(LOCAL_LANES.as_ptr().cast()),
+                _mm512_loadu_si512(TOTAL_LANES.as_ptr().cast()),
+                _mm512_loadu_si512(PACK8_BYTES[(k as usize - 8) / 2].as_ptr().cast()),
+            )
+        };
+        let c = Packing {
+            local,
+            weights: _mm512_set1_epi32(((1u32 << k) << 16 | 1) as i32),
+            shift: _mm512_set1_epi64(i64::from(32 - 2 * k)),
+            low2k: _mm512_set1_epi64(((1u64 << (2 * k)) - 1) as i64),
+            bytes,
+            #[cfg(miri)]
+            k,
+        };
         let n = 7 * k as usize / 2;
         let store = (1u64 << n) - 1;
         let mut run = _mm_setzero_si128();
@@ -4385,134 +4248,27 @@ mod band512 {
             for pr in from..end {
                 let i = 32 * pr;
                 // SAFETY: pr < pairs: texels and column sums i..i + 32 inside `t` and `cs`,
-                // boundaries 4 pr..4 pr + 4 inside `bnd`; the packed bytes as
-                // [`store_packed`] writes them (the caller's contract).
+                // boundaries 4 pr..4 pr + 4 inside `bnd`; the packed bytes at out[n pr..n pr +
+                // 64] when that ends inside the caller's `n pairs`, else out[n pr..n (pr +
+                // 1)] by the masked store (the caller's contract).
                 unsafe {
                     let x = _mm512_cvtepu8_epi16(_mm256_loadu_si256(t.add(i).cast()));
                     let s = _mm512_add_epi16(x, _mm512_loadu_si512(cs.add(i).cast()));
                     _mm512_storeu_si512(cs.add(i).cast(), s);
                     let p = prefix8(s);
-                    store_packed(out, pr, pairs, n, pack(p, &c), store);
-                    let w = if QUAD {
-                        boundaries_quad(p, total, &mut run)
+                    let o = pack(p, &c);
+                    if n * pr + 64 <= n * pairs {
+                        _mm512_storeu_si512(out.add(n * pr).cast(), o);
                     } else {
-                        boundaries(p, total, &mut run)
-                    };
+                        _mm512_mask_storeu_epi8(out.add(n * pr).cast(), store, o);
+                    }
+                    let w = boundaries(p, total, &mut run);
                     _mm_storeu_si128(bnd.add(4 * pr).cast(), w);
                 }
             }
             from = end;
         }
         _mm_cvtsi128_si32(run) as u32
-    }
-
-    /// [`row_packed`] (with `QUAD`) for two consecutive band rows of a tile row in one pass:
-    /// per pair of blocks, the column sums loaded once, the first row's texels added (its
-    /// prefix sums), then the second's, stored once; each row's local sums packed as
-    /// [`row_packed`] packs them, at `out[0]` and `out[1]`; both rows' boundaries at once
-    /// ([`boundaries_pair`]) into `bnd[0]` and `bnd[1]`. One load and store of the column
-    /// sums and one gather of the totals per two rows: a Zen 4 ran the band rows of a tiled
-    /// build of 1,024^2 in 0.90x the time of [`row_packed`] per row (docs/benchmarks.md,
-    /// sixteenth session). The lines of `ahead` (both rows' words) asked for at the pass's
-    /// pace, as [`row_packed`] asks for one row's.
-    ///
-    /// # Safety
-    /// As [`row_packed`] with `QUAD` for each row: `t[j]` valid for reads of `32 pairs` bytes,
-    /// `bnd[j]` for writes of `4 pairs` `u32`, `out[j]` for writes of `7 k / 2 pairs` bytes,
-    /// `cs` for reads and writes of `32 pairs` `u16`, the sum of 4 tiles of the column sums
-    /// with both rows below `2^16`; not overlapping.
-    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx512vbmi")]
-    pub(super) unsafe fn rows2_packed(
-        t: [*const u8; 2],
-        cs: *mut u16,
-        bnd: [*mut u32; 2],
-        pairs: usize,
-        out: [*mut u8; 2],
-        k: u32,
-        ahead: Ahead,
-    ) {
-        const GROUP: usize = 4;
-        let mut prefetch = Prefetch::paced(ahead, 2 * pairs, 16);
-        let c = packing(k);
-        // SAFETY: the table is 64 bytes: one unaligned load.
-        let total = unsafe { _mm512_loadu_si512(PAIR_LANES.as_ptr().cast()) };
-        let n = 7 * k as usize / 2;
-        let store = (1u64 << n) - 1;
-        let mut run = _mm256_setzero_si256();
-        let mut from = 0;
-        while from < pairs {
-            let end = (from + GROUP).min(pairs);
-            prefetch.ask(2 * end);
-            for pr in from..end {
-                let i = 32 * pr;
-                // SAFETY: pr < pairs: texels and column sums i..i + 32 inside `t[j]` and `cs`,
-                // boundaries 4 pr..4 pr + 4 inside `bnd[j]`; the packed bytes of each row as
-                // [`store_packed`] writes them (the caller's contract).
-                unsafe {
-                    let x0 = _mm512_cvtepu8_epi16(_mm256_loadu_si256(t[0].add(i).cast()));
-                    let x1 = _mm512_cvtepu8_epi16(_mm256_loadu_si256(t[1].add(i).cast()));
-                    let s0 = _mm512_add_epi16(x0, _mm512_loadu_si512(cs.add(i).cast()));
-                    let s1 = _mm512_add_epi16(x1, s0);
-                    _mm512_storeu_si512(cs.add(i).cast(), s1);
-                    let (p0, p1) = (prefix8(s0), prefix8(s1));
-                    store_packed(out[0], pr, pairs, n, pack(p0, &c), store);
-                    store_packed(out[1], pr, pairs, n, pack(p1, &c), store);
-                    let w = boundaries_pair(p0, p1, total, &mut run);
-                    _mm_storeu_si128(bnd[0].add(4 * pr).cast(), _mm256_castsi256_si128(w));
-                    _mm_storeu_si128(bnd[1].add(4 * pr).cast(), _mm256_extracti128_si256::<1>(w));
-                }
-            }
-            from = end;
-        }
-    }
-
-    /// Pair `pr`'s packed bytes `o` (`n = 7 k / 2` of its 64) at `out + n pr`: all 64 bytes
-    /// while they end inside the pairs' `n pairs` bytes (the bytes past this pair's are the
-    /// next pairs', rewritten by their stores in order), else a masked store (`store`, the
-    /// low `n` bits) of exactly its bytes.
-    ///
-    /// # Safety
-    /// `out` valid for writes of `n pairs` bytes; `pr < pairs`; `store` is `2^n - 1`.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw")]
-    unsafe fn store_packed(
-        out: *mut u8,
-        pr: usize,
-        pairs: usize,
-        n: usize,
-        o: __m512i,
-        store: u64,
-    ) {
-        // SAFETY: bytes n pr..n pr + 64 when they end inside the n pairs, else exactly n pr..n
-        // (pr + 1) (the caller's contract).
-        unsafe {
-            if n * pr + 64 <= n * pairs {
-                _mm512_storeu_si512(out.add(n * pr).cast(), o);
-            } else {
-                _mm512_mask_storeu_epi8(out.add(n * pr).cast(), store, o);
-            }
-        }
-    }
-
-    /// [`pack`]'s constants for the width `k` (8, 10, 12 or 14).
-    #[target_feature(enable = "avx512f")]
-    fn packing(k: u32) -> Packing {
-        // SAFETY: each table is 64 bytes: one unaligned load.
-        let (local, bytes) = unsafe {
-            (
-                _mm512_loadu_si512(LOCAL_LANES.as_ptr().cast()),
-                _mm512_loadu_si512(PACK8_BYTES[(k as usize - 8) / 2].as_ptr().cast()),
-            )
-        };
-        Packing {
-            local,
-            weights: _mm512_set1_epi32(((1u32 << k) << 16 | 1) as i32),
-            shift: _mm512_set1_epi64(i64::from(32 - 2 * k)),
-            low2k: _mm512_set1_epi64(((1u64 << (2 * k)) - 1) as i64),
-            bytes,
-            #[cfg(miri)]
-            k,
-        }
     }
 
     /// Columns per chunk of [`end_row_packed`]: 32 tiles, whose 224 local sums and 32
@@ -4569,20 +4325,19 @@ mod band512 {
     /// 75 ([`band256::end_row`]). The lines of `ahead` asked for a chunk ahead, a chunk (16
     /// blocks) at a time ([`Prefetch::paced`]: all of them by the middle of the row, as
     /// [`band256::end_row`] asks, took 1.06x to 1.08x the time of the tiled build of
-    /// 4,096^2). `QUAD`: the boundaries by [`boundaries_quad`], else by [`boundaries`].
+    /// 4,096^2).
     ///
     /// # Safety
     /// The CPU has AVX-512F, VL, BW and DQ; `t` valid for reads of `256 chunks` bytes, `cs` for
     /// reads and writes of `256 chunks` `u16`, `acc` for reads and writes of `256 chunks`
     /// words, `wl` for writes of `7 kl chunks` words, `wb` for writes of `kb chunks` words;
-    /// `11 <= kl, kb <= 32`; with `QUAD`, the sum of 4 tiles of the column sums with this row
-    /// below `2^16`; not overlapping.
+    /// `11 <= kl, kb <= 32`; not overlapping.
     #[allow(
         clippy::too_many_arguments,
         reason = "a kernel's raw parts, one call site"
     )]
     #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    pub(super) unsafe fn end_row_packed<const QUAD: bool>(
+    pub(super) unsafe fn end_row_packed(
         t: *const u8,
         cs: *mut u16,
         acc: *mut u32,
@@ -4606,11 +4361,7 @@ mod band512 {
                     load(&END_LANES[1]),
                     load(&END_LANES[2]),
                 ],
-                _mm512_loadu_si512(
-                    if QUAD { &QUAD_LANES } else { &TOTAL_LANES }
-                        .as_ptr()
-                        .cast(),
-                ),
+                _mm512_loadu_si512(TOTAL_LANES.as_ptr().cast()),
             )
         };
         let zero = _mm512_setzero_si512();
@@ -4627,11 +4378,7 @@ mod band512 {
                     let sum = _mm512_add_epi16(x, _mm512_loadu_si512(cs.add(i).cast()));
                     _mm512_storeu_si512(cs.add(i).cast(), zero);
                     let p = prefix8(sum);
-                    let w = _mm512_zextsi128_si512(if QUAD {
-                        boundaries_quad(p, total, &mut run)
-                    } else {
-                        boundaries(p, total, &mut run)
-                    });
+                    let w = _mm512_zextsi128_si512(boundaries(p, total, &mut run));
                     let lo = _mm512_cvtepu16_epi32(_mm512_castsi512_si256(p));
                     let hi = _mm512_cvtepu16_epi32(_mm512_extracti64x4_epi64::<1>(p));
                     let lo = _mm512_mask_permutexvar_epi32(lo, 0x8080, ins_lo, w);
@@ -5468,13 +5215,8 @@ mod tests {
         for &n in &sizes {
             // The texels and column sums: all at their largest (255, 6 x 255), random, or
             // random below the largest texel whose tile's local sums fit k bits (49 m < 2^k):
-            // then every width is exact; or random over 8 rows before (a tile row of 10: 4
-            // tiles pass 2^16, one does not, and the local sums fit 14 bits). `quad` (the
-            // boundaries by the multiply) where 4 tiles fit 16 bits, except for the random
-            // data, which take the other path too.
-            let kinds = if cfg!(miri) { 0..3 } else { 0..4 };
-            for data in kinds {
-                let quad = data == 0 || data == 2;
+            // then every width is exact.
+            for data in 0..3 {
                 let widths = [
                     (0, 0),
                     (14, 0),
@@ -5497,14 +5239,11 @@ mod tests {
                     };
                     let texel = |seed: &mut u64| match data {
                         0 => 255,
-                        1 | 3 => rng(seed),
+                        1 => rng(seed),
                         _ => (u16::from(rng(seed)) % (u16::from(top) + 1)) as u8,
                     };
-                    let rows_before = if data == 3 { 8 } else { 6 };
                     let t: Vec<u8> = (0..n).map(|_| texel(&mut seed)).collect();
-                    let cs0: Vec<u16> = (0..n)
-                        .map(|_| u16::from(texel(&mut seed)) * rows_before)
-                        .collect();
+                    let cs0: Vec<u16> = (0..n).map(|_| u16::from(texel(&mut seed)) * 6).collect();
                     // acc0's storage: the column sums in u16 n..2 n, the lower half dirty.
                     let (_, mut acc0) = band_storage(&cs0);
                     // The reference.
@@ -5530,8 +5269,8 @@ mod tests {
                         .map(|i| 0x9e37_79b9u32.rotate_left(i as u32))
                         .collect();
                     let mut words = noise.clone();
-                    // Exact (no mask) where the local sums fit k bits (at most 7 * 9 * 255 =
-                    // 16,065 < 2^14), and once with the mask for k = 14 too.
+                    // Exact (no mask) where the local sums fit k bits (at most 7 * 7 * 255 =
+                    // 12,495 < 2^14), and once with the mask for k = 14 too.
                     let pack = (k > 0).then(|| PackTo {
                         words: &mut words,
                         bit,
@@ -5545,7 +5284,6 @@ mod tests {
                         &mut local[..nl],
                         [(core::ptr::null(), 0); 2],
                         pack,
-                        quad,
                     );
                     if !avx2 {
                         assert_eq!(got, None);
@@ -5658,7 +5396,6 @@ mod tests {
                             k,
                             exact: true,
                         }),
-                        true,
                     );
                     assert_eq!(got, Some((nb, nl, want_kp)), "{len} words, {kernel:?}");
                     let mut want_w = noise.clone();
@@ -5685,8 +5422,7 @@ mod tests {
     /// [`band_rows`] against [`band_row`] on each row in turn: the same packed words (every
     /// bit, from byte offsets 0, 1 and 3 of a word; the words around the rows untouched), the
     /// same boundaries, the same column sums after the run; runs of 2, 3 and 7 rows, fields of
-    /// 8 to 14 bits (texels bounded so that every local sum is below `2^k`), with and without
-    /// `quad` (two rows per pass, the boundaries by the multiply). Where it does not
+    /// 8 to 14 bits (texels bounded so that every local sum is below `2^k`). Where it does not
     /// apply (no AVX-512 VBMI, a row not a whole number of pairs, inexact fields, too few
     /// words) it returns `false` and writes nothing.
     #[test]
@@ -5732,7 +5468,6 @@ mod tests {
                         k,
                         exact: true,
                     }),
-                    false,
                 )
                 .unwrap();
                 assert_eq!((got.0, got.1), (nb, nl));
@@ -5748,8 +5483,7 @@ mod tests {
                 }
             }
             let applies = band_rows_apply::<u8, u32, 1>(n, k, true);
-            // (`quad` holds: 4 tiles of at most 8 rows of u8 texels fit 16 bits.)
-            for (exact, quad) in [(true, false), (true, true), (false, true)] {
+            for exact in [true, false] {
                 let (_, mut acc) = band_storage(&std::vec![0u16; n]);
                 let mut words = noise.clone();
                 let mut bnd = std::vec![0u32; r * nb];
@@ -5760,9 +5494,8 @@ mod tests {
                     k,
                     exact,
                 };
-                let ran = band_rows::<u8, u32, 1>(&refs, &mut acc, &mut bnd, hint, out, quad);
-                let what =
-                    std::format!("n {n}, {r} rows, k {k}, skip {skip}, exact {exact}, quad {quad}");
+                let ran = band_rows::<u8, u32, 1>(&refs, &mut acc, &mut bnd, hint, out);
+                let what = std::format!("n {n}, {r} rows, k {k}, skip {skip}, exact {exact}");
                 assert_eq!(ran, applies && exact, "{what}");
                 if ran {
                     assert_eq!(words, want_w, "{what}");
@@ -5786,7 +5519,7 @@ mod tests {
                     exact: true,
                 };
                 assert!(!band_rows::<u8, u32, 1>(
-                    &refs, &mut acc, &mut bnd, None, out, true
+                    &refs, &mut acc, &mut bnd, None, out
                 ));
                 assert_eq!(words, noise[..short]);
             }
@@ -5915,8 +5648,7 @@ mod tests {
         let (mut ran, mut packed_any) = (0, false);
         for &n in &sizes {
             // Saturated texels over 7 rows of them (a tile row of 8), over 31 (a tile row of 32:
-            // a tile's sum of 65,280, at the band form's 16-bit bound), random over 7. `quad`
-            // (the boundaries by the multiply) for the tile rows of 8, whose 4 tiles fit 16 bits.
+            // a tile's sum of 65,280, at the band form's 16-bit bound), random over 7.
             for ((full, rows), &(w, short)) in [(true, 7), (true, 31), (false, 7)]
                 .into_iter()
                 .flat_map(|f| widths.iter().map(move |w| (f, w)))
@@ -5985,7 +5717,6 @@ mod tests {
                     &mut local[..nl],
                     [(core::ptr::null(), 0); 2],
                     pack,
-                    rows == 7,
                 );
                 if !avx2 {
                     assert_eq!(got, None);

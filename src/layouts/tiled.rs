@@ -824,13 +824,6 @@ impl Geometry {
         })
     }
 
-    /// Whether the band kernels may take the tile rows' boundaries by a multiply
-    /// (`simd::band_quad`: 4 tiles of the first level sum to at most `2^16 - 1`).
-    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    fn band_quad(&self) -> bool {
-        crate::simd::band_quad(self.ax.block(1), self.ay.block(1), self.texel_bits)
-    }
-
     /// The value type must hold the worst-case total, or `k` bits for a modular spec.
     const fn check_value_type<E: Entry>(&self) -> Result<(), Error> {
         match self.spec.modulus {
@@ -2366,8 +2359,6 @@ struct BandPlan {
     prefetch: bool,
     /// No modulus: every local sum is below `2^k` (the width proof), packed unmasked.
     exact: bool,
-    /// 4 tiles sum to at most `2^16 - 1` ([`Geometry::band_quad`]).
-    quad: bool,
     /// The layout's words (`Geometry::words`), for the refusal of short storage.
     words: usize,
 }
@@ -2492,7 +2483,6 @@ impl BandPlan {
             split,
             prefetch: g.words >= PREFETCH_MIN_WORDS,
             exact: g.spec.modulus.is_none(),
-            quad: g.band_quad(),
             words: g.words,
         })
     }
@@ -2832,23 +2822,12 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 k,
                 exact,
             });
-            crate::simd::band_row::<T, E, C>(
-                texels,
-                acc,
-                bnd_out,
-                local,
-                ahead,
-                pack,
-                g.band_quad(),
-            )
+            crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, pack)
         } else if band_end {
             // q = 1: `lower` is acc_0's storage (n positions from its first), in the band form.
             let acc0 = lower.and_then(|l| l.get_mut(..n)).ok_or(short)?;
-            let quad = g.band_quad();
-            crate::simd::band_end_row::<T, E, C>(
-                texels, acc0, acc, bnd_out, local, ahead, None, quad,
-            )
-            .map(|(kb, kl, _, _)| (kb, kl, 0))
+            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, None)
+                .map(|(kb, kl, _, _)| (kb, kl, 0))
         } else {
             row_fields::<T, E, C>(texels, lower, acc, t, bnd_out, local, ahead, pack)
         };
@@ -3075,7 +3054,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             k: plan.local.bits,
             exact: plan.exact,
         };
-        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, ahead, out, plan.quad) {
+        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, ahead, out) {
             return Ok(0);
         }
         if !pack_fields(words, at1, bnd, plan.bnd.bits) {
@@ -3120,16 +3099,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             k: plan.local.bits,
             exact: plan.exact,
         };
-        let (kb, kl, kp) = crate::simd::band_row::<T, E, C>(
-            texels,
-            acc,
-            bnd_out,
-            local,
-            ahead,
-            Some(pack),
-            plan.quad,
-        )
-        .ok_or(short)?;
+        let (kb, kl, kp) =
+            crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, Some(pack))
+                .ok_or(short)?;
         plan.end(
             words,
             [at0, at1],
@@ -3176,9 +3148,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             local: (w0, k0),
             bnd: (w1, k1),
         });
-        let packed = crate::simd::band_end_row::<T, E, C>(
-            texels, acc0, acc, bnd_out, local, ahead, pack, plan.quad,
-        );
+        let packed =
+            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, pack);
         let (kb, kl, pl, pb) = packed.ok_or(short)?;
         plan.end(
             words,
