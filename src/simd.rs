@@ -2705,6 +2705,16 @@ fn tile_walk(
 /// at a time (4 fields of `k` bits per 64-bit lane, `7 k / 2` bytes).
 const PAIR: usize = 28;
 
+/// How far ahead of its own packed bytes each row of [`band_rows`] asks for the layout's
+/// lines (at most a row: then the next row's): 2 KiB, a row of 1,024 texels (1,568 bytes of
+/// 14-bit local sums) a row ahead, about 0.25 us before the next row stores to them. Asking for
+/// a row's own lines 16 blocks ahead in the row itself left a cold build waiting for them. In
+/// the rounds' mixed order (Zen 4 guest, in one process, docs/benchmarks.md, seventeenth
+/// session), with [`TexturePages`], a tiled build of 1,024^2 took about 0.9x the time of
+/// neither on 2 MiB pages; asking a whole row ahead at 4,096^2 (6,272 bytes a row) took 1.03x
+/// there, where 2 KiB took 0.99x.
+const BAND_WORDS_AHEAD: usize = 2048;
+
 /// The most band rows [`band_rows`] takes at once: the builder's scratch row holds the
 /// boundaries of `(n + 1) / (n / 8)` rows, 8 for every width `band_rows` takes (a multiple of
 /// 32): a tile row of 8 (7 band rows) in one run, of 16 (15) in two.
@@ -2761,10 +2771,89 @@ const fn tile_table(tile: usize) -> TileTable {
 /// Tile widths 2, 4, 8, 16 (index `log2 tile - 1`).
 static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8), tile_table(16)];
 
-/// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`],
-/// the band rows' kernels): the 64-byte lines of each `ahead` slice (the words the row's fields
-/// go to), spread over the first half of the row's blocks ([`Prefetch::new`]) or over all of
-/// them a lead ahead ([`Prefetch::paced`]), asked for a group of blocks at a time.
+/// Bytes past the rows a step of the tiled build is about to read up to which
+/// [`TexturePages`] has asked for the texture's pages.
+const PAGE_LEAD: usize = 16 << 10;
+
+/// The pages [`TexturePages`] asks for: 4 KiB, the smallest page on x86-64, the span the
+/// hardware's stream prefetchers stop at.
+const PAGE: usize = 4096;
+
+/// The first 64-byte line of every 4 KiB page of a texture, asked for (`prefetcht0`) before
+/// the tiled build reads it: [`TexturePages::ask`] before each step (a row, or a run of band
+/// rows) asks for the pages up to [`PAGE_LEAD`] bytes past the [`MAX_BAND_ROWS`] rows from
+/// the step's on, each page once, so about 4 to 6 pages ahead at 1,024 texels a row.
+///
+/// Why: after other jobs (its texture out of the caches) `perf` put a cold tiled build's extra
+/// time on the loads of the band rows' texels (about a quarter of `band512::row_packed`'s
+/// samples on the instruction after the texels' load, none there back to back). The tiled build
+/// is bound by its arithmetic, so a load that waits costs it the whole wait, where the flat
+/// build, bound by its stores, drains them meanwhile. The hardware's stream prefetchers start
+/// over at each 4 KiB page; one hint per page, well ahead, presumably takes the page's first
+/// miss (and its page walk) out of the build's way (inferred: the guest has no hardware
+/// counters). Measured in the rounds' mixed order, in one process with the hints switched at
+/// run time (Zen 4 guest, docs/benchmarks.md, seventeenth session): a tiled build of 1,024^2
+/// on 2 MiB pages (the texture on 4 KiB ones) took 0.96x the time with the pages asked for
+/// alone and 0.90x with the band rows' words asked further ahead too ([`BAND_WORDS_AHEAD`]); of
+/// 4,096^2 (everything on 2 MiB pages) 1.01x and 0.99x. Asking for the first 2 to 64 lines of
+/// each page instead of one, or for every line 2 to 16 KiB ahead, took longer than asking for
+/// none. A hint reads and writes nothing and never faults.
+pub(crate) struct TexturePages {
+    /// The texture's first byte (a hint's base: never dereferenced).
+    base: *const u8,
+    /// The texture's bytes.
+    len: usize,
+    /// Bytes from one row to the next.
+    row: usize,
+    /// Bytes below which every page start has been asked for.
+    asked: usize,
+}
+
+impl TexturePages {
+    /// The schedule for the texels `data`, rows `row_elems` elements apart.
+    pub(crate) fn new<T>(data: &[T], row_elems: usize) -> Self {
+        TexturePages {
+            base: data.as_ptr().cast(),
+            len: core::mem::size_of_val(data),
+            row: row_elems.saturating_mul(core::mem::size_of::<T>()),
+            asked: 0,
+        }
+    }
+
+    /// Before the step that starts at row `y`: asks for the first line of each page that
+    /// [`TexturePages::due`] gives.
+    pub(crate) fn ask(&mut self, y: usize) {
+        for at in self.due(y) {
+            // SAFETY: SSE is baseline on x86-64; a hint dereferences nothing and never
+            // faults (`at < len`: a byte of the texture).
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(self.base.wrapping_add(at).cast()) };
+        }
+    }
+
+    /// The offsets (bytes from the texture's first) of the pages due before the step that
+    /// starts at row `y`, in order: those that start (at a multiple of [`PAGE`] by address)
+    /// below [`PAGE_LEAD`] bytes past rows `y..y + MAX_BAND_ROWS`, inside the texture, and were
+    /// not due before (steps come in increasing `y`: each page once).
+    fn due(&mut self, y: usize) -> core::iter::StepBy<core::ops::Range<usize>> {
+        let to = y
+            .saturating_add(MAX_BAND_ROWS)
+            .saturating_mul(self.row)
+            .saturating_add(PAGE_LEAD)
+            .min(self.len);
+        // The first page start at or after byte `asked`, by address (no overflow: the
+        // texture's bytes and a page past them are addresses).
+        let addr = self.base.addr();
+        let from = ((addr + self.asked).next_multiple_of(PAGE) - addr).min(to);
+        self.asked = self.asked.max(to);
+        (from..to).step_by(PAGE)
+    }
+}
+
+/// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`], the
+/// band rows' kernels): the 64-byte lines of each `ahead` slice (the words the row's fields go to,
+/// or [`band_rows`]' next row's), spread over the first half of the row's blocks
+/// ([`Prefetch::new`]) or over all of them a lead ahead ([`Prefetch::paced`]), asked for a group of
+/// blocks at a time.
 struct Prefetch {
     ahead: Ahead,
     lines: [usize; 2],
@@ -2875,9 +2964,10 @@ impl Prefetch {
             let mut at = self.ahead[r].0.wrapping_add(16 * asked);
             let mut left = due.saturating_sub(asked);
             let ask = |p: *const u32| {
-                // A hint (reads and writes nothing, never faults); the lines asked for are
-                // asked..due < lines, inside the words (16 line < len). SAFETY: SSE is
-                // baseline on x86-64; the hint dereferences nothing.
+                // A hint (reads and writes nothing, never faults): the lines asked..due <
+                // lines of the slice `ahead[r]` (16 line < len), which may lie past the words
+                // ([`band_rows`] asks for the next row's). SAFETY: SSE is baseline on x86-64;
+                // the hint dereferences nothing.
                 unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast()) };
             };
             while left >= 4 {
@@ -3560,9 +3650,12 @@ pub(crate) fn band_rows_apply<T: Texel, E: Entry, const C: usize>(
 /// `j`'s local sums are packed at `bit + j stride_bits` of `out` (the rows of component `(0,
 /// 0)` follow each other: `stride_bits = 28 (n / 32) k`), its `n / 8` boundaries stored at
 /// `bnd[j n / 8..]` (the caller packs them, one call for the run). `ahead`: the words of the
-/// run's boundaries' rows, asked for a row's share with each row (with the row's own packed
-/// bytes), when the layout is large enough. Returns whether it ran; `false` (nothing written)
-/// for other types, CPUs, widths or short slices: the caller then takes the rows one by one.
+/// run's boundaries' rows, when the layout is large enough; each row asks, at its pace, for
+/// the packed bytes [`BAND_WORDS_AHEAD`] bytes (at most a row) past its own, and for the next
+/// row's share of `ahead` (the run's last row for those after the run, which the next tile
+/// row's first band row writes: the rows of both components follow each other). Returns
+/// whether it ran; `false` (nothing written) for other types, CPUs, widths or short slices:
+/// the caller then takes the rows one by one.
 pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     rows: &[&[T]],
     acc0: &mut [E],
@@ -3609,10 +3702,18 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
             return false;
         };
         let to = out.wrapping_add(j * stride);
+        // The lines [`BAND_WORDS_AHEAD`] bytes (at most a row) past the row's own, and the
+        // next row's share of the boundaries' (hints: past the words after the layout's last
+        // rows, which `Prefetch` never dereferences).
         let lines: Ahead = match share {
             Some((p, len)) => [
-                (to.cast::<u32>().cast_const(), stride / 4),
-                (p.wrapping_add(j * len), len),
+                (
+                    to.wrapping_add(stride.min(BAND_WORDS_AHEAD))
+                        .cast::<u32>()
+                        .cast_const(),
+                    stride / 4,
+                ),
+                (p.wrapping_add((j + 1) * len), len),
             ],
             None => [(core::ptr::null(), 0); 2],
         };
@@ -4428,6 +4529,59 @@ mod tests {
     /// kernel cap (SSE2, AVX2, AVX-512 in turn; the widest the CPU runs for a kernel it lacks,
     /// so that no case is skipped); it declines the rest with nothing written. (Whether a copy
     /// was streamed cannot be seen from the table: the values are the same.)
+    /// [`TexturePages`]'s schedule: steps of 7 rows and 1 (the band rows' runs and the rows
+    /// that end a tile row) and of 1, over textures of `u8` and `u16` texels at every start
+    /// within a page's first bytes: each page start of the texture (by address) is due exactly
+    /// once, in order, and before the step at row `y` every one below `PAGE_LEAD` bytes past
+    /// rows `y..y + MAX_BAND_ROWS` is (none past the texture).
+    #[test]
+    fn texture_pages_are_each_due_once_ahead_of_their_rows() {
+        fn check<T: Copy + Default>(row: usize, height: usize, skip: usize, steps: &[usize]) {
+            let buf = std::vec![T::default(); row * height + 4096];
+            let data = &buf[skip..skip + row * height];
+            let bytes = core::mem::size_of_val(data);
+            let addr = data.as_ptr().addr();
+            let first = (PAGE - addr % PAGE) % PAGE;
+            let mut pages = TexturePages::new(data, row);
+            let (mut y, mut got) = (0, std::vec::Vec::new());
+            for &step in steps.iter().cycle() {
+                if y >= height {
+                    break;
+                }
+                got.extend(pages.due(y));
+                let ahead =
+                    ((y + MAX_BAND_ROWS) * row * core::mem::size_of::<T>() + PAGE_LEAD).min(bytes);
+                // Page starts below `ahead`: from the first (the texture's first byte at
+                // `addr`), one per PAGE bytes.
+                let want = ahead.saturating_sub(first).div_ceil(PAGE);
+                assert_eq!(
+                    got.len(),
+                    want,
+                    "row {row} height {height} skip {skip} y {y}"
+                );
+                y += step;
+            }
+            let all: std::vec::Vec<usize> = (first..bytes).step_by(PAGE).collect();
+            assert!(all.iter().all(|b| (addr + b) % PAGE == 0));
+            assert_eq!(got, all, "row {row} height {height} skip {skip}");
+        }
+        for skip in [0, 1, 17, 4095] {
+            for (row, height) in [
+                (1, 3),
+                (100, 50),
+                (1024, 64),
+                (4096, 40),
+                (5000, 9),
+                (64, 700),
+            ] {
+                for steps in [&[7, 1][..], &[1]] {
+                    check::<u8>(row, height, skip, steps);
+                    check::<u16>(row, height, skip, steps);
+                }
+            }
+        }
+    }
+
     #[test]
     #[cfg_attr(miri, ignore = "tables of 1 to 34 MiB: too slow under Miri")]
     fn build_via_working_row_takes_tables_of_a_mib_and_more() {

@@ -93,6 +93,13 @@ impl<'a, T: Texel, const C: usize> Texture<'a, T, C> {
         })
     }
 
+    /// The texels' storage (row `y` from element `y * stride`) and the stride: for the tiled
+    /// build's prefetch hints (`simd::TexturePages`).
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    pub(crate) fn storage(&self) -> (&'a [T], usize) {
+        (self.data, self.stride)
+    }
+
     /// Width in texels.
     pub fn width(&self) -> usize {
         self.width

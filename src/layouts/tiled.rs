@@ -2904,7 +2904,8 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
 
     /// Every row of `texture` from the next one on ([`Tiled::build`]'s rows): with `simd`, the
     /// band rows of a tile row in runs where they apply ([`TiledBuilder::push_band_rows`]),
-    /// the others (and all without `simd`) by [`TiledBuilder::push_row`]. The same table.
+    /// the others (and all without `simd`) by [`TiledBuilder::push_row`], the texture's pages
+    /// asked for ahead of them (`simd::TexturePages`, x86-64). The same table.
     pub(super) fn push_texture<T: Texel>(
         &mut self,
         texture: &Texture<'_, T, C>,
@@ -2915,8 +2916,16 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         let runs = self.band_one.is_some_and(|plan| {
             crate::simd::band_rows_apply::<T, E, C>(self.geo.width, plan.local.bits, plan.exact)
         });
+        // The texture's pages asked for ahead of the rows (hints only).
+        #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+        let mut pages = {
+            let (data, stride) = texture.storage();
+            crate::simd::TexturePages::new(data, stride)
+        };
         let mut y = self.rows_done;
         while y < texture.height() {
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            pages.ask(y);
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             if runs {
                 let took = self.push_band_rows(texture)?;
