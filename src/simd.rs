@@ -4533,7 +4533,7 @@ mod tests {
     /// that end a tile row) and of 1, over textures of `u8` and `u16` texels at every start
     /// within a page's first bytes: each page start of the texture (by address) is due exactly
     /// once, in order, and before the step at row `y` every one below `PAGE_LEAD` bytes past
-    /// rows `y..y + MAX_BAND_ROWS` is (none past the texture).
+    /// rows `y..y + MAX_BAND_ROWS` is (none past the texture); `ask` follows the same schedule.
     #[test]
     fn texture_pages_are_each_due_once_ahead_of_their_rows() {
         fn check<T: Copy + Default>(row: usize, height: usize, skip: usize, steps: &[usize]) {
@@ -4543,12 +4543,16 @@ mod tests {
             let addr = data.as_ptr().addr();
             let first = (PAGE - addr % PAGE) % PAGE;
             let mut pages = TexturePages::new(data, row);
+            // The same schedule through `ask` (its hints run; under Miri too).
+            let mut hinted = TexturePages::new(data, row);
             let (mut y, mut got) = (0, std::vec::Vec::new());
             for &step in steps.iter().cycle() {
                 if y >= height {
                     break;
                 }
                 got.extend(pages.due(y));
+                hinted.ask(y);
+                assert_eq!(hinted.asked, pages.asked);
                 let ahead =
                     ((y + MAX_BAND_ROWS) * row * core::mem::size_of::<T>() + PAGE_LEAD).min(bytes);
                 // Page starts below `ahead`: from the first (the texture's first byte at
