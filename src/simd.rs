@@ -2201,11 +2201,10 @@ mod modular256 {
                 // The words of the pass `MODULAR_AHEAD` passes on (past the row's end: the next
                 // row's, or none; a hint only, never dereferenced, so the pointer may point
                 // anywhere), one hint per 64 bytes.
-                let ahead = wp.wrapping_add(8 * K * MODULAR_AHEAD).cast::<i8>();
+                let ahead = wp.wrapping_add(8 * K * MODULAR_AHEAD).cast::<u8>();
                 let mut b = 0;
                 while b < 32 * K {
-                    // A prefetch accesses no memory and never faults.
-                    _mm_prefetch::<_MM_HINT_T0>(ahead.wrapping_add(b));
+                    hint(ahead.wrapping_add(b));
                     b += 64;
                 }
             }
@@ -2771,6 +2770,16 @@ const fn tile_table(tile: usize) -> TileTable {
 /// Tile widths 2, 4, 8, 16 (index `log2 tile - 1`).
 static TILE_TABLES: [TileTable; 4] = [tile_table(2), tile_table(4), tile_table(8), tile_table(16)];
 
+/// Asks for the 64-byte line that holds `p` (`prefetcht0`): a hint, the crate's one call of
+/// it. A hint reads and writes nothing and never faults, whatever `p` points to (past a slice,
+/// or at nothing), so this is safe to call with any pointer.
+#[inline(always)]
+fn hint(p: *const u8) {
+    // SAFETY: SSE is baseline on x86-64; a prefetch dereferences nothing, so it cannot fault
+    // or change memory.
+    unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast()) };
+}
+
 /// Bytes past the rows a step of the tiled build is about to read up to which
 /// [`TexturePages`] has asked for the texture's pages.
 const PAGE_LEAD: usize = 16 << 10;
@@ -2779,10 +2788,12 @@ const PAGE_LEAD: usize = 16 << 10;
 /// hardware's stream prefetchers stop at.
 const PAGE: usize = 4096;
 
-/// The first 64-byte line of every 4 KiB page of a texture, asked for (`prefetcht0`) before
-/// the tiled build reads it: [`TexturePages::ask`] before each step (a row, or a run of band
-/// rows) asks for the pages up to [`PAGE_LEAD`] bytes past the [`MAX_BAND_ROWS`] rows from
-/// the step's on, each page once, so about 4 to 6 pages ahead at 1,024 texels a row.
+/// The texture's pages asked for before the tiled build reads them: before each step (a row,
+/// or a run of band rows), [`TexturePages::ask`] asks for one line of every 4 KiB page that
+/// starts below [`PAGE_LEAD`] bytes past the [`MAX_BAND_ROWS`] rows from the step's on, each
+/// page once: about 4 to 6 pages ahead at 1,024 texels a row. The line is the page's first,
+/// or, where the page starts between two rows (a stride longer than the row), the next row's
+/// first; pages of padding alone are skipped.
 ///
 /// Why: after other jobs (its texture out of the caches) `perf` put a cold tiled build's extra
 /// time on the loads of the band rows' texels (about a quarter of `band512::row_packed`'s
@@ -2793,59 +2804,87 @@ const PAGE: usize = 4096;
 /// miss (and its page walk) out of the build's way (inferred: the guest has no hardware
 /// counters). Measured in the rounds' mixed order, in one process with the hints switched at
 /// run time (Zen 4 guest, docs/benchmarks.md, seventeenth session): a tiled build of 1,024^2
-/// on 2 MiB pages (the texture on 4 KiB ones) took 0.96x the time with the pages asked for
-/// alone and 0.90x with the band rows' words asked further ahead too ([`BAND_WORDS_AHEAD`]); of
-/// 4,096^2 (everything on 2 MiB pages) 1.01x and 0.99x. Asking for the first 2 to 64 lines of
-/// each page instead of one, or for every line 2 to 16 KiB ahead, took longer than asking for
-/// none. A hint reads and writes nothing and never faults.
+/// on 2 MiB pages (the texture on 4 KiB ones) took 0.96x the time (median of 6 runs) with the
+/// pages asked for alone and 0.90x with the band rows' words asked further ahead too
+/// ([`BAND_WORDS_AHEAD`]); of 4,096^2 (everything on 2 MiB pages) 1.01x and 0.99x. Asking for
+/// the first 2 to 64 lines of each page took longer than asking for one, and asking for every
+/// line 256 bytes to 16 KiB ahead gained nothing.
 pub(crate) struct TexturePages {
-    /// The texture's first byte (a hint's base: never dereferenced).
+    /// The texture's first byte (the hints' base: never dereferenced).
     base: *const u8,
-    /// The texture's bytes.
+    /// Bytes from the first texel to the last row's end.
     len: usize,
-    /// Bytes from one row to the next.
+    /// Bytes from one row's start to the next's.
+    stride: usize,
+    /// Bytes of a row's texels.
     row: usize,
-    /// Bytes below which every page start has been asked for.
+    /// The next page start not asked for (bytes from `base`).
+    next: usize,
+    /// Bytes below which a line has been asked for (none twice).
     asked: usize,
 }
 
 impl TexturePages {
-    /// The schedule for the texels `data`, rows `row_elems` elements apart.
-    pub(crate) fn new<T>(data: &[T], row_elems: usize) -> Self {
+    /// The schedule for `texture`'s rows from row `from` on.
+    pub(crate) fn new<T: Texel, const C: usize>(
+        texture: &crate::Texture<'_, T, C>,
+        from: usize,
+    ) -> Self {
+        let (data, stride) = texture.storage();
+        let size = core::mem::size_of::<T>();
+        let (stride, row) = (stride.saturating_mul(size), (texture.width() * C) * size);
+        // The last row's end: inside `data` (`Texture::with_stride` checked it).
+        let len = (texture.height() - 1)
+            .saturating_mul(stride)
+            .saturating_add(row)
+            .min(core::mem::size_of_val(data));
+        let base: *const u8 = data.as_ptr().cast();
+        // The first page start (by address) at or after row `from`'s first byte.
+        let at = from.saturating_mul(stride).min(len);
+        let into = (base.addr() % PAGE + at % PAGE) % PAGE;
         TexturePages {
-            base: data.as_ptr().cast(),
-            len: core::mem::size_of_val(data),
-            row: row_elems.saturating_mul(core::mem::size_of::<T>()),
-            asked: 0,
+            base,
+            len,
+            stride,
+            row,
+            next: at + (PAGE - into) % PAGE,
+            asked: at,
         }
     }
 
-    /// Before the step that starts at row `y`: asks for the first line of each page that
-    /// [`TexturePages::due`] gives.
+    /// Before the step that starts at row `y`: asks for the line [`TexturePages::due`] gives
+    /// for each page.
     pub(crate) fn ask(&mut self, y: usize) {
-        for at in self.due(y) {
-            // SAFETY: SSE is baseline on x86-64; a hint dereferences nothing and never
-            // faults (`at < len`: a byte of the texture).
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(self.base.wrapping_add(at).cast()) };
-        }
+        let base = self.base;
+        self.due(y, |at| hint(base.wrapping_add(at)));
     }
 
-    /// The offsets (bytes from the texture's first) of the pages due before the step that
-    /// starts at row `y`, in order: those that start (at a multiple of [`PAGE`] by address)
-    /// below [`PAGE_LEAD`] bytes past rows `y..y + MAX_BAND_ROWS`, inside the texture, and were
-    /// not due before (steps come in increasing `y`: each page once).
-    fn due(&mut self, y: usize) -> core::iter::StepBy<core::ops::Range<usize>> {
+    /// `each(at)` for the pages due before the step that starts at row `y`, in order: those that
+    /// start below [`PAGE_LEAD`] bytes past rows `y..y + MAX_BAND_ROWS` and were not due
+    /// before (steps come in increasing `y`), `at` (bytes from the first texel) the page's
+    /// first byte, or the next row's first where the page starts past a row's texels; none
+    /// past the last row, none twice.
+    fn due(&mut self, y: usize, mut each: impl FnMut(usize)) {
         let to = y
             .saturating_add(MAX_BAND_ROWS)
-            .saturating_mul(self.row)
+            .saturating_mul(self.stride)
             .saturating_add(PAGE_LEAD)
             .min(self.len);
-        // The first page start at or after byte `asked`, by address (no overflow: the
-        // texture's bytes and a page past them are addresses).
-        let addr = self.base.addr();
-        let from = ((addr + self.asked).next_multiple_of(PAGE) - addr).min(to);
-        self.asked = self.asked.max(to);
-        (from..to).step_by(PAGE)
+        while self.next < to {
+            let page = self.next;
+            self.next += PAGE;
+            // Past a row's texels (in the padding to the next row): that row's start.
+            let past = page % self.stride >= self.row;
+            let at = if past {
+                (page / self.stride + 1) * self.stride
+            } else {
+                page
+            };
+            if at >= self.asked && at < self.len {
+                each(at);
+                self.asked = at + 1;
+            }
+        }
     }
 }
 
@@ -2963,13 +3002,9 @@ impl Prefetch {
             // 2 % of a tiled build of 1,024^2), then the rest.
             let mut at = self.ahead[r].0.wrapping_add(16 * asked);
             let mut left = due.saturating_sub(asked);
-            let ask = |p: *const u32| {
-                // A hint (reads and writes nothing, never faults): the lines asked..due <
-                // lines of the slice `ahead[r]` (16 line < len), which may lie past the words
-                // ([`band_rows`] asks for the next row's). SAFETY: SSE is baseline on x86-64;
-                // the hint dereferences nothing.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast()) };
-            };
+            // The lines asked..due < lines of the slice `ahead[r]` (16 line < len), which may
+            // lie past the words ([`band_rows`] asks for the next row's): hints.
+            let ask = |p: *const u32| hint(p.cast());
             while left >= 4 {
                 ask(at);
                 ask(at.wrapping_add(16));
@@ -4522,6 +4557,113 @@ mod tests {
     extern crate std;
     use super::*;
 
+    /// [`TexturePages`]'s schedule, against the pages computed row by row: textures of `u8` and
+    /// `u16` texels, tight and with strides of a few bytes to two pages past the row, at 4 offsets
+    /// from an allocation (under Miri one padded shape), from row 0 and from a later row; steps of
+    /// 7 rows and 1 (the band rows' runs and the rows that end a tile row) and of 1, each step
+    /// asked twice (the second asks nothing). Every page (by address) that holds texels of the rows
+    /// from the first gets exactly one line, that line a texel's, and before the step at row `y`
+    /// every page that holds texels of its rows has one; none is asked for past `PAGE_LEAD` bytes
+    /// beyond the next `MAX_BAND_ROWS` rows; `ask` follows the same schedule.
+    #[test]
+    fn texture_pages_ask_once_per_page_ahead_of_its_rows() {
+        use std::collections::BTreeSet;
+        #[allow(clippy::too_many_arguments, reason = "a test's cases")]
+        fn check<T: Texel + Default>(
+            width: usize,
+            pad: usize,
+            height: usize,
+            skip: usize,
+            from: usize,
+            steps: &[usize],
+        ) {
+            let stride = width + pad;
+            let buf = std::vec![T::default(); stride * height + 4096];
+            let data = &buf[skip..skip + stride * (height - 1) + width];
+            let texture = crate::Texture::<T, 1>::with_stride(data, width, height, stride).unwrap();
+            let (size, addr) = (core::mem::size_of::<T>(), data.as_ptr().addr());
+            let page_of = |b: usize| (addr + b) / PAGE;
+            // The pages that hold texels of rows `from..rows`, computed row by row; those that
+            // start before row `from`'s first byte belong to the rows before.
+            let first = page_of(from * stride * size)
+                + usize::from(!(addr + from * stride * size).is_multiple_of(PAGE));
+            let pages = |rows: core::ops::Range<usize>| -> BTreeSet<usize> {
+                rows.flat_map(|r| {
+                    page_of(r * stride * size)..=page_of((r * stride + width) * size - 1)
+                })
+                .filter(|&p| p >= first)
+                .collect()
+            };
+            let mut schedule = TexturePages::new(&texture, from);
+            let mut hinted = TexturePages::new(&texture, from);
+            let (mut y, mut got) = (from, std::vec::Vec::new());
+            let case =
+                std::format!("width {width} pad {pad} height {height} skip {skip} from {from}");
+            for &step in steps.iter().cycle() {
+                if y >= height {
+                    break;
+                }
+                let before = got.len();
+                schedule.due(y, |at| got.push(at));
+                schedule.due(y, |at| got.push(at));
+                hinted.ask(y);
+                assert_eq!(
+                    (hinted.next, hinted.asked),
+                    (schedule.next, schedule.asked),
+                    "{case}"
+                );
+                // Each line a texel's, in order; none past the lead.
+                let lead = ((y + MAX_BAND_ROWS) * stride * size + PAGE_LEAD).max(stride * size);
+                for &at in &got[before..] {
+                    assert!(
+                        at % (stride * size) < width * size && at < data.len() * size,
+                        "{case}"
+                    );
+                    assert!(at < lead + stride * size, "{case} y {y} at {at}");
+                }
+                let asked: BTreeSet<usize> = got.iter().map(|&at| page_of(at)).collect();
+                assert_eq!(asked.len(), got.len(), "{case}: a page twice");
+                assert!(got.windows(2).all(|w| w[0] < w[1]), "{case}");
+                assert!(
+                    pages(y..(y + step).min(height)).is_subset(&asked),
+                    "{case} y {y}"
+                );
+                y += step;
+            }
+            let asked: BTreeSet<usize> = got.iter().map(|&at| page_of(at)).collect();
+            assert_eq!(asked, pages(from..height), "{case}");
+        }
+        // Under Miri (four runs in CI, for the hints' unsafe call) one padded shape.
+        let (skips, shapes): (&[usize], &[(usize, usize, usize)]) = if cfg!(miri) {
+            (&[1], &[(1000, 24, 40)])
+        } else {
+            (
+                &[0, 1, 17, 4095],
+                &[
+                    (1, 0, 3),
+                    (100, 0, 50),
+                    (1024, 0, 64),
+                    (4096, 0, 40),
+                    (5000, 0, 9),
+                    (64, 0, 700),
+                    (1000, 24, 40),
+                    (100, 8000, 12),
+                    (3000, 5000, 10),
+                ],
+            )
+        };
+        for &skip in skips {
+            for &(width, pad, height) in shapes {
+                for from in [0, height / 2] {
+                    for steps in [&[7, 1][..], &[1]] {
+                        check::<u8>(width, pad, height, skip, from, steps);
+                        check::<u16>(width, pad, height, skip, from, steps);
+                    }
+                }
+            }
+        }
+    }
+
     /// `build_via_working_row` takes exactly the tables it documents (`u8` texels, one
     /// channel, `u32` entries, whole rows, at least 1 MiB, rows of at most 4,096 entries, every
     /// row present and whole; streamed from 32 MiB, by plain stores below, or for the rows off
@@ -4529,63 +4671,6 @@ mod tests {
     /// kernel cap (SSE2, AVX2, AVX-512 in turn; the widest the CPU runs for a kernel it lacks,
     /// so that no case is skipped); it declines the rest with nothing written. (Whether a copy
     /// was streamed cannot be seen from the table: the values are the same.)
-    /// [`TexturePages`]'s schedule: steps of 7 rows and 1 (the band rows' runs and the rows
-    /// that end a tile row) and of 1, over textures of `u8` and `u16` texels at every start
-    /// within a page's first bytes: each page start of the texture (by address) is due exactly
-    /// once, in order, and before the step at row `y` every one below `PAGE_LEAD` bytes past
-    /// rows `y..y + MAX_BAND_ROWS` is (none past the texture); `ask` follows the same schedule.
-    #[test]
-    fn texture_pages_are_each_due_once_ahead_of_their_rows() {
-        fn check<T: Copy + Default>(row: usize, height: usize, skip: usize, steps: &[usize]) {
-            let buf = std::vec![T::default(); row * height + 4096];
-            let data = &buf[skip..skip + row * height];
-            let bytes = core::mem::size_of_val(data);
-            let addr = data.as_ptr().addr();
-            let first = (PAGE - addr % PAGE) % PAGE;
-            let mut pages = TexturePages::new(data, row);
-            // The same schedule through `ask` (its hints run; under Miri too).
-            let mut hinted = TexturePages::new(data, row);
-            let (mut y, mut got) = (0, std::vec::Vec::new());
-            for &step in steps.iter().cycle() {
-                if y >= height {
-                    break;
-                }
-                got.extend(pages.due(y));
-                hinted.ask(y);
-                assert_eq!(hinted.asked, pages.asked);
-                let ahead =
-                    ((y + MAX_BAND_ROWS) * row * core::mem::size_of::<T>() + PAGE_LEAD).min(bytes);
-                // Page starts below `ahead`: from the first (the texture's first byte at
-                // `addr`), one per PAGE bytes.
-                let want = ahead.saturating_sub(first).div_ceil(PAGE);
-                assert_eq!(
-                    got.len(),
-                    want,
-                    "row {row} height {height} skip {skip} y {y}"
-                );
-                y += step;
-            }
-            let all: std::vec::Vec<usize> = (first..bytes).step_by(PAGE).collect();
-            assert!(all.iter().all(|b| (addr + b) % PAGE == 0));
-            assert_eq!(got, all, "row {row} height {height} skip {skip}");
-        }
-        for skip in [0, 1, 17, 4095] {
-            for (row, height) in [
-                (1, 3),
-                (100, 50),
-                (1024, 64),
-                (4096, 40),
-                (5000, 9),
-                (64, 700),
-            ] {
-                for steps in [&[7, 1][..], &[1]] {
-                    check::<u8>(row, height, skip, steps);
-                    check::<u16>(row, height, skip, steps);
-                }
-            }
-        }
-    }
-
     #[test]
     #[cfg_attr(miri, ignore = "tables of 1 to 34 MiB: too slow under Miri")]
     fn build_via_working_row_takes_tables_of_a_mib_and_more() {

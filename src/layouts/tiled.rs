@@ -1901,9 +1901,10 @@ fn local_fields<E: Entry, const C: usize, const B: usize>(
     Some((dst.len(), blocks.checked_mul(B)?))
 }
 
-/// The words of the component rows a row's fields go to (first word, word count), per x
-/// component 0 and 1: the row kernel's prefetch hint (never dereferenced). The one definition,
-/// also the `simd` kernels' (`simd::Ahead`).
+/// The words whose lines a row kernel asks for (first word, word count), two slices: the
+/// component rows a row's fields go to, per x component 0 and 1, or, for `simd::band_rows`,
+/// words further ahead (the next row's, and past the layout after its last rows). A prefetch
+/// hint, never dereferenced. The one definition, also the `simd` kernels' (`simd::Ahead`).
 pub(crate) type Ahead = [(*const u32, usize); 2];
 
 /// The row step of [`TiledBuilder::push_row`] on one accumulator row `acc` (position `x =
@@ -2918,10 +2919,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         });
         // The texture's pages asked for ahead of the rows (hints only).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        let mut pages = {
-            let (data, stride) = texture.storage();
-            crate::simd::TexturePages::new(data, stride)
-        };
+        let mut pages = crate::simd::TexturePages::new(texture, self.rows_done);
         let mut y = self.rows_done;
         while y < texture.height() {
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
