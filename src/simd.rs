@@ -4568,7 +4568,6 @@ mod tests {
     #[test]
     fn texture_pages_ask_once_per_page_ahead_of_its_rows() {
         use std::collections::BTreeSet;
-        #[allow(clippy::too_many_arguments, reason = "a test's cases")]
         fn check<T: Texel + Default>(
             width: usize,
             pad: usize,
