@@ -71,6 +71,8 @@
 
 pub mod cost;
 mod div;
+#[cfg(all(feature = "simd", texsat_armv7em))]
+mod dsp;
 pub mod edge;
 mod error;
 pub mod filters;

@@ -70,6 +70,10 @@ fn build_row<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     if !CHECKED && crate::simd::build_row::<T, E, C>(texels, above, out) {
         return Ok(());
     }
+    #[cfg(all(feature = "simd", texsat_armv7em))]
+    if !CHECKED && crate::dsp::build_row::<T, E, C>(texels, above, out) {
+        return Ok(());
+    }
     let mut run = [E::ZERO; C];
     match above {
         None => {

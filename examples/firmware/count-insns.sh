@@ -4,6 +4,7 @@
 #
 #   examples/firmware/count-insns.sh            prints a markdown table
 #   COUNT_PROFILE=1 examples/firmware/count-insns.sh   also instructions per call by function (stderr)
+#   COUNT_FEATURES=simd ...                the texsat features too (simd: the DSP row scan)
 #   COUNT_LINES=mip_trilinear ...          also that entry point's instructions per call by source line
 #   COUNT_ANNOTATE=tiled_stable_border ... also the disassembly of what that entry point runs,
 #                                          each instruction with its count per call (stderr)
@@ -33,6 +34,8 @@ HERE=$(pwd)
 TARGET=thumbv7em-none-eabihf
 BIN=texsat-count
 FEATURES=count,filter-mip
+# COUNT_FEATURES=simd adds texsat features (simd: the ARMv7E-M row scan, src/dsp.rs).
+[ -n "${COUNT_FEATURES:-}" ] && FEATURES="$FEATURES,$COUNT_FEATURES"
 QEMU=${QEMU:-qemu-system-arm}
 
 die() {

@@ -22,7 +22,7 @@ REPO=$(cd ../.. && pwd)
 TARGET=thumbv7em-none-eabihf
 BIN=texsat-link-gate
 UNDEF=texsat_link_gate_a_panic_path_remains
-ALL_SETS=(none filter-point filter-mip filter-rip filter-dip filter-tent filter-variance filters filters,defmt)
+ALL_SETS=(none filter-point filter-mip filter-rip filter-dip filter-tent filter-variance filters filters,defmt simd filters,defmt,simd)
 
 banner() { printf '\n=== %s ===\n' "$*"; }
 die() {
