@@ -8,41 +8,136 @@
 //! store, the count and the branch: `examples/firmware/count-insns.sh`), because LLVM splits a
 //! word load of four texels back into byte loads and does not merge the rows' words into
 //! multiple loads and stores. Per four entries this loop takes 13 instructions: one word load
-//! of four texels; one `LDM` of four entries of the row above; per texel one `UXTAB` (the DSP
-//! extension's "extract a byte, rotated, and add": the running sum plus texel `j`), and for the
-//! last a plain add of the word shifted right by 24; four adds of the row above; one `STM` of
-//! the four entries; the count and the branch. The rest of the row (fewer than 4 entries) and
-//! rows without a row above (the first) take the portable loop.
+//! of four texels; one `LDM` (Thumb-2) of the four entries of the row above; per texel one
+//! `UXTAB` (the DSP extension's "extract a byte, rotated, and add": the running sum plus texel
+//! `j`), and for the last a plain add of the word shifted right by 24; four adds of the row
+//! above; one `STM` of the four entries (two for [`build_row_in_place`] with a copy); the
+//! count and the branch. The rest of a row (fewer than 4 entries) and the first row of a table
+//! take the portable loop. Used by `Sat::build`, `Sat::build_strips` and `RowStreamBuilder`
+//! (in place, [`build_row_in_place`]); not by the checked builds.
 //!
 //! Exactness: the same additions as the portable loop, in the same order, on 32-bit registers.
-//! The caller runs it only where the width proof holds (`CHECKED = false`: every running sum
+//! The callers run it only where the width proof holds (`CHECKED = false`: every running sum
 //! and entry is the sum of a sub-rectangle, at most `255 w h < 2^32`), so no addition wraps.
 //!
+//! Targets: the assembly needs the DSP extension (`UXTAB`), which every ARMv7E-M core has; a
+//! build for a `thumbv7em-*` target with `-C target-cpu=cortex-m3` (or `-C
+//! target-feature=-dsp`) and `simd` fails to assemble, loudly.
+//!
 //! # Safety argument
-//! 1. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]`, `&[E]` to `&[u32]` and `&mut [E]` to
-//!    `&mut [u32]` only after `TypeId` equality shows `T = u8` and `E = u32` (and `C = 1`): the
-//!    same type, the same length.
-//! 2. *Bounds.* The three slices have the same length `n` (checked); the assembly runs `q = n /
-//!    4` turns, each reading 4 bytes of `t` and 16 of `above` and writing 16 of `out` at the
-//!    turn's offset (`4 j`, `16 j`): all inside the slices. It runs only for `q >= 1` (the
-//!    count is decremented before the test).
-//! 3. *Alignment.* `LDM` and `STM` need word-aligned addresses: `above` and `out` are `u32`
-//!    slices. The texels' word load may be unaligned, which ARMv7-M's `LDR` allows (unless the
-//!    program sets `CCR.UNALIGN_TRP`, which would fault every unaligned access of compiled
-//!    code too).
-//! 4. *Aliasing.* `out` is a `&mut` borrow, so it overlaps neither `t` nor `above`.
-//! 5. *Registers.* The four entries live in `r0` to `r3`, named as outputs (clobbered): `LDM`
-//!    and `STM` take their register lists in ascending order, so the lowest register holds the
-//!    lowest address, as the code assumes. The pointers and the count are in-out operands the
-//!    assembly advances (their final values discarded), the running sum an in-out operand. The
-//!    flags are clobbered (`SUBS`), which `asm!` assumes without `preserves_flags`; no stack is
-//!    used (`nostack`).
+//! 1. *Type casts.* [`build_row`] and [`build_row_in_place`] cast `&[T]` to `&[u8]` and `&[E]`
+//!    / `&mut [E]` to `&[u32]` / `&mut [u32]` only after `TypeId` equality shows `T = u8` and
+//!    `E = u32` (and `C = 1`): the same type, the same length.
+//! 2. *Bounds.* The slices have the same length `n` (checked); the assembly runs `q = n / 4`
+//!    turns, each reading 4 bytes of the texels and 16 of the row above and writing 16 of the
+//!    row out (and of the copy) at the turn's offset (`4 j`, `16 j`): all inside the slices. It
+//!    runs only for `q >= 1` (the count is decremented before the test).
+//! 3. *Alignment.* `LDM` and `STM` need word-aligned addresses: the rows are `u32` slices. The
+//!    texels' word load may be unaligned, which ARMv7-M's single `LDR` allows unless the
+//!    program sets `CCR.UNALIGN_TRP` (then a row of texels not on a 4-byte boundary takes a
+//!    UsageFault: a fault, not undefined behaviour; documented with the feature). Texels in
+//!    Device memory (which faults on unaligned access on the Cortex-M7) are not supported.
+//! 4. *Aliasing.* In [`build_row`], `out` is a `&mut` borrow, so it overlaps neither the texels
+//!    nor the row above. In place, the row above and the row out are one `&mut` slice: each
+//!    turn's `LDM` reads its 16 bytes before its `STM` writes them, and turns move forward, so
+//!    every entry is read as the row above before it is overwritten; the copy is another `&mut`
+//!    borrow, disjoint from both.
+//! 5. *Registers.* The four entries live in `r0` to `r3`, named as outputs (clobbered): `LDM` and
+//!    `STM` take their register lists in ascending order, so the lowest register holds the
+//!    lowest address, as the code assumes. They are early-clobber outputs (`out`, not
+//!    `lateout`), so no input shares them: no base register of an `LDM` or `STM` is in its own
+//!    list, and the texel word's register `w` (also `out`) is never the texel pointer `t`
+//!    (`LDR w, [t], #4` with `w = t` is UNPREDICTABLE). The pointers and the count are in-out
+//!    operands the assembly advances (their final values discarded), the running sum an in-out
+//!    operand.
+//! 6. *Effects.* The flags are clobbered (`SUBS`), which `asm!` assumes without
+//!    `preserves_flags`; no stack is used (`nostack`); without `nomem` or `readonly` the
+//!    compiler treats the block as reading and writing any memory, as it does.
 #![allow(unsafe_code)]
 
 use core::any::TypeId;
 use core::arch::asm;
 
 use crate::texel::{Entry, Texel};
+
+/// The turn loop around one load of the row above and one or two stores (the module's doc):
+/// `t` the texels, `n` the turns (at least 1), `run` the running sum, the entries in `r0` to
+/// `r3`; the caller names the row pointers its load and stores use.
+macro_rules! scan_turns {
+    ($load:literal, $($store:literal),+; $($operands:tt)*) => {
+        asm!(
+            "2:",
+            "ldr {w}, [{t}], #4",
+            $load,
+            "uxtab {run}, {run}, {w}",
+            "add r0, r0, {run}",
+            "uxtab {run}, {run}, {w}, ror #8",
+            "add r1, r1, {run}",
+            "uxtab {run}, {run}, {w}, ror #16",
+            "add r2, r2, {run}",
+            "add {run}, {run}, {w}, lsr #24",
+            "add r3, r3, {run}",
+            $($store,)+
+            "subs {n}, {n}, #1",
+            "bne 2b",
+            $($operands)*
+            w = out(reg) _,
+            out("r0") _,
+            out("r1") _,
+            out("r2") _,
+            out("r3") _,
+            options(nostack),
+        )
+    };
+}
+
+/// `texels` as `u8` when `T` is `u8` and there is one channel (the safety argument, 1).
+fn texels_u8<T: Texel, const C: usize>(texels: &[T]) -> Option<&[u8]> {
+    (C == 1 && TypeId::of::<T>() == TypeId::of::<u8>()).then(|| {
+        // SAFETY: T is u8 (TypeId equality): the same layout and length.
+        unsafe { core::slice::from_raw_parts(texels.as_ptr().cast::<u8>(), texels.len()) }
+    })
+}
+
+/// `row` as `u32` when `E` is `u32` (the safety argument, 1).
+fn entries_u32<E: Entry>(row: &[E]) -> Option<&[u32]> {
+    (TypeId::of::<E>() == TypeId::of::<u32>()).then(|| {
+        // SAFETY: E is u32 (TypeId equality): the same layout and length.
+        unsafe { core::slice::from_raw_parts(row.as_ptr().cast::<u32>(), row.len()) }
+    })
+}
+
+/// `row` as `u32` when `E` is `u32`, the borrow moved (the safety argument, 1).
+fn entries_u32_mut<E: Entry>(row: &mut [E]) -> Option<&mut [u32]> {
+    (TypeId::of::<E>() == TypeId::of::<u32>()).then(|| {
+        // SAFETY: E is u32 (TypeId equality): the same layout and length; the mutable borrow
+        // of `row` is moved into the result.
+        unsafe { core::slice::from_raw_parts_mut(row.as_mut_ptr().cast::<u32>(), row.len()) }
+    })
+}
+
+/// The last `n % 4` entries, one by one, after `done = n - n % 4` by the turns: `out[x] =
+/// above[x] + run` (`above` `None`: in place, `out` holds it), written to `copy` too.
+fn tail(t: &[u8], above: Option<&[u32]>, out: &mut [u32], copy: Option<&mut [u32]>, mut run: u32) {
+    let done = out.len() & !3;
+    let (Some(t), Some(out)) = (t.get(done..), out.get_mut(done..)) else {
+        return;
+    };
+    let above = above.and_then(|a| a.get(done..));
+    let mut copy = copy.and_then(|c| c.get_mut(done..));
+    for (x, (o, &v)) in out.iter_mut().zip(t).enumerate() {
+        // No wrap: the caller's width proof (the module's doc).
+        run = run.wrapping_add(u32::from(v));
+        let up = match above {
+            Some(a) => a.get(x).copied().unwrap_or(0),
+            None => *o,
+        };
+        *o = run.wrapping_add(up);
+        if let Some(c) = copy.as_deref_mut().and_then(|c| c.get_mut(x)) {
+            *c = *o;
+        }
+    }
+}
 
 /// `out = above + prefix sums of texels` for `u8` texels, `u32` entries and one channel with a
 /// row above, four entries per turn (the module's doc); `false` (nothing written) otherwise,
@@ -52,80 +147,94 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
     above: Option<&[E]>,
     out: &mut [E],
 ) -> bool {
-    let Some(above) = above else {
+    let (Some(t), Some(a)) = (texels_u8::<T, C>(texels), above.and_then(entries_u32)) else {
         return false;
     };
-    if C != 1
-        || TypeId::of::<T>() != TypeId::of::<u8>()
-        || TypeId::of::<E>() != TypeId::of::<u32>()
-        || texels.len() != out.len()
-        || above.len() != out.len()
-    {
+    let n = out.len();
+    let Some(o) = entries_u32_mut(out) else {
+        return false;
+    };
+    if t.len() != n || a.len() != n {
         return false;
     }
-    // SAFETY: T is u8 and E is u32 (TypeId equality): the same layout and length (the safety
-    // argument, 1); the mutable borrow of `out` is moved into the cast.
-    let (t, a, o) = unsafe {
-        (
-            core::slice::from_raw_parts(texels.as_ptr().cast::<u8>(), texels.len()),
-            core::slice::from_raw_parts(above.as_ptr().cast::<u32>(), above.len()),
-            core::slice::from_raw_parts_mut(out.as_mut_ptr().cast::<u32>(), out.len()),
-        )
-    };
-    scan(t, a, o);
-    true
-}
-
-/// The row scan over slices of one length `n` (checked by the caller): `n / 4` turns of the
-/// assembly loop, then the last `n % 4` entries one by one.
-fn scan(t: &[u8], above: &[u32], out: &mut [u32]) {
-    let n = out.len();
-    let turns = n / 4;
     let mut run = 0u32;
-    if turns > 0 && t.len() == n && above.len() == n {
-        // SAFETY: the safety argument, 2 to 5: `turns >= 1` turns of 4 texels, 4 entries above
-        // and 4 entries out, all inside the three slices of length n >= 4 turns; `above` and
-        // `out` word-aligned; `out` disjoint from both.
+    let turns = n / 4;
+    if turns > 0 {
+        // SAFETY: the safety argument, 2 to 6: `turns >= 1` turns of 4 texels, 4 entries above
+        // and 4 out, inside the three slices of length n >= 4 turns; the rows word-aligned;
+        // `o` disjoint from `t` and `a`.
         unsafe {
-            asm!(
-                "2:",
-                "ldr {w}, [{t}], #4",
+            scan_turns!(
                 "ldm {a}!, {{r0, r1, r2, r3}}",
-                "uxtab {run}, {run}, {w}",
-                "add r0, r0, {run}",
-                "uxtab {run}, {run}, {w}, ror #8",
-                "add r1, r1, {run}",
-                "uxtab {run}, {run}, {w}, ror #16",
-                "add r2, r2, {run}",
-                "add {run}, {run}, {w}, lsr #24",
-                "add r3, r3, {run}",
-                "stm {o}!, {{r0, r1, r2, r3}}",
-                "subs {n}, {n}, #1",
-                "bne 2b",
+                "stm {o}!, {{r0, r1, r2, r3}}";
                 t = inout(reg) t.as_ptr() => _,
-                a = inout(reg) above.as_ptr() => _,
-                o = inout(reg) out.as_mut_ptr() => _,
+                a = inout(reg) a.as_ptr() => _,
+                o = inout(reg) o.as_mut_ptr() => _,
                 n = inout(reg) turns => _,
                 run = inout(reg) run,
-                w = out(reg) _,
-                out("r0") _,
-                out("r1") _,
-                out("r2") _,
-                out("r3") _,
-                options(nostack),
             );
         }
     }
-    // The last n % 4 entries (all of them if the slices differ, which the caller rules out).
-    let done = if t.len() == n && above.len() == n {
-        turns.saturating_mul(4)
-    } else {
-        0
+    tail(t, Some(a), o, None, run);
+    true
+}
+
+/// [`build_row`] in place: `row` holds the row above on entry and the new row on exit, and with
+/// `copy` (as long as `row`) the new row is written there too, in the same pass (the streaming
+/// builder's rows). `false` (nothing written) for the first row (`first`: nothing above) and
+/// for other types, and the caller takes the portable loop.
+pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
+    texels: &[T],
+    row: &mut [E],
+    first: bool,
+    copy: Option<&mut [E]>,
+) -> bool {
+    let Some(t) = texels_u8::<T, C>(texels) else {
+        return false;
     };
-    let rest = out.iter_mut().zip(t).zip(above).skip(done);
-    for ((o, &v), &u) in rest {
-        // No wrap: the caller's width proof (the module's doc).
-        run = run.wrapping_add(u32::from(v));
-        *o = run.wrapping_add(u);
+    let n = row.len();
+    let mut copy = match copy {
+        Some(c) => match entries_u32_mut(c) {
+            Some(c) if c.len() == n => Some(c),
+            _ => return false,
+        },
+        None => None,
+    };
+    let Some(r) = entries_u32_mut(row) else {
+        return false;
+    };
+    if first || t.len() != n {
+        return false;
     }
+    let mut run = 0u32;
+    let turns = n / 4;
+    if turns > 0 {
+        // SAFETY: the safety argument, 2 to 6: `turns >= 1` turns of 4 texels and 4 entries of
+        // the row (read, then written back) and of the copy, inside slices of length n >= 4
+        // turns; the rows word-aligned; the copy a separate `&mut` borrow.
+        unsafe {
+            match copy.as_deref_mut() {
+                Some(c) => scan_turns!(
+                    "ldm {r}, {{r0, r1, r2, r3}}",
+                    "stm {r}!, {{r0, r1, r2, r3}}",
+                    "stm {c}!, {{r0, r1, r2, r3}}";
+                    t = inout(reg) t.as_ptr() => _,
+                    r = inout(reg) r.as_mut_ptr() => _,
+                    c = inout(reg) c.as_mut_ptr() => _,
+                    n = inout(reg) turns => _,
+                    run = inout(reg) run,
+                ),
+                None => scan_turns!(
+                    "ldm {r}, {{r0, r1, r2, r3}}",
+                    "stm {r}!, {{r0, r1, r2, r3}}";
+                    t = inout(reg) t.as_ptr() => _,
+                    r = inout(reg) r.as_mut_ptr() => _,
+                    n = inout(reg) turns => _,
+                    run = inout(reg) run,
+                ),
+            }
+        }
+    }
+    tail(t, None, r, copy, run);
+    true
 }

@@ -995,15 +995,27 @@ fn build_row_in_place<T: Texel, E: Entry, const C: usize, const CHECKED: bool>(
     if !CHECKED && crate::simd::build_row_in_place::<T, E, C>(texels, row, first, None, false) {
         return Ok(());
     }
+    #[cfg(all(feature = "simd", texsat_armv7em))]
+    if !CHECKED && crate::dsp::build_row_in_place::<T, E, C>(texels, row, first, None) {
+        return Ok(());
+    }
+    // Two loops, not a test of `first` per entry: the firmware's opt-level "s" does not
+    // unswitch loops (the streaming build on the Cortex-M4: `count-insns.sh`, row 6b).
     let mut run = [E::ZERO; C];
-    for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
-        for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
-            *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
-            *o = if first {
-                *r
-            } else {
-                add::<E, CHECKED>(*r, *o)?
-            };
+    let pixels = row.chunks_exact_mut(C).zip(texels.chunks_exact(C));
+    if first {
+        for (o, t) in pixels {
+            for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+                *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+                *o = *r;
+            }
+        }
+    } else {
+        for (o, t) in pixels {
+            for ((o, t), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {
+                *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+                *o = add::<E, CHECKED>(*r, *o)?;
+            }
         }
     }
     Ok(())
@@ -1031,20 +1043,31 @@ fn build_row_in_place_copy<T: Texel, E: Entry, const C: usize, const CHECKED: bo
     {
         return Ok(());
     }
+    #[cfg(all(feature = "simd", texsat_armv7em))]
+    if !CHECKED && crate::dsp::build_row_in_place::<T, E, C>(texels, row, first, Some(copy)) {
+        return Ok(());
+    }
+    // Two loops, as in `build_row_in_place`.
     let mut run = [E::ZERO; C];
-    for ((o, t), c) in row
+    let pixels = row
         .chunks_exact_mut(C)
         .zip(texels.chunks_exact(C))
-        .zip(copy.chunks_exact_mut(C))
-    {
-        for (((o, t), c), r) in o.iter_mut().zip(t).zip(c).zip(run.iter_mut()) {
-            *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
-            *o = if first {
-                *r
-            } else {
-                add::<E, CHECKED>(*r, *o)?
-            };
-            *c = *o;
+        .zip(copy.chunks_exact_mut(C));
+    if first {
+        for ((o, t), c) in pixels {
+            for (((o, t), c), r) in o.iter_mut().zip(t).zip(c).zip(run.iter_mut()) {
+                *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+                *o = *r;
+                *c = *r;
+            }
+        }
+    } else {
+        for ((o, t), c) in pixels {
+            for (((o, t), c), r) in o.iter_mut().zip(t).zip(c).zip(run.iter_mut()) {
+                *r = add::<E, CHECKED>(*r, E::from(t.to_u16()))?;
+                *o = add::<E, CHECKED>(*r, *o)?;
+                *c = *o;
+            }
         }
     }
     Ok(())

@@ -79,6 +79,14 @@ if ! CARGO_TARGET_DIR=$TARGET_DIR cargo build --release --locked --target "$TARG
   die "build failed (log: $OUT/build.log)"
 fi
 cp "$TARGET_DIR/$TARGET/release/$BIN" "$ELF"
+# With simd the build's row scan must be the ARMv7E-M one (texsat's src/dsp.rs), else the
+# harness's check of it (count.rs, builds_agree) would pass on the portable loop.
+if [[ ",${COUNT_FEATURES:-}," == *",simd,"* ]]; then
+  UXTAB=$("$LLVM_BIN/llvm-objdump" -d "$ELF" | grep -c uxtab || true)
+  [ "${UXTAB:-0}" -gt 0 ] ||
+    die "COUNT_FEATURES=simd, but the binary has no UXTAB: texsat's ARMv7E-M row scan (src/dsp.rs) is not compiled in"
+  echo "count-insns: simd: $UXTAB UXTAB instructions in the binary (texsat's src/dsp.rs)" >&2
+fi
 
 loud() {
   printf '%s\n' "!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!!" \

@@ -53,6 +53,7 @@ ENTRIES = [
     ("hand_border_mean", "", None),
     ("sat_build", "6. `Sat::build`", "hand_build"),
     ("hand_build", "", None),
+    ("stream_build", "6b. `RowStreamBuilder::push_row_into`, row by row", "hand_build"),
     ("tiled_int_border", "7a. `Tiled` 8x8 tiles `box_sum_int` Border (4 corners)", None),
     ("tiled_stable_border", "7b. `Tiled` 8x8 tiles `box_sum` Stable Border", None),
 ]
@@ -393,7 +394,7 @@ def main():
         h = f"{per_call[hand] - base:g}" if hand else ""
         if key == "baseline":
             print(f"| {label} | {per_call[key]:g} (subtracted from the rows below) | |")
-        elif key == "sat_build":
+        elif key in ("sat_build", "stream_build"):
             hv = per_call[hand] - base
             print(
                 f"| {label}, 64x64 u32 table: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** "

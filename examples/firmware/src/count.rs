@@ -28,7 +28,8 @@ use cortex_m_rt::entry;
 mod hand;
 use texsat::layouts::{Tiled, TiledSpec};
 use texsat::{
-    Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, RepeatWithinPeriod, Sat, Stable, Texture,
+    Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, RepeatWithinPeriod, RowStreamBuilder, Sat,
+    Stable, Texture,
 };
 
 type Tx = u8;
@@ -266,18 +267,36 @@ fn h_box_sum_border_mean(t: &hand::Table<'_>, r: &Rect<Co>) {
 }
 
 #[inline(never)]
+fn m_stream_build(texels: &[Tx], storage: &mut [En]) {
+    let mut row = [0 as En; W];
+    let Ok(mut s) = RowStreamBuilder::<En>::new(W, H, 8, &mut row[..]) else {
+        return;
+    };
+    for (src, dst) in texels.chunks_exact(W).zip(storage.chunks_exact_mut(W)) {
+        if s.push_row_into(src, dst).is_err() {
+            return;
+        }
+    }
+    keep(s.finish().is_ok());
+}
+
+#[inline(never)]
 fn h_build(texels: &[Tx], storage: &mut [En]) {
     hand::build(texels, black_box(W), storage);
     keep(&*storage);
 }
 
-/// `Sat::build` equals the hand-written build (`hand::build`, the plain loop) for every width 1
-/// to 40 and height 1 to 4, the texels from `texels` at byte offsets 0 to 3 (unaligned word
-/// loads for the `simd` feature's row scan, texsat's src/dsp.rs) and all 255 (the largest
-/// sums): on the device, the one place that scan runs. A mismatch exits before the first mark,
-/// and count_insns.py then fails (no regions).
+/// `Sat::build` and the streaming builder (`RowStreamBuilder::push_row_into`, and `push_row`
+/// with each row copied out) equal the hand-written build (`hand::build`, the plain loop) for
+/// every width 1 to 40 and height 1 to 4, the texels at byte offsets 0 to 3 (unaligned word
+/// loads in the `simd` feature's row scan, texsat's src/dsp.rs) of the harness's random texels
+/// and of all 255, each output first filled with a sentinel: on the device, the one place that
+/// scan runs. A mismatch exits before the first mark, and count_insns.py then fails (no
+/// regions).
 fn builds_agree(texels: &[Tx], a: &mut [En], b: &mut [En]) -> bool {
+    const SENTINEL: En = 0xDEAD_BEEF;
     let full = [255u8; 4 + 40 * 4];
+    let mut row = [0 as En; 40];
     for w in 1..=40 {
         for h in 1..=4 {
             for skip in 0..4 {
@@ -288,15 +307,34 @@ fn builds_agree(texels: &[Tx], a: &mut [En], b: &mut [En]) -> bool {
                     let (Some(a), Some(b)) = (a.get_mut(..w * h), b.get_mut(..w * h)) else {
                         return false;
                     };
+                    hand::build(t, w, b);
                     let Ok(tex) = Texture::<Tx>::new(t, black_box(w), h) else {
                         return false;
                     };
-                    if Sat::build(&tex, black_box(&mut a[..])).is_err() {
+                    a.fill(SENTINEL);
+                    if Sat::build(&tex, black_box(&mut a[..])).is_err() || a != b {
                         return false;
                     }
-                    hand::build(t, w, b);
-                    if a != b {
-                        return false;
+                    for into in [true, false] {
+                        a.fill(SENTINEL);
+                        let Ok(mut s) = RowStreamBuilder::<En>::new(w, h, 8, &mut row[..]) else {
+                            return false;
+                        };
+                        for (src, dst) in t.chunks_exact(w).zip(a.chunks_exact_mut(w)) {
+                            let ok = if into {
+                                s.push_row_into(black_box(src), dst).is_ok()
+                            } else {
+                                s.push_row(black_box(src))
+                                    .map(|r| dst.iter_mut().zip(r).for_each(|(d, v)| *d = *v))
+                                    .is_ok()
+                            };
+                            if !ok {
+                                return false;
+                            }
+                        }
+                        if s.finish().is_err() || a != b {
+                            return false;
+                        }
                     }
                 }
             }
@@ -467,6 +505,11 @@ fn main() -> ! {
     // Sat::build of the whole W x H table (per entry: divided by W * H in count-insns.sh).
     measure!(m_sat_build(&tex, black_box(&mut table2[..])));
     measure!(h_build(texels, black_box(&mut table2[..])));
+    if table2[..] != sat.entries()[..] {
+        exit()
+    }
+    table2.fill(0);
+    measure!(m_stream_build(texels, black_box(&mut table2[..])));
     if table2[..] != sat.entries()[..] {
         exit()
     }
