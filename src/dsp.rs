@@ -61,10 +61,11 @@ use core::arch::asm;
 use crate::texel::{Entry, Texel};
 
 /// The turn loop around one load of the row above and one or two stores (the module's doc):
-/// `t` the texels, `n` the turns (at least 1), `run` the running sum, the entries in `r0` to
-/// `r3`; the caller names the row pointers its load and stores use.
+/// `$t` the texels' pointer, `$turns` the turns (at least 1), `$run` the running sum (read and
+/// updated), the entries in `r0` to `r3`; the caller names the row pointers its load and stores
+/// use.
 macro_rules! scan_turns {
-    ($load:literal, $($store:literal),+; $($operands:tt)*) => {
+    ($t:expr, $turns:expr, $run:ident; $load:literal, $($store:literal),+; $($operands:tt)*) => {
         asm!(
             "2:",
             "ldr {w}, [{t}], #4",
@@ -81,6 +82,9 @@ macro_rules! scan_turns {
             "subs {n}, {n}, #1",
             "bne 2b",
             $($operands)*
+            t = inout(reg) $t => _,
+            n = inout(reg) $turns => _,
+            run = inout(reg) $run,
             w = out(reg) _,
             out("r0") _,
             out("r1") _,
@@ -165,13 +169,11 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
         // `o` disjoint from `t` and `a`.
         unsafe {
             scan_turns!(
+                t.as_ptr(), turns, run;
                 "ldm {a}!, {{r0, r1, r2, r3}}",
                 "stm {o}!, {{r0, r1, r2, r3}}";
-                t = inout(reg) t.as_ptr() => _,
                 a = inout(reg) a.as_ptr() => _,
                 o = inout(reg) o.as_mut_ptr() => _,
-                n = inout(reg) turns => _,
-                run = inout(reg) run,
             );
         }
     }
@@ -215,22 +217,18 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
         unsafe {
             match copy.as_deref_mut() {
                 Some(c) => scan_turns!(
+                    t.as_ptr(), turns, run;
                     "ldm {r}, {{r0, r1, r2, r3}}",
                     "stm {r}!, {{r0, r1, r2, r3}}",
                     "stm {c}!, {{r0, r1, r2, r3}}";
-                    t = inout(reg) t.as_ptr() => _,
                     r = inout(reg) r.as_mut_ptr() => _,
                     c = inout(reg) c.as_mut_ptr() => _,
-                    n = inout(reg) turns => _,
-                    run = inout(reg) run,
                 ),
                 None => scan_turns!(
+                    t.as_ptr(), turns, run;
                     "ldm {r}, {{r0, r1, r2, r3}}",
                     "stm {r}!, {{r0, r1, r2, r3}}";
-                    t = inout(reg) t.as_ptr() => _,
                     r = inout(reg) r.as_mut_ptr() => _,
-                    n = inout(reg) turns => _,
-                    run = inout(reg) run,
                 ),
             }
         }
