@@ -12,9 +12,10 @@
 //! `UXTAB` (the DSP extension's "extract a byte, rotated, and add": the running sum plus texel
 //! `j`), and for the last a plain add of the word shifted right by 24; four adds of the row
 //! above; one `STM` of the four entries (two for [`build_row_in_place`] with a copy); the
-//! count and the branch. The rest of a row (fewer than 4 entries) and the first row of a table
-//! take the portable loop. Used by `Sat::build`, `Sat::build_strips` and `RowStreamBuilder`
-//! (in place, [`build_row_in_place`]); not by the checked builds.
+//! count and the branch. The rest of a row (fewer than 4 entries) goes one entry at a time in
+//! safe Rust here (`tail`); the first row of a table, other types and the checked builds take
+//! the portable loop in `table.rs`. Used by `Sat::build`, `Sat::build_strips` and
+//! `RowStreamBuilder` (in place, [`build_row_in_place`]).
 //!
 //! Exactness: the same additions as the portable loop, in the same order, on 32-bit registers.
 //! The callers run it only where the width proof holds (`CHECKED = false`: every running sum
@@ -54,6 +55,14 @@
 //!    `preserves_flags`; no stack is used (`nostack`); without `nomem` or `readonly` the
 //!    compiler treats the block as reading and writing any memory, as it does.
 #![allow(unsafe_code)]
+#![deny(
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::as_conversions
+)]
 
 use core::any::TypeId;
 use core::arch::asm;
@@ -195,6 +204,9 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
         return false;
     };
     let n = row.len();
+    if first || t.len() != n {
+        return false;
+    }
     let mut copy = match copy {
         Some(c) => match entries_u32_mut(c) {
             Some(c) if c.len() == n => Some(c),
@@ -205,9 +217,6 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
     let Some(r) = entries_u32_mut(row) else {
         return false;
     };
-    if first || t.len() != n {
-        return false;
-    }
     let mut run = 0u32;
     let turns = n / 4;
     if turns > 0 {

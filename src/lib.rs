@@ -49,7 +49,8 @@
 //! ```
 #![no_std]
 // No `unsafe` anywhere, except the vectorized build rows behind the `simd` feature, which live in
-// one module (`src/simd.rs`, with its safety argument) and are denied everywhere else.
+// two modules (`src/simd.rs` for x86-64, `src/dsp.rs` for ARMv7E-M, each with its safety
+// argument) and are denied everywhere else.
 #![cfg_attr(not(feature = "simd"), forbid(unsafe_code))]
 #![cfg_attr(feature = "simd", deny(unsafe_code))]
 // docs.rs (and `RUSTDOCFLAGS="--cfg docsrs" cargo +nightly doc --all-features`) shows which
