@@ -258,8 +258,8 @@ def main():
     if cv2 is not None:
         arrays = [a for n in sides for a in (images[n], outs[n])]
         p = huge_kb("self", [(a.ctypes.data, a.ctypes.data + a.nbytes) for a in arrays])
-        pages.append(("opencv's arrays", min(p[0], sum(a.nbytes for a in arrays) // 1024)
-                      if p else None, sum(a.nbytes for a in arrays) // 1024))
+        total_kb = sum(a.nbytes for a in arrays) // 1024
+        pages.append(("opencv's arrays", min(p[0], total_kb) if p else None, total_kb))
     for s in servers:
         s.close()
 
