@@ -14,12 +14,15 @@
 //! above; one `STM` of the four entries (two for [`build_row_in_place`] with a copy); the
 //! count and the branch. The rest of a row (fewer than 4 entries) goes one entry at a time in
 //! safe Rust here (`tail`); the first row of a table, other types and the checked builds take
-//! the portable loop in `table.rs`. Used by `Sat::build`, `Sat::build_strips` and
-//! `RowStreamBuilder` (in place, [`build_row_in_place`]).
+//! the portable loop in `table.rs`. Used by `Sat::build`, `Sat::build_strips`,
+//! `RowStreamBuilder` and the modular layout's rows (`Modular::build`, `ModularBuilder`: in
+//! place, [`build_row_in_place`]).
 //!
 //! Exactness: the same additions as the portable loop, in the same order, on 32-bit registers.
-//! The callers run it only where the width proof holds (`CHECKED = false`: every running sum
-//! and entry is the sum of a sub-rectangle, at most `255 w h < 2^32`), so no addition wraps.
+//! The table builds run it only where the width proof holds (`CHECKED = false`: every running
+//! sum and entry is the sum of a sub-rectangle, at most `255 w h < 2^32`), so no addition
+//! wraps; the modular rows want their sums modulo `2^32` (they keep the low `k` bits), which
+//! is what the registers' additions give, as the portable `wrapping_add` does.
 //!
 //! Targets: the assembly needs the DSP extension (`UXTAB`), which every ARMv7E-M core has; a
 //! build for a `thumbv7em-*` target with `-C target-cpu=cortex-m3` (or `-C

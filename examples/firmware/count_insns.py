@@ -54,6 +54,7 @@ ENTRIES = [
     ("sat_build", "6. `Sat::build`", "hand_build"),
     ("hand_build", "", None),
     ("stream_build", "6b. `RowStreamBuilder::push_row_into`, row by row", "hand_build"),
+    ("modular_build", "6c. `Modular::build`, k = 20", None),
     ("tiled_int_border", "7a. `Tiled` 8x8 tiles `box_sum_int` Border (4 corners)", None),
     ("tiled_stable_border", "7b. `Tiled` 8x8 tiles `box_sum` Stable Border", None),
 ]
@@ -400,6 +401,8 @@ def main():
                 f"| {label}, 64x64 u32 table: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** "
                 f"| {hv:g} / **{hv / a.texels:.2f}** |"
             )
+        elif key == "modular_build":
+            print(f"| {label}, 64x64: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** | |")
         else:
             print(f"| {label} | {v:g} | {h} |")
 

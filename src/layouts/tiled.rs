@@ -1743,6 +1743,11 @@ pub(super) fn add_prefix_row<T: Texel, E: Entry, const C: usize>(texels: &[T], r
     if crate::simd::build_row_in_place::<T, E, C>(texels, row, false, None, false) {
         return;
     }
+    // ARMv7E-M: the same row in place (its 32-bit additions wrap as these do).
+    #[cfg(all(feature = "simd", texsat_armv7em))]
+    if crate::dsp::build_row_in_place::<T, E, C>(texels, row, false, None) {
+        return;
+    }
     let mut run = [E::ZERO; C];
     for (o, t) in row.chunks_exact_mut(C).zip(texels.chunks_exact(C)) {
         for ((ov, tv), r) in o.iter_mut().zip(t).zip(run.iter_mut()) {

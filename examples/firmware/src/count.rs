@@ -26,7 +26,7 @@ use cortex_m_rt::entry;
 // The clamp lookup is measured for flash only (flash.rs).
 #[allow(dead_code)]
 mod hand;
-use texsat::layouts::{Tiled, TiledSpec};
+use texsat::layouts::{Modular, Tiled, TiledSpec};
 use texsat::{
     Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, RepeatWithinPeriod, RowStreamBuilder, Sat,
     Stable, Texture,
@@ -280,6 +280,42 @@ fn m_stream_build(texels: &[Tx], storage: &mut [En]) {
     keep(s.finish().is_ok());
 }
 
+/// The modulus of the measured modular build (fields of 20 bits: not byte-aligned).
+const MODULAR_K: u32 = 20;
+
+#[inline(never)]
+fn m_modular_build(tex: &Texture<'_, Tx>, words: &mut [u32], row: &mut [En]) {
+    keep(Modular::<En>::build(tex, MODULAR_K, words, row).is_ok());
+}
+
+/// Every corner of a modular layout of `k` bits built from `tex` equals the reference table's
+/// entry (`w` wide) modulo `2^k`.
+fn modular_agrees(
+    tex: &Texture<'_, Tx>,
+    k: u32,
+    words: &mut [u32],
+    row: &mut [En],
+    reference: &[En],
+) -> bool {
+    use texsat::Layout;
+    let (w, h) = (tex.width(), tex.height());
+    let Ok(m) = Modular::<En>::build(tex, k, words, row) else {
+        return false;
+    };
+    let mask = if k >= 32 { En::MAX } else { (1 << k) - 1 };
+    for y in 1..=h {
+        for x in 1..=w {
+            let Some(&want) = reference.get((y - 1) * w + (x - 1)) else {
+                return false;
+            };
+            if m.corner(x, y, &mut NoCount)[0] & mask != want & mask {
+                return false;
+            }
+        }
+    }
+    true
+}
+
 #[inline(never)]
 fn h_build(texels: &[Tx], storage: &mut [En]) {
     hand::build(texels, black_box(W), storage);
@@ -293,7 +329,7 @@ fn h_build(texels: &[Tx], storage: &mut [En]) {
 /// and of all 255, each output first filled with a sentinel: on the device, the one place that
 /// scan runs. A mismatch exits before the first mark, and count_insns.py then fails (no
 /// regions).
-fn builds_agree(texels: &[Tx], a: &mut [En], b: &mut [En]) -> bool {
+fn builds_agree(texels: &[Tx], a: &mut [En], b: &mut [En], words: &mut [u32]) -> bool {
     const SENTINEL: En = 0xDEAD_BEEF;
     let full = [255u8; 4 + 40 * 4];
     let mut row = [0 as En; 40];
@@ -314,6 +350,14 @@ fn builds_agree(texels: &[Tx], a: &mut [En], b: &mut [En]) -> bool {
                     a.fill(SENTINEL);
                     if Sat::build(&tex, black_box(&mut a[..])).is_err() || a != b {
                         return false;
+                    }
+                    // The modular layout's rows (in place, wrapping) at two moduli.
+                    for k in [MODULAR_K, 32] {
+                        words.fill(SENTINEL);
+                        row.fill(SENTINEL);
+                        if !modular_agrees(&tex, k, words, &mut row[..w], b) {
+                            return false;
+                        }
                     }
                     for into in [true, false] {
                         a.fill(SENTINEL);
@@ -410,7 +454,7 @@ fn main() -> ! {
         *t = (s >> 24) as u8;
     }
     let texels: &[Tx] = black_box(&texels[..]);
-    if !builds_agree(texels, &mut table[..], &mut table2[..]) {
+    if !builds_agree(texels, &mut table[..], &mut table2[..], &mut words[..]) {
         exit()
     }
     let Ok(tex) = Texture::<Tx>::new(texels, black_box(W), black_box(H)) else {
@@ -511,6 +555,20 @@ fn main() -> ! {
     table2.fill(0);
     measure!(m_stream_build(texels, black_box(&mut table2[..])));
     if table2[..] != sat.entries()[..] {
+        exit()
+    }
+    measure!(m_modular_build(
+        &tex,
+        black_box(&mut words[..]),
+        &mut scratch[..W]
+    ));
+    if !modular_agrees(
+        &tex,
+        MODULAR_K,
+        &mut words[..],
+        &mut scratch[..W],
+        sat.entries(),
+    ) {
         exit()
     }
     // Tiled, 8 x 8 tiles.
