@@ -501,14 +501,68 @@ pub(crate) fn pack_fields<E: Entry>(
     } else {
         (0, offset)
     };
+    let fields = fields.get(done..).unwrap_or(&[]);
+    if len <= WORD_BITS {
+        pack_run32(words, offset, fields, len);
+        return true;
+    }
     let m = mask(len);
     let mut out = BitWriter::new(words, offset);
-    let fields = fields.get(done..).unwrap_or(&[]);
     for f in fields {
         out.push(f.to_u64() & m, len);
     }
     out.finish();
     true
+}
+
+/// Packs `fields` (their low `len <= 32` bits) from bit `offset`, which the caller has checked
+/// they fit ([`BitWriter::fits`]), in 32-bit arithmetic: a word assembled in a register (each
+/// field one shift and one or into it, the bits that cross into the next word one more shift)
+/// and stored once, when full; the first word's bits below `offset` and the last word's bits
+/// above the fields kept. [`BitWriter`]'s 64-bit steps do the same with a 64-bit accumulator:
+/// on a 32-bit core each of its shifts is several instructions. On the Cortex-M4, where only
+/// 16-bit fields have a group packer ([`pack_groups`]), `pack_fields` of 20-bit fields took 31
+/// instructions per field through [`BitWriter`] and takes about 17 here; a modular build of
+/// 64 x 64, 40.04 -> 26.46 instructions per entry (`examples/firmware/count-insns.sh`, row 6c,
+/// `COUNT_PROFILE=1`; docs/benchmarks.md, eighteenth session).
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::as_conversions,
+    reason = "used < 32 and len <= 32 between fields, so used + len < 64 and end - 32 >= 0 where               formed, v << used is a u32 shift below 32 and 32 - used is in 1..=32 (checked_shr \
+              takes 32); the u64 -> u32 casts keep the low word on purpose (len <= 32 bits)"
+)]
+fn pack_run32<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32) {
+    let m = mask(len) as u32;
+    let Some(dst) = usize::try_from(offset / WORD_BITS64)
+        .ok()
+        .and_then(|first| words.get_mut(first..))
+    else {
+        return;
+    };
+    let mut used = word_shift(offset);
+    // The first word's bits below `offset`.
+    let mut acc = dst.first().map_or(0, |&w| w & mask(used) as u32);
+    let mut out = dst.iter_mut();
+    for f in fields {
+        let v = f.to_u64() as u32 & m;
+        acc |= v << used;
+        let end = used + len;
+        if end >= WORD_BITS {
+            if let Some(w) = out.next() {
+                *w = acc;
+            }
+            // The field's bits past this word (none when it ends on the boundary).
+            acc = v.checked_shr(WORD_BITS - used).unwrap_or(0);
+            used = end - WORD_BITS;
+        } else {
+            used = end;
+        }
+    }
+    if used > 0 {
+        if let Some(w) = out.next() {
+            *w = (*w & !(mask(used) as u32)) | acc;
+        }
+    }
 }
 
 /// Packs the whole groups of 32 fields of `fields` (`len <= 32` bits each, their low bits) from
