@@ -462,7 +462,8 @@ impl<'w> BitWriter<'w> {
 /// has its specialization; on smaller ones (microcontrollers, where each costs flash: about
 /// 0.5 KiB per width and entry type on the Cortex-M4) only 16 bits, the width of a `modular:16`
 /// plan, whose build it makes 2.5 times faster there (31.5 to 12.7 instructions per entry).
-/// The rest, and the fields after the last whole group, go through [`BitWriter`].
+/// The rest of the fields of at most 32 bits (other widths, and the fields after the last whole
+/// group) go through [`pack_run32`] (32-bit arithmetic), wider fields through [`BitWriter`].
 pub(crate) fn pack_fields<E: Entry>(
     words: &mut [u32],
     offset: u64,
@@ -528,10 +529,16 @@ pub(crate) fn pack_fields<E: Entry>(
 #[allow(
     clippy::arithmetic_side_effects,
     clippy::as_conversions,
-    reason = "used < 32 and len <= 32 between fields, so used + len < 64 and end - 32 >= 0 where               formed, v << used is a u32 shift below 32 and 32 - used is in 1..=32 (checked_shr \
-              takes 32); the u64 -> u32 casts keep the low word on purpose (len <= 32 bits)"
+    reason = "used < 32 and len <= 32 between fields (len checked on entry), so used + len < \
+              64, end - 32 >= 0 where formed, v << used is a u32 shift below 32 and 32 - used \
+              is in 1..=32 (checked_shr takes 32); the u64 -> u32 casts keep the low word on \
+              purpose (len <= 32 bits)"
 )]
 fn pack_run32<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32) {
+    // (The one caller passes 1 <= len <= 32; the arithmetic below relies on it.)
+    if len == 0 || len > WORD_BITS {
+        return;
+    }
     let m = mask(len) as u32;
     let Some(dst) = usize::try_from(offset / WORD_BITS64)
         .ok()
@@ -710,9 +717,56 @@ mod tests {
     /// several starting offsets, over words that start as noise (bits outside the fields kept).
     /// `pack_fields` writes what `write_bits` field by field writes, bits around the fields
     /// kept: every width 1 to 64, start offsets at and around word boundaries, counts below,
-    /// at and past whole groups of 32 (the width-specialized path and the `BitWriter` tail),
+    /// at and past whole groups of 32 (the width-specialized path and the `pack_run32` or
+    /// `BitWriter` tail),
     /// values wider than the field (only their low bits stored), for `u16`, `u32` and `u64`
     /// values; refusals (past the slice, width 0 or above 64) write nothing.
+    /// `pack_run32` alone (what a 32-bit target runs for every width but 16, whole rows at a
+    /// time) writes what `write_bits` writes field by field: every width 1 to 32, every start
+    /// bit 0 to 31 (and in a later word), runs of 0 to 3, 31 to 33 and 100 and 257 fields,
+    /// values wider than the field; into noise with room after the fields, and into a slice that
+    /// ends exactly at the last field's word (the last word full, or partial and the slice's
+    /// last).
+    #[test]
+    fn pack_run32_equals_write_bits() {
+        let counts: &[usize] = if cfg!(miri) {
+            &[0, 1, 33]
+        } else {
+            &[0, 1, 2, 3, 31, 32, 33, 100, 257]
+        };
+        let lens = (1..=32u32).filter(|l| !cfg!(miri) || [1, 7, 20, 31, 32].contains(l));
+        for len in lens {
+            let starts = (0..32u64)
+                .chain([64 + 17])
+                .filter(|s| !cfg!(miri) || s % 8 == 3);
+            for start in starts {
+                for &count in counts {
+                    let mut seed = 0x0fed_cba9_8765_4321u64 ^ u64::from(len) << 7 ^ start << 20;
+                    let mut next = || {
+                        seed ^= seed << 13;
+                        seed ^= seed >> 7;
+                        seed ^= seed << 17;
+                        seed
+                    };
+                    let end = start + count as u64 * u64::from(len);
+                    let exact = end.div_ceil(32) as usize;
+                    let noise: Vec<u32> = (0..exact + 3).map(|_| next() as u32).collect();
+                    let fields: Vec<u64> = (0..count).map(|_| next()).collect();
+                    for room in [3, 0] {
+                        let n = exact + room;
+                        let (mut a, mut b) = (noise[..n].to_vec(), noise[..n].to_vec());
+                        for (i, f) in fields.iter().enumerate() {
+                            let at = start + i as u64 * u64::from(len);
+                            assert!(write_bits(&mut a, at, len, f & mask(len)));
+                        }
+                        pack_run32(&mut b, start, &fields, len);
+                        assert_eq!(a, b, "len {len} start {start} count {count} room {room}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn pack_fields_equals_write_bits() {
         fn check<E: Entry>(to_e: impl Fn(u64) -> E, value_bits: u32) {
