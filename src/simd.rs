@@ -218,9 +218,9 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
         return false;
     };
     match above {
-        None => row_u8_u32(Kernel::best(), t, &[], out, Above::Zero, None, false),
+        None => row_u8_u32(Kernel::for_rows(), t, &[], out, Above::Zero, None, false),
         Some(a) => match as_u32(a) {
-            Some(a) => row_u8_u32(Kernel::best(), t, a, out, Above::Slice, None, false),
+            Some(a) => row_u8_u32(Kernel::for_rows(), t, a, out, Above::Slice, None, false),
             None => return false,
         },
     }
@@ -249,7 +249,7 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
         },
     };
     let mode = if first { Above::Zero } else { Above::InPlace };
-    row_u8_u32(Kernel::best(), t, &[], row, mode, copy, stream);
+    row_u8_u32(Kernel::for_rows(), t, &[], row, mode, copy, stream);
     true
 }
 
@@ -377,7 +377,7 @@ pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>
         // Checked above: every row is there, `width` texels of `u8`.
         let t = row(y).and_then(as_u8).unwrap_or(&[]);
         let mode = if y == 0 { Above::Zero } else { Above::InPlace };
-        row_u8_u32(Kernel::best(), t, &[], work, mode, Some(copy), stream);
+        row_u8_u32(Kernel::for_rows(), t, &[], work, mode, Some(copy), stream);
     }
     true
 }
@@ -635,6 +635,31 @@ impl Kernel {
         k
     }
 
+    /// The kernel for the flat rows ([`row_u8_u32`]: `Sat::build` and the streaming builder):
+    /// [`Kernel::best`], except SSE2's where that is AVX2 on a CPU that executes 256-bit
+    /// operations as two 128-bit halves ([`splits_256`], Zen and Zen+). There each AVX2
+    /// instruction costs two, and the AVX2 kernel's multiplies (`vpmaddubsw`, `vpmaddwd`: 6
+    /// per 16 texels, 12 halves, all on the one pipe that multiplies) outweigh the shifts
+    /// they save: on a Zen 1 guest (EPYC 7001) the SSE2 kernel built 1,024^2 and 4,096^2 in
+    /// 0.75x and 0.72x the time, 1.13x and 0.88x the widen-copy floor against 1.50x and 1.24x
+    /// (docs/benchmarks.md, nineteenth session). The layouts' AVX2 kernels (modular rows, band
+    /// rows, packing) have no SSE2 form and stay. In the crate's unit tests a thread's
+    /// [`Kernel::cap`] names the row kernel exactly, so that every kernel is tested on every
+    /// CPU.
+    #[inline]
+    pub(crate) fn for_rows() -> Kernel {
+        let k = Kernel::best();
+        #[cfg(test)]
+        if CAP.with(|c| c.get()).is_some() {
+            return k;
+        }
+        if k == Kernel::Avx2 && splits_256() {
+            Kernel::Sse2
+        } else {
+            k
+        }
+    }
+
     /// Runs `f` with [`Kernel::best`] at most `self` on this thread (tests only: the other
     /// test threads keep theirs).
     #[cfg(test)]
@@ -693,9 +718,13 @@ impl Kernel {
     }
 }
 
-/// The build kernel in use (detected at run time), for benchmarks and reports.
+/// The build kernel in use (detected at run time), for benchmarks and reports: its name, or
+/// `"avx2, sse2 rows"` where the flat rows take SSE2's ([`Kernel::for_rows`]).
 pub fn kernel_name() -> &'static str {
-    Kernel::best().name()
+    match (Kernel::best(), Kernel::for_rows()) {
+        (Kernel::Avx2, Kernel::Sse2) => "avx2, sse2 rows",
+        (k, _) => k.name(),
+    }
 }
 
 /// CPUID leaf 1 ECX: OSXSAVE (27) and AVX (28); leaf 7 EBX: AVX2 (5), AVX-512F (16),
@@ -765,6 +794,75 @@ fn detect_vbmi() -> bool {
         target_feature = "avx512dq",
         target_feature = "avx512vbmi"
     ))
+}
+
+/// Whether this CPU executes 256-bit AVX operations as two 128-bit halves (for
+/// [`Kernel::for_rows`]): detected once, then cached as [`vbmi`] is.
+pub(crate) fn splits_256() -> bool {
+    match SPLITS_256.load(Ordering::Relaxed) {
+        1 => false,
+        2 => true,
+        _ => {
+            let v = detect_splits_256();
+            SPLITS_256.store(1 + u8::from(v), Ordering::Relaxed);
+            v
+        }
+    }
+}
+
+/// [`splits_256`]'s answer: 0 before the first detection, 1 no, 2 yes.
+static SPLITS_256: AtomicU8 = AtomicU8::new(0);
+
+/// CPUID's vendor registers (leaf 0: EBX, EDX, ECX) of AMD and of Hygon (whose Dhyana is a
+/// Zen core), the vendors that define leaf `8000_001A`.
+const SPLIT_VENDORS: [[u32; 3]; 2] = [vendor(b"AuthenticAMD"), vendor(b"HygonGenuine")];
+
+/// A 12-byte vendor string as CPUID leaf 0 returns it: EBX, EDX, ECX, 4 bytes each,
+/// little-endian.
+const fn vendor(s: &[u8; 12]) -> [u32; 3] {
+    let mut out = [0u32; 3];
+    let mut i = 0;
+    while i < 3 {
+        out[i] = u32::from_le_bytes([s[4 * i], s[4 * i + 1], s[4 * i + 2], s[4 * i + 3]]);
+        i += 1;
+    }
+    out
+}
+
+/// CPUID leaf `8000_001A` ("Performance Optimization Identifiers", AMD64 Architecture
+/// Programmer's Manual vol. 3, appendix E): EAX bit 2, FP256, is set when 256-bit AVX
+/// instructions are executed with full-width internal operations rather than decomposed into
+/// 128-bit ones.
+const LEAF_FP: u32 = 0x8000_001A;
+
+/// [`splits_256`] from CPUID's answers: `vendor` (leaf 0), `max_ext` (leaf `8000_0000` EAX,
+/// the highest extended leaf) and `fp` (leaf [`LEAF_FP`] EAX, 0 where the leaf is absent).
+/// Only AMD and Hygon define the leaf (on other CPUs a leaf past the highest returns another
+/// leaf's data); their CPUs split where FP256 is clear (Zen, Zen+, and the Excavator cores
+/// with AVX2), and are full width where it is set (Zen 2 on). Intel's AVX2 cores are taken
+/// as full width (no CPUID bit says otherwise; the Atom-derived cores with AVX2, Gracemont on,
+/// split, but are not told apart here: not measured).
+fn splits_256_from(vendor: [u32; 3], max_ext: u32, fp: u32) -> bool {
+    SPLIT_VENDORS.contains(&vendor) && max_ext >= LEAF_FP && fp & 0b100 == 0
+}
+
+/// CPUID leaves 0, `8000_0000` and [`LEAF_FP`] into [`splits_256_from`].
+#[cfg(not(miri))]
+fn detect_splits_256() -> bool {
+    let v = __cpuid(0);
+    let max_ext = __cpuid(0x8000_0000).eax;
+    let fp = if max_ext >= LEAF_FP {
+        __cpuid(LEAF_FP).eax
+    } else {
+        0
+    };
+    splits_256_from([v.ebx, v.edx, v.ecx], max_ext, fp)
+}
+
+/// Under Miri, which cannot run CPUID: full width.
+#[cfg(miri)]
+fn detect_splits_256() -> bool {
+    false
 }
 
 /// XCR0.
@@ -6169,7 +6267,52 @@ mod tests {
         for k in Kernel::ALL {
             assert_eq!(k.available(), rank(k) <= rank(best), "{k:?}");
         }
-        assert_eq!(kernel_name(), best.name());
+        assert!(kernel_name().starts_with(best.name()));
+    }
+
+    /// The flat rows' kernel is SSE2's exactly where the best is AVX2 on a CPU that splits
+    /// 256-bit operations, the best elsewhere, and the cap under a cap (so that the tests
+    /// reach every kernel); `kernel_name` says which.
+    #[test]
+    fn rows_take_sse2_where_256_bit_operations_split() {
+        let best = Kernel::best();
+        let rows = if best == Kernel::Avx2 && splits_256() {
+            Kernel::Sse2
+        } else {
+            best
+        };
+        assert_eq!(Kernel::for_rows(), rows);
+        assert_eq!(kernel_name() == "avx2, sse2 rows", rows != best);
+        for k in Kernel::ALL.into_iter().filter(|k| k.available()) {
+            assert_eq!(k.cap(Kernel::for_rows), k);
+        }
+    }
+
+    /// `splits_256_from` on CPUID's answers: AMD's and Hygon's FP256 bit (leaf `8000_001A`
+    /// EAX bit 2) read where the leaf exists, every other vendor full width.
+    #[test]
+    fn splits_256_reads_amds_fp256_bit() {
+        let (amd, hygon) = (vendor(b"AuthenticAMD"), vendor(b"HygonGenuine"));
+        let intel = vendor(b"GenuineIntel");
+        // The Zen 1 guest of the nineteenth session (EPYC 7001): FP128 and MOVU set, FP256
+        // clear; its highest extended leaf 8000_0021.
+        assert!(splits_256_from(amd, 0x8000_0021, 0b011));
+        assert!(splits_256_from(hygon, 0x8000_001F, 0b011));
+        assert!(splits_256_from(amd, LEAF_FP, 0));
+        // FP256 set (Zen 2 on), whatever the other bits.
+        assert!(!splits_256_from(amd, 0x8000_0021, 0b111));
+        assert!(!splits_256_from(amd, 0x8000_0021, 0b100));
+        assert!(!splits_256_from(hygon, 0x8000_001F, 0b111));
+        // The leaf absent, or another vendor's (Intel's highest is 8000_0008; past it, another
+        // leaf's data).
+        assert!(!splits_256_from(amd, LEAF_FP - 1, 0));
+        assert!(!splits_256_from(intel, 0x8000_0008, 0));
+        assert!(!splits_256_from(intel, 0x8000_0021, 0));
+        assert_eq!(
+            vendor(b"AuthenticAMD"),
+            [0x6874_7541, 0x6974_6E65, 0x444D_4163],
+            "EBX, EDX, ECX as CPUID returns them"
+        );
     }
 
     /// Other types and channel counts are left to the portable path, untouched.
