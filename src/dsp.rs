@@ -29,9 +29,10 @@
 //! target-feature=-dsp`) and `simd` fails to assemble, loudly.
 //!
 //! # Safety argument
-//! 1. *Type casts.* [`build_row`] and [`build_row_in_place`] cast `&[T]` to `&[u8]` and `&[E]`
-//!    / `&mut [E]` to `&[u32]` / `&mut [u32]` only after `TypeId` equality shows `T = u8` and
-//!    `E = u32` (and `C = 1`): the same type, the same length.
+//! 1. *Type casts.* [`build_row`] and [`build_row_in_place`] see `&[T]` as `&[u8]` and `&[E]`
+//!    / `&mut [E]` as `&[u32]` / `&mut [u32]` through `crate::cast` (safe functions whose own
+//!    safety argument is `TypeId` equality: `T = u8` and `E = u32`, the same type, the same
+//!    length), and take them only for one channel (`C = 1`).
 //! 2. *Bounds.* The slices have the same length `n` (checked); the assembly runs `q = n / 4`
 //!    turns, each reading 4 bytes of the texels and 16 of the row above and writing 16 of the
 //!    row out (and of the copy) at the turn's offset (`4 j`, `16 j`): all inside the slices. It
@@ -67,9 +68,9 @@
     clippy::as_conversions
 )]
 
-use core::any::TypeId;
 use core::arch::asm;
 
+use crate::cast;
 use crate::texel::{Entry, Texel};
 
 /// The turn loop around one load of the row above and one or two stores (the module's doc):
@@ -107,29 +108,13 @@ macro_rules! scan_turns {
     };
 }
 
-/// `texels` as `u8` when `T` is `u8` and there is one channel (the safety argument, 1).
+/// `texels` as `u8` when `T` is `u8` and there is one channel ([`cast::u8s`]).
 fn texels_u8<T: Texel, const C: usize>(texels: &[T]) -> Option<&[u8]> {
-    (C == 1 && TypeId::of::<T>() == TypeId::of::<u8>()).then(|| {
-        // SAFETY: T is u8 (TypeId equality): the same layout and length.
-        unsafe { core::slice::from_raw_parts(texels.as_ptr().cast::<u8>(), texels.len()) }
-    })
-}
-
-/// `row` as `u32` when `E` is `u32` (the safety argument, 1).
-fn entries_u32<E: Entry>(row: &[E]) -> Option<&[u32]> {
-    (TypeId::of::<E>() == TypeId::of::<u32>()).then(|| {
-        // SAFETY: E is u32 (TypeId equality): the same layout and length.
-        unsafe { core::slice::from_raw_parts(row.as_ptr().cast::<u32>(), row.len()) }
-    })
-}
-
-/// `row` as `u32` when `E` is `u32`, the borrow moved (the safety argument, 1).
-fn entries_u32_mut<E: Entry>(row: &mut [E]) -> Option<&mut [u32]> {
-    (TypeId::of::<E>() == TypeId::of::<u32>()).then(|| {
-        // SAFETY: E is u32 (TypeId equality): the same layout and length; the mutable borrow
-        // of `row` is moved into the result.
-        unsafe { core::slice::from_raw_parts_mut(row.as_mut_ptr().cast::<u32>(), row.len()) }
-    })
+    if C == 1 {
+        cast::u8s(texels)
+    } else {
+        None
+    }
 }
 
 /// The last `n % 4` entries, one by one, after `done = n - n % 4` by the turns: `out[x] =
@@ -163,11 +148,11 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
     above: Option<&[E]>,
     out: &mut [E],
 ) -> bool {
-    let (Some(t), Some(a)) = (texels_u8::<T, C>(texels), above.and_then(entries_u32)) else {
+    let (Some(t), Some(a)) = (texels_u8::<T, C>(texels), above.and_then(cast::u32s)) else {
         return false;
     };
     let n = out.len();
-    let Some(o) = entries_u32_mut(out) else {
+    let Some(o) = cast::u32s_mut(out) else {
         return false;
     };
     if t.len() != n || a.len() != n {
@@ -211,13 +196,13 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
         return false;
     }
     let mut copy = match copy {
-        Some(c) => match entries_u32_mut(c) {
+        Some(c) => match cast::u32s_mut(c) {
             Some(c) if c.len() == n => Some(c),
             _ => return false,
         },
         None => None,
     };
-    let Some(r) = entries_u32_mut(row) else {
+    let Some(r) = cast::u32s_mut(row) else {
         return false;
     };
     let mut run = 0u32;

@@ -49,8 +49,8 @@
 //! ```
 #![no_std]
 // No `unsafe` anywhere, except the vectorized build rows behind the `simd` feature, which live in
-// two modules (`src/simd.rs` for x86-64, `src/dsp.rs` for ARMv7E-M, each with its safety
-// argument) and are denied everywhere else.
+// two modules (`src/simd.rs` for x86-64, `src/dsp.rs` for ARMv7E-M) and the slice casts both
+// share (`src/cast.rs`), each with its safety argument; denied everywhere else.
 #![cfg_attr(not(feature = "simd"), forbid(unsafe_code))]
 #![cfg_attr(feature = "simd", deny(unsafe_code))]
 // docs.rs (and `RUSTDOCFLAGS="--cfg docsrs" cargo +nightly doc --all-features`) shows which
@@ -70,6 +70,8 @@
     clippy::as_conversions
 )]
 
+#[cfg(all(feature = "simd", any(target_arch = "x86_64", texsat_armv7em)))]
+mod cast;
 pub mod cost;
 mod div;
 #[cfg(all(feature = "simd", texsat_armv7em))]

@@ -175,8 +175,9 @@
 //!    values and, when in place, the last vector) from one `&mut` borrow, or the last vector
 //!    in its own stack buffer, disjoint from the values the passes touch. No reference is
 //!    created from the raw pointers.
-//! 4. *Type casts.* [`build_row`] casts `&[T]` to `&[u8]` and `&mut [E]` to `&mut [u32]` only after
-//!    `TypeId` equality shows `T = u8` and `E = u32`: the same type, the same length. The band
+//! 4. *Type casts.* [`build_row`] and the other entry points see `&[T]` as `&[u8]` and `&mut
+//!    [E]` as `&mut [u32]` through `crate::cast` (safe functions whose own safety argument is
+//!    `TypeId` equality: `T = u8` and `E = u32`, the same type, the same length). The band
 //!    rows read and write `u32` words as pairs of `u16` halves through raw pointers derived
 //!    from the one slice (any bit pattern is a valid `u16` and `u32`; `u16`'s alignment
 //!    divides `u32`'s); no reference of the other type is created.
@@ -193,6 +194,7 @@ use core::any::TypeId;
 use core::arch::x86_64::*;
 use core::sync::atomic::{AtomicU8, Ordering};
 
+use crate::cast;
 use crate::texel::{Entry, Texel};
 
 /// Where the row above comes from.
@@ -214,12 +216,12 @@ pub(crate) fn build_row<T: Texel, E: Entry, const C: usize>(
     above: Option<&[E]>,
     out: &mut [E],
 ) -> bool {
-    let (Some(t), Some(out)) = (as_u8(texels), as_u32_mut::<E, C>(out)) else {
+    let (Some(t), Some(out)) = (cast::u8s(texels), as_u32_mut::<E, C>(out)) else {
         return false;
     };
     match above {
         None => row_u8_u32(Kernel::for_rows(), t, &[], out, Above::Zero, None, false),
-        Some(a) => match as_u32(a) {
+        Some(a) => match cast::u32s(a) {
             Some(a) => row_u8_u32(Kernel::for_rows(), t, a, out, Above::Slice, None, false),
             None => return false,
         },
@@ -238,7 +240,7 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
     copy: Option<&mut [E]>,
     stream: bool,
 ) -> bool {
-    let (Some(t), Some(row)) = (as_u8(texels), as_u32_mut::<E, C>(row)) else {
+    let (Some(t), Some(row)) = (cast::u8s(texels), as_u32_mut::<E, C>(row)) else {
         return false;
     };
     let copy = match copy {
@@ -336,6 +338,13 @@ fn fence() {
 /// (checked for every row before the first is written; the caller's own loop then reports
 /// it). `row` is called twice per row and must give the same row each time (the caller passes
 /// `Texture::row`).
+///
+/// Also `false` below [`STREAM_MIN_BYTES`] where the flat rows take SSE2's kernel in place of
+/// AVX2's ([`Kernel::for_rows`]: Zen, Zen+): there the working row's second store per entry
+/// costs more than the reads it saves. On a Zen 1 guest, `Sat::build` of 1,024^2 took 0.91x
+/// the time straight into the table, both back to back and after 64 MiB written between
+/// builds (1.09x the widen-copy floor against 1.19x; docs/benchmarks.md, nineteenth
+/// session).
 #[inline(never)]
 pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>(
     table: &mut [E],
@@ -351,6 +360,7 @@ pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>
         || width > WORKING_ROW_MAX
         || out.len() % width != 0
         || bytes < WORKING_ROW_MIN_BYTES
+        || (Kernel::for_rows() != Kernel::best() && !past_the_caches(bytes))
     {
         return false;
     }
@@ -375,35 +385,17 @@ pub(crate) fn build_via_working_row<'t, T: Texel + 't, E: Entry, const C: usize>
     let stream = past_the_caches(bytes);
     for (y, copy) in out.chunks_exact_mut(width).enumerate() {
         // Checked above: every row is there, `width` texels of `u8`.
-        let t = row(y).and_then(as_u8).unwrap_or(&[]);
+        let t = row(y).and_then(cast::u8s).unwrap_or(&[]);
         let mode = if y == 0 { Above::Zero } else { Above::InPlace };
         row_u8_u32(Kernel::for_rows(), t, &[], work, mode, Some(copy), stream);
     }
     true
 }
 
-fn as_u8<T: Texel>(s: &[T]) -> Option<&[u8]> {
-    if TypeId::of::<T>() == TypeId::of::<u8>() {
-        // SAFETY: T is u8 (TypeId equality): same layout, same length.
-        Some(unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u8>(), s.len()) })
-    } else {
-        None
-    }
-}
-
-fn as_u32<E: Entry>(s: &[E]) -> Option<&[u32]> {
-    if TypeId::of::<E>() == TypeId::of::<u32>() {
-        // SAFETY: E is u32 (TypeId equality): same layout, same length.
-        Some(unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u32>(), s.len()) })
-    } else {
-        None
-    }
-}
-
+/// `s` as `u32` entries of one channel (`C = 1`), for the row kernels ([`cast::u32s_mut`]).
 fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
-    if C == 1 && TypeId::of::<E>() == TypeId::of::<u32>() {
-        // SAFETY: E is u32 (TypeId equality): same layout, same length; the borrow is moved.
-        Some(unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().cast::<u32>(), s.len()) })
+    if C == 1 {
+        cast::u32s_mut(s)
     } else {
         None
     }
@@ -1214,7 +1206,7 @@ unsafe fn pack_u32_with<E: Entry>(
     fields: &[E],
     k: u32,
 ) -> usize {
-    let Some(f) = as_u32(fields) else {
+    let Some(f) = cast::u32s(fields) else {
         return 0;
     };
     if !(MIN_PACK_BITS..=32).contains(&k) || kernel == Kernel::Sse2 {
@@ -2054,7 +2046,7 @@ pub(crate) fn modular_row<T: Texel, E: Entry, const C: usize>(
     if !modular_fused::<T, E, C>(texels.len(), k) {
         return None;
     }
-    let t = as_u8(texels)?;
+    let t = cast::u8s(texels)?;
     let a = as_u32_mut::<E, C>(acc)?;
     let passes = t.len() / MODULAR_PASS;
     let ku = k as usize;
@@ -2633,7 +2625,7 @@ unsafe fn tiled_row_with<T: Texel, E: Entry, const C: usize>(
     ahead: Ahead,
     pack: Option<PackTo<'_>>,
 ) -> Option<(usize, usize, usize)> {
-    let t = as_u8(texels)?;
+    let t = cast::u8s(texels)?;
     let acc = as_u32_mut::<E, C>(acc)?;
     let mut lower = match lower {
         None => None,
@@ -3616,7 +3608,7 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
         return None;
     }
-    let t = as_u8(texels)?;
+    let t = cast::u8s(texels)?;
     let acc0 = as_u32_mut::<E, C>(acc0)?;
     let bnd = as_u32_mut::<E, C>(bnd)?;
     let local = as_u32_mut::<E, C>(local)?;
@@ -3822,7 +3814,7 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     }
     if rows
         .iter()
-        .any(|row| as_u8(row).is_none_or(|b| b.len() != n))
+        .any(|row| cast::u8s(row).is_none_or(|b| b.len() != n))
     {
         return false;
     }
@@ -3831,7 +3823,7 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     // Each row's share of the boundaries' words (a hint: never read).
     let share = ahead.map(|(p, len)| (p, len / r.max(1)));
     for (j, row) in rows.iter().enumerate() {
-        let Some(t) = as_u8(row) else {
+        let Some(t) = cast::u8s(row) else {
             return false;
         };
         let to = out.wrapping_add(j * stride);
@@ -3917,7 +3909,7 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
         return None;
     }
-    let t = as_u8(texels)?;
+    let t = cast::u8s(texels)?;
     let acc0 = as_u32_mut::<E, C>(acc0)?;
     let acc = as_u32_mut::<E, C>(acc)?;
     let bnd = as_u32_mut::<E, C>(bnd)?;
@@ -6286,6 +6278,24 @@ mod tests {
         for k in Kernel::ALL.into_iter().filter(|k| k.available()) {
             assert_eq!(k.cap(Kernel::for_rows), k);
         }
+        // Where SSE2 stands in, `Sat::build` of a table of 1 MiB to 32 MiB goes straight into
+        // the table (`build_via_working_row` declines, nothing written); past 32 MiB, and
+        // everywhere else, through the working row. Either way the portable checked build's
+        // table.
+        let (w, h) = (1024, 256);
+        let texels: std::vec::Vec<u8> = (0..w * h).map(|i| (i * 7 % 251) as u8).collect();
+        let texture = crate::Texture::<u8, 1>::new(&texels, w, h).unwrap();
+        let mut table = std::vec![5u32; w * h];
+        let took = build_via_working_row::<u8, u32, 1>(&mut table, w, |y| texture.row(y));
+        assert_eq!(took, rows == best);
+        if !took {
+            assert!(table.iter().all(|&v| v == 5), "nothing written");
+        }
+        let mut straight = std::vec![0u32; w * h];
+        let sat = crate::Sat::build(&texture, &mut straight).unwrap();
+        let mut reference = std::vec![0u32; w * h];
+        let sat_ref = crate::Sat::build_checked(&texture, &mut reference).unwrap();
+        assert_eq!(sat.entries(), sat_ref.entries());
     }
 
     /// `splits_256_from` on CPUID's answers: AMD's and Hygon's FP256 bit (leaf `8000_001A`
