@@ -364,12 +364,19 @@ pub(crate) fn write_field(
 /// [`write_bits`]: LSB first, little-endian words. Bits before the first field and after the last
 /// are kept. The caller checks first that every field fits the slice ([`BitWriter::fits`]); a
 /// word past the end would be dropped, never a panic.
+///
+/// In 32-bit arithmetic: the pending bits of one word in a `u32`, and the bits of a field that
+/// cross into the next word one more shift. A 64-bit accumulator (as this writer had before)
+/// costs several instructions per shift on a 32-bit core: on the Cortex-M4, where only 16-bit
+/// fields have a group packer ([`pack_groups`]), `pack_fields` of 20-bit fields took 31
+/// instructions per field with it and about 17 this way; a modular build of 64 x 64, 40.04 ->
+/// 26.46 instructions per entry (`examples/firmware/count-insns.sh`, row 6c,
+/// `COUNT_PROFILE=1`; docs/benchmarks.md, eighteenth session).
 pub(crate) struct BitWriter<'w> {
-    words: &'w mut [u32],
-    /// The word the pending bits go to.
-    next: usize,
+    /// The words from the one the pending bits go to.
+    out: core::slice::IterMut<'w, u32>,
     /// Pending bits (fewer than 32 between pushes), LSB first.
-    acc: u64,
+    acc: u32,
     bits: u32,
 }
 
@@ -388,13 +395,19 @@ impl<'w> BitWriter<'w> {
 
     /// A writer at bit `offset` (its word's lower bits kept).
     #[inline]
+    #[allow(
+        clippy::as_conversions,
+        reason = "mask(bits) < 2^32 (bits < 32): the low word, lossless"
+    )]
     pub(crate) fn new(words: &'w mut [u32], offset: u64) -> Self {
-        let next = usize::try_from(offset / WORD_BITS64).unwrap_or(usize::MAX);
+        let rest = usize::try_from(offset / WORD_BITS64)
+            .ok()
+            .and_then(|first| words.get_mut(first..))
+            .unwrap_or_default();
         let bits = word_shift(offset);
-        let acc = words.get(next).map_or(0, |&w| u64::from(w) & mask(bits));
+        let acc = rest.first().map_or(0, |&w| w & mask(bits) as u32);
         BitWriter {
-            words,
-            next,
+            out: rest.iter_mut(),
             acc,
             bits,
         }
@@ -404,34 +417,37 @@ impl<'w> BitWriter<'w> {
     #[inline(always)]
     #[allow(
         clippy::arithmetic_side_effects,
-        clippy::as_conversions,
-        reason = "bits < 32 and len <= 32 between pushes, so bits + len < 64, v << bits fits 64 \
-                  bits and bits - 32 >= 0 where formed; next < words.len() <= usize::MAX while \
-                  fields fit (checked by the caller), else the store is dropped and next \
-                  saturates; the u32 cast keeps the low word on purpose"
+        reason = "bits < 32 and len <= 32 between pushes, so bits + len < 64 and end - 32 >= 0                   where formed; v << bits is a u32 shift below 32, and 32 - bits is in 1..=32                   (checked_shr takes 32)"
     )]
-    pub(crate) fn push32(&mut self, v: u64, len: u32) {
+    pub(crate) fn push32(&mut self, v: u32, len: u32) {
         self.acc |= v << self.bits;
-        self.bits += len;
-        if self.bits >= WORD_BITS {
-            if let Some(w) = self.words.get_mut(self.next) {
-                *w = self.acc as u32;
+        let end = self.bits + len;
+        if end >= WORD_BITS {
+            if let Some(w) = self.out.next() {
+                *w = self.acc;
             }
-            self.next = self.next.saturating_add(1);
-            self.acc >>= WORD_BITS;
-            self.bits -= WORD_BITS;
+            // The field's bits past this word (none when it ends on the boundary).
+            self.acc = v.checked_shr(WORD_BITS - self.bits).unwrap_or(0);
+            self.bits = end - WORD_BITS;
+        } else {
+            self.bits = end;
         }
     }
 
-    /// Appends a field of `len <= 64` bits (`v < 2^len`).
+    /// Appends a field of `len <= 64` bits (`v < 2^len`): as one push of 32 bits or fewer, or
+    /// its low word then the rest.
     #[inline(always)]
-    #[allow(clippy::arithmetic_side_effects, reason = "len - 32 where len > 32")]
+    #[allow(
+        clippy::arithmetic_side_effects,
+        clippy::as_conversions,
+        reason = "len - 32 where len > 32; the u32 casts keep the low word on purpose"
+    )]
     pub(crate) fn push(&mut self, v: u64, len: u32) {
         if len <= WORD_BITS {
-            self.push32(v, len);
+            self.push32(v as u32, len);
         } else {
-            self.push32(v & mask(WORD_BITS), WORD_BITS);
-            self.push32(v >> WORD_BITS, len - WORD_BITS);
+            self.push32(v as u32, WORD_BITS);
+            self.push32((v >> WORD_BITS) as u32, len - WORD_BITS);
         }
     }
 
@@ -439,13 +455,12 @@ impl<'w> BitWriter<'w> {
     #[inline]
     #[allow(
         clippy::as_conversions,
-        reason = "acc < 2^bits < 2^32: lossless; the mask's low word on purpose"
+        reason = "mask(bits) < 2^32 (bits < 32): the low word, lossless"
     )]
-    pub(crate) fn finish(self) {
+    pub(crate) fn finish(mut self) {
         if self.bits > 0 {
-            if let Some(w) = self.words.get_mut(self.next) {
-                let keep = !(mask(self.bits) as u32);
-                *w = (*w & keep) | self.acc as u32;
+            if let Some(w) = self.out.next() {
+                *w = (*w & !(mask(self.bits) as u32)) | self.acc;
             }
         }
     }
@@ -462,8 +477,8 @@ impl<'w> BitWriter<'w> {
 /// has its specialization; on smaller ones (microcontrollers, where each costs flash: about
 /// 0.5 KiB per width and entry type on the Cortex-M4) only 16 bits, the width of a `modular:16`
 /// plan, whose build it makes 2.5 times faster there (31.5 to 12.7 instructions per entry).
-/// The rest of the fields of at most 32 bits (other widths, and the fields after the last whole
-/// group) go through [`pack_run32`] (32-bit arithmetic), wider fields through [`BitWriter`].
+/// The rest (other widths, the fields after the last whole group, and fields wider than 32
+/// bits) go through [`BitWriter`], in 32-bit arithmetic.
 pub(crate) fn pack_fields<E: Entry>(
     words: &mut [u32],
     offset: u64,
@@ -503,73 +518,30 @@ pub(crate) fn pack_fields<E: Entry>(
         (0, offset)
     };
     let fields = fields.get(done..).unwrap_or(&[]);
-    if len <= WORD_BITS {
-        pack_run32(words, offset, fields, len);
-        return true;
-    }
     let m = mask(len);
     let mut out = BitWriter::new(words, offset);
+    if len <= WORD_BITS {
+        #[allow(
+            clippy::as_conversions,
+            reason = "m < 2^32 (len <= 32): the low word, lossless; the values' low words on \
+                      purpose (their low len bits kept)"
+        )]
+        let m = m as u32;
+        for f in fields {
+            #[allow(
+                clippy::as_conversions,
+                reason = "the value's low word on purpose (its low len <= 32 bits kept)"
+            )]
+            out.push32(f.to_u64() as u32 & m, len);
+        }
+        out.finish();
+        return true;
+    }
     for f in fields {
         out.push(f.to_u64() & m, len);
     }
     out.finish();
     true
-}
-
-/// Packs `fields` (their low `len <= 32` bits) from bit `offset`, which the caller has checked
-/// they fit ([`BitWriter::fits`]), in 32-bit arithmetic: a word assembled in a register (each
-/// field one shift and one or into it, the bits that cross into the next word one more shift)
-/// and stored once, when full; the first word's bits below `offset` and the last word's bits
-/// above the fields kept. [`BitWriter`]'s 64-bit steps do the same with a 64-bit accumulator:
-/// on a 32-bit core each of its shifts is several instructions. On the Cortex-M4, where only
-/// 16-bit fields have a group packer ([`pack_groups`]), `pack_fields` of 20-bit fields took 31
-/// instructions per field through [`BitWriter`] and takes about 17 here; a modular build of
-/// 64 x 64, 40.04 -> 26.46 instructions per entry (`examples/firmware/count-insns.sh`, row 6c,
-/// `COUNT_PROFILE=1`; docs/benchmarks.md, eighteenth session).
-#[allow(
-    clippy::arithmetic_side_effects,
-    clippy::as_conversions,
-    reason = "used < 32 and len <= 32 between fields (len checked on entry), so used + len < \
-              64, end - 32 >= 0 where formed, v << used is a u32 shift below 32 and 32 - used \
-              is in 1..=32 (checked_shr takes 32); the u64 -> u32 casts keep the low word on \
-              purpose (len <= 32 bits)"
-)]
-fn pack_run32<E: Entry>(words: &mut [u32], offset: u64, fields: &[E], len: u32) {
-    // (The one caller passes 1 <= len <= 32; the arithmetic below relies on it.)
-    if len == 0 || len > WORD_BITS {
-        return;
-    }
-    let m = mask(len) as u32;
-    let Some(dst) = usize::try_from(offset / WORD_BITS64)
-        .ok()
-        .and_then(|first| words.get_mut(first..))
-    else {
-        return;
-    };
-    let mut used = word_shift(offset);
-    // The first word's bits below `offset`.
-    let mut acc = dst.first().map_or(0, |&w| w & mask(used) as u32);
-    let mut out = dst.iter_mut();
-    for f in fields {
-        let v = f.to_u64() as u32 & m;
-        acc |= v << used;
-        let end = used + len;
-        if end >= WORD_BITS {
-            if let Some(w) = out.next() {
-                *w = acc;
-            }
-            // The field's bits past this word (none when it ends on the boundary).
-            acc = v.checked_shr(WORD_BITS - used).unwrap_or(0);
-            used = end - WORD_BITS;
-        } else {
-            used = end;
-        }
-    }
-    if used > 0 {
-        if let Some(w) = out.next() {
-            *w = (*w & !(mask(used) as u32)) | acc;
-        }
-    }
 }
 
 /// Packs the whole groups of 32 fields of `fields` (`len <= 32` bits each, their low bits) from
@@ -713,22 +685,14 @@ mod tests {
     use super::*;
     use std::vec::Vec;
 
-    /// The writer lays fields out exactly as `write_bits` does, for every field width at
-    /// several starting offsets, over words that start as noise (bits outside the fields kept).
-    /// `pack_fields` writes what `write_bits` field by field writes, bits around the fields
-    /// kept: every width 1 to 64, start offsets at and around word boundaries, counts below,
-    /// at and past whole groups of 32 (the width-specialized path and the `pack_run32` or
-    /// `BitWriter` tail),
-    /// values wider than the field (only their low bits stored), for `u16`, `u32` and `u64`
-    /// values; refusals (past the slice, width 0 or above 64) write nothing.
-    /// `pack_run32` alone (what a 32-bit target runs for every width but 16, whole rows at a
-    /// time) writes what `write_bits` writes field by field: every width 1 to 32, every start
-    /// bit 0 to 31 (and in a later word), runs of 0 to 3, 31 to 33 and 100 and 257 fields,
-    /// values wider than the field; into noise with room after the fields, and into a slice that
+    /// `BitWriter::push32` runs (what a 32-bit target's `pack_fields` runs for every width
+    /// but 16, whole rows at a time) write what `write_bits` writes field by field: every
+    /// width 1 to 32, every start bit 0 to 31 (and in a later word), runs of 0 to 3, 31 to 33
+    /// and 100 and 257 fields; into noise with room after the fields, and into a slice that
     /// ends exactly at the last field's word (the last word full, or partial and the slice's
     /// last).
     #[test]
-    fn pack_run32_equals_write_bits() {
+    fn bit_writer_push32_equals_write_bits() {
         let counts: &[usize] = if cfg!(miri) {
             &[0, 1, 33]
         } else {
@@ -759,7 +723,11 @@ mod tests {
                             let at = start + i as u64 * u64::from(len);
                             assert!(write_bits(&mut a, at, len, f & mask(len)));
                         }
-                        pack_run32(&mut b, start, &fields, len);
+                        let mut wr = BitWriter::new(&mut b, start);
+                        for f in &fields {
+                            wr.push32(*f as u32 & mask(len) as u32, len);
+                        }
+                        wr.finish();
                         assert_eq!(a, b, "len {len} start {start} count {count} room {room}");
                     }
                 }
@@ -767,6 +735,11 @@ mod tests {
         }
     }
 
+    /// `pack_fields` writes what `write_bits` field by field writes, bits around the fields
+    /// kept: every width 1 to 64, start offsets at and around word boundaries, counts below,
+    /// at and past whole groups of 32 (the width-specialized path and the `BitWriter` tail),
+    /// values wider than the field (only their low bits stored), for `u16`, `u32` and `u64`
+    /// values; refusals (past the slice, width 0 or above 64) write nothing.
     #[test]
     fn pack_fields_equals_write_bits() {
         fn check<E: Entry>(to_e: impl Fn(u64) -> E, value_bits: u32) {
@@ -826,6 +799,9 @@ mod tests {
         check(|v| v, 64);
     }
 
+    /// The writer lays fields out exactly as `write_bits` does, for every field width 1 to 64
+    /// (`push`: one or two 32-bit pushes) at several starting offsets, over words that start
+    /// as noise (bits outside the fields kept).
     #[test]
     fn bit_writer_equals_write_bits() {
         for len in 1..=64u32 {
