@@ -2,8 +2,9 @@
 # Miri (undefined behaviour, and overflow checks in every interpreted build). Needs the nightly
 # toolchain and the miri component; without them Miri is skipped, loudly, with exit status 0.
 #
-#   bash .ci/miri.sh              the CI tier: the crate's only unsafe code (src/simd.rs, the
-#                                 `simd::` tests) once per instruction set, and the core's
+#   bash .ci/miri.sh              the CI tier: the crate's only unsafe code on x86-64
+#                                 (src/simd.rs and src/cast.rs, the `simd::` and `cast::`
+#                                 tests) once per instruction set, and the core's
 #                                 doctests (about 12 minutes on 2 cores)
 #   MIRI_FULL=1 bash .ci/miri.sh  also the core's unit tests without features, the comparison
 #                                 filters' unit tests and doctests, and host-tests' build.rs and
@@ -64,7 +65,8 @@ if [ -n "${MIRI_FULL:-}" ]; then
 fi
 
 step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512 VBMI packing; 0.5 to 2.5 min each)"
-# src/simd.rs is the crate's only unsafe code: its exhaustive small-size tests under Miri, which
+# src/simd.rs (with the slice casts of src/cast.rs) is the crate's only unsafe code on x86-64: its
+# exhaustive small-size tests (and cast.rs's) under Miri, which
 # emulates the intrinsics (the CPU need not have them) but not CPUID, so the kernels are those the
 # target features enable: each run tests every kernel up to its flags, in its own target dir.
 # The last set adds AVX-512BW, DQ and VBMI: the tiled kernels that pack their local sums in the row
@@ -75,7 +77,7 @@ step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512
 simd_pass() {
   local flags=$1 log=$2
   RUSTFLAGS="$flags" CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-target}/miri-$(echo "x$flags" | tr -cd 'a-z0-9')" \
-    cargo +nightly miri test -p texsat --lib --features simd --locked -- simd:: >"$log" 2>&1
+    cargo +nightly miri test -p texsat --lib --features simd --locked -- simd:: cast:: >"$log" 2>&1
 }
 logs=$(mktemp -d)
 trap 'rm -rf "$logs"' EXIT
