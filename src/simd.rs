@@ -633,8 +633,10 @@ impl Kernel {
     /// instruction costs two, and the AVX2 kernel's multiplies (`vpmaddubsw`, `vpmaddwd`: 6
     /// per 16 texels, 12 halves, all on the one pipe that multiplies) outweigh the shifts
     /// they save: on a Zen 1 guest (EPYC 7001) the SSE2 kernel built 1,024^2 and 4,096^2 in
-    /// 0.75x and 0.72x the time, 1.13x and 0.88x the widen-copy floor against 1.50x and 1.24x
-    /// (docs/benchmarks.md, nineteenth session). The layouts' AVX2 kernels (modular rows, band
+    /// 0.75x and 0.72x the time; with it `Sat::build` went from 1.36x to 1.42x and 1.18x to
+    /// 1.23x the widen-copy floor to 1.09x to 1.18x and 0.81x to 0.93x, also without the
+    /// working row below 32 MiB (docs/benchmarks.md, nineteenth session). The layouts' AVX2
+    /// kernels (modular rows, band
     /// rows, packing) have no SSE2 form and stay. In the crate's unit tests a thread's
     /// [`Kernel::cap`] names the row kernel exactly, so that every kernel is tested on every
     /// CPU.
@@ -645,10 +647,16 @@ impl Kernel {
         if CAP.with(|c| c.get()).is_some() {
             return k;
         }
-        if k == Kernel::Avx2 && splits_256() {
+        k.rows_on(splits_256())
+    }
+
+    /// [`Kernel::for_rows`] for the best kernel `self` on a CPU that splits 256-bit operations
+    /// or not.
+    fn rows_on(self, splits: bool) -> Kernel {
+        if self == Kernel::Avx2 && splits {
             Kernel::Sse2
         } else {
-            k
+            self
         }
     }
 
@@ -830,12 +838,14 @@ const LEAF_FP: u32 = 0x8000_001A;
 /// [`splits_256`] from CPUID's answers: `vendor` (leaf 0), `max_ext` (leaf `8000_0000` EAX,
 /// the highest extended leaf) and `fp` (leaf [`LEAF_FP`] EAX, 0 where the leaf is absent).
 /// Only AMD and Hygon define the leaf (on other CPUs a leaf past the highest returns another
-/// leaf's data); their CPUs split where FP256 is clear (Zen, Zen+, and the Excavator cores
-/// with AVX2), and are full width where it is set (Zen 2 on). Intel's AVX2 cores are taken
+/// leaf's data); their CPUs split where FP128 (bit 0: 128-bit operations full width) is set and
+/// FP256 clear (Zen, Zen+, and the Excavator cores with AVX2: `0b011`), and are full width
+/// where FP256 is set (Zen 2 on). A leaf that reads all zero (as a hypervisor may give it) is
+/// taken as full width, the choice that was the only one before. Intel's AVX2 cores are taken
 /// as full width (no CPUID bit says otherwise; the Atom-derived cores with AVX2, Gracemont on,
 /// split, but are not told apart here: not measured).
 fn splits_256_from(vendor: [u32; 3], max_ext: u32, fp: u32) -> bool {
-    SPLIT_VENDORS.contains(&vendor) && max_ext >= LEAF_FP && fp & 0b100 == 0
+    SPLIT_VENDORS.contains(&vendor) && max_ext >= LEAF_FP && fp & 0b101 == 0b001
 }
 
 /// CPUID leaves 0, `8000_0000` and [`LEAF_FP`] into [`splits_256_from`].
@@ -6278,6 +6288,12 @@ mod tests {
         for k in Kernel::ALL.into_iter().filter(|k| k.available()) {
             assert_eq!(k.cap(Kernel::for_rows), k);
         }
+        // The choice itself, whatever this CPU is: only AVX2 on a splitting CPU gives way.
+        for k in Kernel::ALL {
+            assert_eq!(k.rows_on(false), k);
+            let on_split = if k == Kernel::Avx2 { Kernel::Sse2 } else { k };
+            assert_eq!(k.rows_on(true), on_split);
+        }
     }
 
     /// Where SSE2 stands in for AVX2 ([`Kernel::for_rows`]), `Sat::build` of a table of 1 MiB
@@ -6314,10 +6330,13 @@ mod tests {
         // clear; its highest extended leaf 8000_0021.
         assert!(splits_256_from(amd, 0x8000_0021, 0b011));
         assert!(splits_256_from(hygon, 0x8000_001F, 0b011));
-        assert!(splits_256_from(amd, LEAF_FP, 0));
+        assert!(splits_256_from(amd, LEAF_FP, 0b001));
         // FP256 set (Zen 2 on), whatever the other bits.
         assert!(!splits_256_from(amd, 0x8000_0021, 0b111));
+        assert!(!splits_256_from(amd, 0x8000_0021, 0b110));
         assert!(!splits_256_from(amd, 0x8000_0021, 0b100));
+        // The leaf all zero (a hypervisor's): full width.
+        assert!(!splits_256_from(amd, 0x8000_0021, 0));
         assert!(!splits_256_from(hygon, 0x8000_001F, 0b111));
         // The leaf absent, or another vendor's (Intel's highest is 8000_0008; past it, another
         // leaf's data).

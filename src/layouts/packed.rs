@@ -417,7 +417,9 @@ impl<'w> BitWriter<'w> {
     #[inline(always)]
     #[allow(
         clippy::arithmetic_side_effects,
-        reason = "bits < 32 and len <= 32 between pushes, so bits + len < 64 and end - 32 >= 0                   where formed; v << bits is a u32 shift below 32, and 32 - bits is in 1..=32                   (checked_shr takes 32)"
+        reason = "bits < 32 and len <= 32 between pushes, so bits + len < 64 and end - 32 >= 0 \
+                  where formed; v << bits is a u32 shift below 32, and 32 - bits is in 1..=32 \
+                  (checked_shr takes 32)"
     )]
     pub(crate) fn push32(&mut self, v: u32, len: u32) {
         self.acc |= v << self.bits;
