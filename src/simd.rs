@@ -636,10 +636,9 @@ impl Kernel {
     /// 0.75x and 0.72x the time; with it `Sat::build` went from 1.36x to 1.42x and 1.18x to
     /// 1.23x the widen-copy floor to 1.09x to 1.18x and 0.81x to 0.93x, also without the
     /// working row below 32 MiB (docs/benchmarks.md, nineteenth session). The layouts' AVX2
-    /// kernels (modular rows, band
-    /// rows, packing) have no SSE2 form and stay. In the crate's unit tests a thread's
-    /// [`Kernel::cap`] names the row kernel exactly, so that every kernel is tested on every
-    /// CPU.
+    /// kernels (modular rows, band rows, packing) have no SSE2 form and stay. In the crate's
+    /// unit tests a thread's [`Kernel::cap`] names the row kernel exactly, so that every kernel
+    /// is tested on every CPU.
     #[inline]
     pub(crate) fn for_rows() -> Kernel {
         let k = Kernel::best();
@@ -830,9 +829,9 @@ const fn vendor(s: &[u8; 12]) -> [u32; 3] {
 }
 
 /// CPUID leaf `8000_001A` ("Performance Optimization Identifiers", AMD64 Architecture
-/// Programmer's Manual vol. 3, appendix E): EAX bit 2, FP256, is set when 256-bit AVX
-/// instructions are executed with full-width internal operations rather than decomposed into
-/// 128-bit ones.
+/// Programmer's Manual vol. 3, appendix E): EAX bit 0, FP128, is set when 128-bit SSE
+/// instructions are executed with full-width internal operations, and bit 2, FP256, when
+/// 256-bit AVX instructions are, rather than decomposed into 128-bit ones.
 const LEAF_FP: u32 = 0x8000_001A;
 
 /// [`splits_256`] from CPUID's answers: `vendor` (leaf 0), `max_ext` (leaf `8000_0000` EAX,
@@ -6320,8 +6319,8 @@ mod tests {
         assert_eq!(sat.entries(), sat_ref.entries());
     }
 
-    /// `splits_256_from` on CPUID's answers: AMD's and Hygon's FP256 bit (leaf `8000_001A`
-    /// EAX bit 2) read where the leaf exists, every other vendor full width.
+    /// `splits_256_from` on CPUID's answers: AMD's and Hygon's FP128 and FP256 bits (leaf
+    /// `8000_001A` EAX bits 0 and 2) read where the leaf exists, every other vendor full width.
     #[test]
     fn splits_256_reads_amds_fp256_bit() {
         let (amd, hygon) = (vendor(b"AuthenticAMD"), vendor(b"HygonGenuine"));
