@@ -687,6 +687,14 @@ mod tests {
     use super::*;
     use std::vec::Vec;
 
+    /// The tests' noise: xorshift64 (13, 7, 17), the state advanced and returned.
+    fn xorshift(seed: &mut u64) -> u64 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        *seed
+    }
+
     /// `BitWriter::push32` runs (what a 32-bit target's `pack_fields` runs for every width
     /// but 16, whole rows at a time) write what `write_bits` writes field by field: every
     /// width 1 to 32, every start bit 0 to 31 (and in a later word), runs of 0 to 3, 31 to 33
@@ -708,12 +716,7 @@ mod tests {
             for start in starts {
                 for &count in counts {
                     let mut seed = 0x0fed_cba9_8765_4321u64 ^ u64::from(len) << 7 ^ start << 20;
-                    let mut next = || {
-                        seed ^= seed << 13;
-                        seed ^= seed >> 7;
-                        seed ^= seed << 17;
-                        seed
-                    };
+                    let mut next = || xorshift(&mut seed);
                     let end = start + count as u64 * u64::from(len);
                     let exact = end.div_ceil(32) as usize;
                     let noise: Vec<u32> = (0..exact + 3).map(|_| next() as u32).collect();
@@ -763,12 +766,7 @@ mod tests {
                 for &start in starts {
                     for &count in counts {
                         let mut seed = 0x1234_5678_9abc_def1u64 ^ u64::from(len) ^ start << 8;
-                        let mut next = || {
-                            seed ^= seed << 13;
-                            seed ^= seed >> 7;
-                            seed ^= seed << 17;
-                            seed
-                        };
+                        let mut next = || xorshift(&mut seed);
                         let noise: Vec<u32> = (0..240).map(|_| next() as u32).collect();
                         let fields: Vec<E> = (0..count)
                             .map(|_| to_e(next() & mask(value_bits)))
@@ -811,10 +809,7 @@ mod tests {
                 let mut seed = 0x1234_5678_9abc_def1u64 ^ u64::from(len);
                 let mut noise = [0u32; 40];
                 for w in noise.iter_mut() {
-                    seed ^= seed << 13;
-                    seed ^= seed >> 7;
-                    seed ^= seed << 17;
-                    *w = seed as u32;
+                    *w = xorshift(&mut seed) as u32;
                 }
                 let count = 9;
                 let fields: [u64; 9] = core::array::from_fn(|i| {
