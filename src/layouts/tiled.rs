@@ -2945,8 +2945,9 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
 
     /// [`Tiled::build`]'s step for a run of the texture's next rows when they are band rows of
     /// one tile row (`q = 0`) and the band form applies with one level of tiles on x
-    /// ([`BandPlan`]), on the AVX-512 path that packs in the pass (`simd::band_rows`: whole
-    /// pairs of blocks, the local sums' rows from a byte): the rest of the tile row's band
+    /// ([`BandPlan`]), on the paths of `simd::band_rows` (AVX-512 VBMI, which packs in the
+    /// pass, whole pairs of blocks; or AVX2, rows a multiple of 128; the local sums' rows from
+    /// a byte): the rest of the tile row's band
     /// rows, at least two, as many as `simd::MAX_BAND_ROWS` and the scratch row (their
     /// boundaries) hold. The same values and fields as [`TiledBuilder::push_row`] on each in
     /// turn (each row its own pass, in order), with the builder's per-row work (the plan's
