@@ -33,10 +33,16 @@ else
 fi
 
 # No sanitizer: the core is forbid(unsafe_code) and the targets check answers, not memory; the
-# long runs (fuzz/README.md) use the same build.
-for t in "${targets[@]}"; do
-  cargo +nightly fuzz build --fuzz-dir fuzz --target-dir "$TARGET_DIR" -s none "$t"
-done
+# long runs (fuzz/README.md) use the same build. Every target at once when none is named: one
+# cargo run builds the binaries side by side (on a 2-core Zen 3 the six builds took 4.9
+# minutes at once, 5.6 one at a time).
+if [ "$#" -gt 0 ]; then
+  for t in "${targets[@]}"; do
+    cargo +nightly fuzz build --fuzz-dir fuzz --target-dir "$TARGET_DIR" -s none "$t"
+  done
+else
+  cargo +nightly fuzz build --fuzz-dir fuzz --target-dir "$TARGET_DIR" -s none
+fi
 
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
