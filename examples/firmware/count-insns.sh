@@ -12,7 +12,7 @@
 #                                          fails unless every region agrees to the instruction
 #   COUNT_METHOD=plugin|singlestep ...     one method only (default `auto`: the plugin, falling back
 #                                          loudly to -singlestep if it cannot be built or loaded)
-#   COUNT_KEEP_LOG=1 ...                        keeps QEMU's -singlestep exec log (about 480 MB) in
+#   COUNT_KEEP_LOG=1 ...                        keeps QEMU's -singlestep exec log (23 GB!) in
 #                                               target/count-insns/ (methods singlestep, both)
 #
 # How: builds the `texsat-count` binary (src/count.rs, feature `count`, plus `filter-mip`) with
@@ -132,8 +132,9 @@ count_plugin() {
     die "count_insns.py failed on the plugin's log"
 }
 
-# The -singlestep exec log (one TB per instruction), read through a FIFO so its ~480 MB never
-# reach the disk (unless COUNT_KEEP_LOG is set).
+# The -singlestep exec log (one TB per instruction), read through a FIFO so that it never
+# reaches the disk (unless COUNT_KEEP_LOG is set): 23 GB in 198 million lines on 2026-12-07,
+# which QEMU writes a line per system call (about 4 minutes here, most of it in the kernel).
 count_singlestep() {
   local log status=0 qstatus=0 qpid
   echo "count-insns: $QEMU ${QEMU_ARGS[*]} -singlestep -d exec,nochain -D <log>" >&2
