@@ -1736,8 +1736,8 @@ mod pack256 {
     /// saturation after the mask, the quarters put back in order by `vpermq`; from `u16`
     /// values, `NARROW`: one load, and no mask without `MASK`, for values the caller knows are
     /// below `2^K`); pairs joined by `vpmaddwd` with weights `(1, 2^K)` (`f_0 + 2^K f_1 <
-    /// 2^{2K} <= 2^28`); pairs of pairs in each 64-bit lane by a shift (`P_0 + 2^{2K} P_1`, the
-    /// `4 K / 8 = K / 2` bytes of 4 fields); the `K / 2` bytes of each 64-bit
+    /// 2^{2K} <= 2^28`); pairs of pairs in each 64-bit lane by two shifts (`P_0 + 2^{2K} P_1`,
+    /// the `4 K / 8 = K / 2` bytes of 4 fields); the `K / 2` bytes of each 64-bit
     /// lane moved together (`vpshufb`, per 128-bit half: `K` bytes) and stored as two 16-byte
     /// stores `K` bytes apart. A store's bytes past its `K` are the next fields', rewritten by
     /// the next store in order; the last step stores `hi` as two 8-byte pieces ending on its
@@ -3613,8 +3613,9 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// storage (`u16` index `n + i` for column `i`; the lower half unused). The accumulator is a
 /// function of them: the local sum at `x` is the prefix of the column sums inside its tile,
 /// and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
-/// added to the column sums (one 16-bit add), their prefix inside each tile (three shifts and
-/// adds within each 128-bit half, which holds one tile), the 14 local sums stored as 16-bit
+/// added to the column sums (one 16-bit add), their prefix inside each tile (a multiply, two
+/// shuffles and two adds within each 128-bit half, which holds one tile: `band256::prefix8`),
+/// the 14 local sums stored as 16-bit
 /// values, the two tiles' totals added into the running boundary sum (four blocks' 8
 /// boundaries by one vector prefix sum, [`band256::row`]). Then the local sums packed as
 /// `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and 14 from a
