@@ -1790,8 +1790,10 @@ mod pack256 {
             // Per 64-bit lane: P_0 (low half) + P_1 (high half) shifted down to bit 2 K, in two
             // instructions: P_0 shifted up by 32 - 2 K inside its half (`vpsllvd`; P_0 <
             // 2^{2 K}, so no bit leaves it), which makes the lane 2^{32 - 2 K} (P_0 + 2^{2 K}
-            // P_1), then the lane shifted down by 32 - 2 K (its low bits are zeros). (Two
-            // blends, a shift and an OR before: 0.1 instructions per texel of a tiled build.)
+            // P_1), then the lane shifted down by 32 - 2 K (its low bits are zeros; for K = 8
+            // and 12 LLVM folds that byte shift into the `vpshufb` below). Two blends, a shift
+            // and an OR before: `even` took 0.591 -> 0.433 instructions per texel of a tiled
+            // build of 1,024^2 (callgrind; docs/benchmarks.md, twenty-first session).
             let q = _mm256_srl_epi64(_mm256_sllv_epi32(d, up), shift);
             let v = _mm256_shuffle_epi8(q, squeeze);
             (_mm256_castsi256_si128(v), _mm256_extracti128_si256::<1>(v))
@@ -3615,12 +3617,11 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
 /// added to the column sums (one 16-bit add), their prefix inside each tile (a multiply, two
 /// shuffles and two adds within each 128-bit half, which holds one tile: `band256::prefix8`),
-/// the 14 local sums stored as 16-bit
-/// values, the two tiles' totals added into the running boundary sum (four blocks' 8
-/// boundaries by one vector prefix sum, [`band256::row`]). Then the local sums packed as
-/// `pack`'s fields straight from 16 bits ([`pack256::even`], for `k` = 8, 10, 12 and 14 from a
-/// byte-aligned `bit`: `kp` fields, a multiple of 16 on this path), the rest widened into
-/// `local`.
+/// the 14 local sums stored as 16-bit values, the two tiles' totals added into the running
+/// boundary sum (four blocks' 8 boundaries by one vector prefix sum, [`band256::row`]). Then
+/// the local sums packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for
+/// `k` = 8, 10, 12 and 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16 on this
+/// path), the rest widened into `local`.
 ///
 /// With AVX-512BW, DQ and VBMI, fields below `2^k` (`exact`) and room for them, the pairs of
 /// blocks go through `band512::row_packed` instead, which packs their local sums in the same pass
@@ -4151,7 +4152,8 @@ mod band256 {
     /// wrapping: each 32-bit lane's two by a multiply (`vpmulld` by `1 + 2^16`: the low 32 bits
     /// of `(x_0 + 2^16 x_1)(1 + 2^16)` are `x_0 + 2^16 (x_0 + x_1)`), then the pairs' sums
     /// carried on by two shuffles and adds (lane 1 into 2 and 3, 5 into 6 and 7; then lane 3
-    /// into 4..8). Five instructions where three byte shifts and three adds were six.
+    /// into 4..8). Five instructions where three byte shifts and three adds were six. (Intel's
+    /// `vpmulld` is two uops; measured on Zen 3 only.)
     #[inline]
     #[target_feature(enable = "avx2")]
     fn prefix8(c: __m256i, k: &Prefix) -> __m256i {
@@ -4544,7 +4546,8 @@ mod band512 {
     /// pairs', rewritten by their stores in order; then a masked store of exactly its bytes);
     /// the 4 tiles' totals ([`totals`]) prefix-summed onto the running sum and stored as the 4
     /// boundaries. The 16-bit local sums of [`band256::row`] are neither stored nor read back
-    /// by [`pack256::even`]: per 32 columns about 22 instructions instead of about 55. The
+    /// by [`pack256::even`]: per 32 columns about 22 instructions instead of about 50 (55
+    /// before the AVX2 cuts of the twenty-first session). The
     /// lines of `ahead` asked for at the row's pace, 16 blocks ahead ([`Prefetch::paced`]: the
     /// pairs pack as they go), a group of 4 pairs at a time.
     ///
