@@ -42,6 +42,14 @@ layout of 1,024^2 is 2.3 MiB) and their textures of 4 MiB and more the same way
 (`TEXSAT_BS_PAGES=thp`). The report prints how much of each side's memory the
 kernel gave huge pages (/proc/<pid>/smaps).
 
+Texture placement: `--texture-page-offset B` puts each server's texture at byte B of a 4 KiB
+page (so every row of 4,096 texels starts there too; `imageproc` keeps its own copy, and
+OpenCV's image is numpy's); without it the texture lies where its storage starts (a page
+boundary for the `thp` maps, 16 bytes past one for glibc's large heap blocks). On the Zen 3
+machine of 2026-12-07 a tiled build of 4,096^2 with its rows starting mid-page (B = 2048) took
+about 1.05x the time of one with them on a page boundary, the other builds the same
+(docs/benchmarks.md, twenty-second session).
+
 On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
 2-vCPU machine of 2026-11-28 a server that the scheduler kept on CPU 0 ran the same code up to
 1.4x slower than one on CPU 1 (median of the best of 5 builds), which made binaries and
@@ -161,6 +169,10 @@ def main():
                     help="4k: numpy's huge-page advice off, the servers on heap memory (both "
                     "sides on 4 KiB pages); thp: numpy's advice on and the servers' outputs and "
                     "textures of 4 MiB and more advised the same way (see Pages above)")
+    ap.add_argument("--texture-page-offset", type=int, default=None,
+                    help="place each server's texture at this byte (0 to 4095) of a 4 KiB "
+                    "page (TEXSAT_BS_TEXTURE_PAGE_OFFSET; OpenCV's image is numpy's, wherever "
+                    "numpy puts it)")
     ap.add_argument("--cpu", type=int, default=None,
                     help="run this script, OpenCV and every server on this one CPU (they take "
                     "turns: one measurement at a time), so that all figures share one core")
@@ -176,6 +188,10 @@ def main():
         # After the builds (cargo keeps every CPU); inherited by the servers started below.
         os.sched_setaffinity(0, {args.cpu})
     os.environ["TEXSAT_BS_PAGES"] = args.pages  # inherited by the servers
+    if args.texture_page_offset is not None:
+        if not 0 <= args.texture_page_offset < 4096:
+            sys.exit("--texture-page-offset: 0 to 4095")
+        os.environ["TEXSAT_BS_TEXTURE_PAGE_OFFSET"] = str(args.texture_page_offset)
     servers = [Server(name, path) for name, path in paths]
     for s in servers:
         unknown = set(methods) - set(s.methods)
@@ -269,6 +285,9 @@ def main():
           f"wall {wall / 1e9:.1f} s")
     print(f"loadavg before: {load0}; after: {load1}")
     print("cpus: " + (f"all on CPU {args.cpu}" if args.cpu is not None else "any (no --cpu)"))
+    print("servers' textures: " + (f"at byte {args.texture_page_offset} of a 4 KiB page"
+                                   if args.texture_page_offset is not None
+                                   else "where their storage starts"))
     print(f"pages ({args.pages}), MiB in 2 MiB pages: " + "; ".join(
         f"{who} {h / 1024:.0f} of {t / 1024:.0f}" if h is not None else f"{who} n/a"
         for who, h, t in pages))
@@ -334,6 +353,7 @@ def main():
             json.dump({"kernels": {s.variant: s.kernel for s in servers},
                        "pages": {"mode": args.pages,
                                  "huge_kb_of_kb": {who: [h, t] for who, h, t in pages}},
+                       "texture_page_offset": args.texture_page_offset,
                        "loadavg": [load0, load1],
                        "medians": {f"{v}/{m}/{n}": x for (v, m, n), x in med.items()},
                        "samples": {f"{v}/{m}/{n}": x for (v, m, n), x in samples.items()}},

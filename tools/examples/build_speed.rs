@@ -9,6 +9,11 @@
 //! is compared with `Sat::build`'s (or, for the layouts, their corners with its entries) before
 //! its first timing. Storage is allocated and touched once per side and reused.
 //!
+//! Texture placement: with `TEXSAT_BS_TEXTURE_PAGE_OFFSET=B` (0 to 4,095) in its environment,
+//! each texture's first texel lies at byte `B` of a 4 KiB page (and so does every row of 4,096
+//! texels); otherwise where its storage starts (a page boundary for a map, 16 bytes past one for
+//! a large heap block on glibc).
+//!
 //! Pages: with `TEXSAT_BS_PAGES=thp` in its environment, every timed output (the table, the
 //! layouts' words) is an anonymous map advised `MADV_HUGEPAGE`, and so is the texture from 4
 //! MiB on, as numpy advises its arrays of 4 MiB and more (OpenCV's output at both sizes, its
@@ -80,6 +85,9 @@ const HUGE_MIN_BYTES: usize = 1 << 22;
 /// arrays, inside unaligned heap maps, get slightly less: see the driver's report).
 const HUGE_PAGE: usize = 1 << 21;
 
+/// A 4 KiB page, the unit of `TEXSAT_BS_TEXTURE_PAGE_OFFSET`.
+const PAGE: usize = 4096;
+
 /// Which page each buffer asks for.
 #[derive(Clone, Copy, PartialEq)]
 enum Pages {
@@ -144,7 +152,9 @@ impl<T: Pod> DerefMut for Buf<T> {
 /// One side's texture and reused storage.
 struct Case {
     side: usize,
+    /// The texture's storage: its texels from byte `at` on.
     tex: Buf<u8>,
+    at: usize,
     gray: GrayImage,
     reference: Vec<u32>,
     table: Buf<u32>,
@@ -158,7 +168,9 @@ struct Case {
 }
 
 impl Case {
-    fn new(side: usize, pages: Pages) -> Self {
+    /// The texture and storage of one side; with `page_offset`, the texture's first texel at
+    /// that byte of a 4 KiB page (its storage then 4 KiB longer).
+    fn new(side: usize, pages: Pages, page_offset: Option<usize>) -> Self {
         let out = pages == Pages::Huge;
         // xorshift64 noise, uniform bytes (the same generator as benches/sat.rs's texels).
         let mut s = 0x9E37_79B9_7F4A_7C15u64;
@@ -182,9 +194,20 @@ impl Case {
         let k = modulus_bits_for(8, 65 * 65);
         let mwords_needed = Modular::<u32>::words_needed(side, side, k).expect("words");
         let mwords = Buf::new(mwords_needed, 0, out);
+        let huge_tex = out && side * side >= HUGE_MIN_BYTES;
+        let (tex, at) = match page_offset {
+            None => (Buf::from_slice(&tex, huge_tex), 0),
+            Some(b) => {
+                let mut buf = Buf::new(tex.len() + PAGE, 0, huge_tex);
+                let at = (b % PAGE + PAGE - buf.as_ptr() as usize % PAGE) % PAGE;
+                buf[at..at + tex.len()].copy_from_slice(&tex);
+                (buf, at)
+            }
+        };
         Case {
             side,
-            tex: Buf::from_slice(&tex, out && side * side >= HUGE_MIN_BYTES),
+            tex,
+            at,
             gray,
             reference,
             table: Buf::new(side * side, 1, out),
@@ -201,10 +224,11 @@ impl Case {
     /// Runs `method` once; checks its output against the reference the first time.
     fn run(&mut self, method: &str) -> f64 {
         let n = self.side;
-        let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
+        let tex = &self.tex[self.at..self.at + n * n];
+        let texture = Texture::<u8>::new(tex, n, n).expect("texture");
         let start = Instant::now();
         match method {
-            "floor" => floor(black_box(&self.tex), black_box(&mut self.table)),
+            "floor" => floor(black_box(tex), black_box(&mut self.table)),
             "build" => {
                 Sat::build(&texture, black_box(&mut self.table)).expect("build");
             }
@@ -214,7 +238,7 @@ impl Case {
             "stream" | "stream_nocopy" => {
                 let copy = method == "stream";
                 let mut b = RowStreamBuilder::<u32>::new(n, n, 8, &mut self.row).expect("stream");
-                for (src, dst) in self.tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
+                for (src, dst) in tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
                     let row = b.push_row(src).expect("push_row");
                     if copy {
                         dst.copy_from_slice(row);
@@ -224,7 +248,7 @@ impl Case {
             }
             "stream_into" => {
                 let mut b = RowStreamBuilder::<u32>::new(n, n, 8, &mut self.row).expect("stream");
-                for (src, dst) in self.tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
+                for (src, dst) in tex.chunks_exact(n).zip(self.table.chunks_exact_mut(n)) {
                     b.push_row_into(src, dst).expect("push_row_into");
                 }
                 black_box(b.finish().expect("finish"));
@@ -274,7 +298,8 @@ impl Case {
 
     fn check(&mut self, method: &str) {
         let n = self.side;
-        let texture = Texture::<u8>::new(&self.tex, n, n).expect("texture");
+        let texture =
+            Texture::<u8>::new(&self.tex[self.at..self.at + n * n], n, n).expect("texture");
         match method {
             "floor" | "stream_nocopy" => {}
             "build" | "checked" | "stream" | "stream_into" | "strips_seq" | "parallel" => {
@@ -343,6 +368,14 @@ fn main() {
         Ok("4k") | Err(_) => Pages::Small,
         Ok(other) => panic!("TEXSAT_BS_PAGES={other:?}: 4k or thp"),
     };
+    let page_offset = std::env::var("TEXSAT_BS_TEXTURE_PAGE_OFFSET")
+        .ok()
+        .map(|v| {
+            v.parse::<usize>()
+                .ok()
+                .filter(|&b| b < PAGE)
+                .unwrap_or_else(|| panic!("TEXSAT_BS_TEXTURE_PAGE_OFFSET={v:?}: 0 to 4095"))
+        });
     for line in stdin.lock().lines() {
         let line = line.expect("stdin");
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -352,13 +385,18 @@ fn main() {
             ["path"] => std::env::current_exe().expect("exe").display().to_string(),
             ["dump", side, path] => {
                 let side: usize = side.parse().expect("side");
-                let case = cases.entry(side).or_insert_with(|| Case::new(side, pages));
-                std::fs::write(path, &*case.tex).expect("write texture");
+                let case = cases
+                    .entry(side)
+                    .or_insert_with(|| Case::new(side, pages, page_offset));
+                std::fs::write(path, &case.tex[case.at..case.at + side * side])
+                    .expect("write texture");
                 "ok".to_string()
             }
             [method, side] => {
                 let side: usize = side.parse().expect("side");
-                let case = cases.entry(side).or_insert_with(|| Case::new(side, pages));
+                let case = cases
+                    .entry(side)
+                    .or_insert_with(|| Case::new(side, pages, page_offset));
                 format!("{}", case.run(method))
             }
             [] => continue,
