@@ -4153,13 +4153,14 @@ mod band256 {
     /// of `(x_0 + 2^16 x_1)(1 + 2^16)` are `x_0 + 2^16 (x_0 + x_1)`), then the pairs' sums
     /// carried on by two shuffles and adds (lane 1 into 2 and 3, 5 into 6 and 7; then lane 3
     /// into 4..8). Five instructions where three byte shifts and three adds were six. (Intel's
-    /// `vpmulld` is two uops; measured on Zen 3 only.)
+    /// `vpmulld` is two uops; measured on Zen 3 only.) `consts`: the multiplier and both
+    /// controls, made once per kernel call ([`Prefix::new`]).
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn prefix8(c: __m256i, k: &Prefix) -> __m256i {
-        let p = _mm256_mullo_epi32(c, k.pair);
-        let p = _mm256_add_epi16(p, _mm256_shuffle_epi8(p, k.lanes1));
-        _mm256_add_epi16(p, _mm256_shuffle_epi8(p, k.lane3))
+    fn prefix8(c: __m256i, consts: &Prefix) -> __m256i {
+        let p = _mm256_mullo_epi32(c, consts.pair);
+        let p = _mm256_add_epi16(p, _mm256_shuffle_epi8(p, consts.lanes1));
+        _mm256_add_epi16(p, _mm256_shuffle_epi8(p, consts.lane3))
     }
 
     /// [`band_row`]'s kernel over `blocks` blocks of 16 columns; returns the running boundary
