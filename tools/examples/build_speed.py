@@ -47,7 +47,8 @@ page (so every row of 4,096 texels starts there too; `imageproc` keeps its own c
 OpenCV's image is numpy's); without it the texture lies where its storage starts (a page
 boundary for the `thp` maps, 16 bytes past one for glibc's large heap blocks). On the Zen 3
 machine of 2026-12-07 a tiled build of 4,096^2 with its rows starting mid-page (B = 2048) took
-about 1.05x the time of one with them on a page boundary, the other builds the same
+1.07x to 1.13x the time of one with them on a page boundary, back to back in a fast state of
+the host, and 1.33x the flat build against 1.19x in this script; the other builds did not move
 (docs/benchmarks.md, twenty-second session).
 
 On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
