@@ -47,9 +47,10 @@ page (so every row of 4,096 texels starts there too; `imageproc` keeps its own c
 OpenCV's image is numpy's); without it the texture lies where its storage starts (a page
 boundary for the `thp` maps, 16 bytes past one for glibc's large heap blocks). On the Zen 3
 machine of 2026-12-07 a tiled build of 4,096^2 with its rows starting mid-page (B = 2048) took
-1.07x to 1.13x the time of one with them on a page boundary, back to back in a fast state of
-the host, and 1.33x the flat build against 1.19x in this script; the other builds did not move
-(docs/benchmarks.md, twenty-second session).
+1.07x to 1.13x the time of one with them on a page boundary, back to back in one server, and
+1.33x the flat build in one run of this script against 1.19x in another without the option;
+the flat build did not move back to back (the others were not measured so), nor the tiled
+build of 1,024^2 (docs/benchmarks.md, twenty-second session).
 
 On a VM whose virtual CPUs are not equally quiet, `--cpu N` runs everything on CPU N: on the
 2-vCPU machine of 2026-11-28 a server that the scheduler kept on CPU 0 ran the same code up to
@@ -178,6 +179,8 @@ def main():
                     help="run this script, OpenCV and every server on this one CPU (they take "
                     "turns: one measurement at a time), so that all figures share one core")
     args = ap.parse_args()
+    if args.texture_page_offset is not None and not 0 <= args.texture_page_offset < 4096:
+        sys.exit("--texture-page-offset: 0 to 4095")
 
     sides = [int(s) for s in args.sides.split(",")]
     methods = args.methods.split(",")
@@ -189,10 +192,12 @@ def main():
         # After the builds (cargo keeps every CPU); inherited by the servers started below.
         os.sched_setaffinity(0, {args.cpu})
     os.environ["TEXSAT_BS_PAGES"] = args.pages  # inherited by the servers
+    # Inherited by the servers; one set in the caller's shell is not (the report names the
+    # placement the servers got).
     if args.texture_page_offset is not None:
-        if not 0 <= args.texture_page_offset < 4096:
-            sys.exit("--texture-page-offset: 0 to 4095")
         os.environ["TEXSAT_BS_TEXTURE_PAGE_OFFSET"] = str(args.texture_page_offset)
+    else:
+        os.environ.pop("TEXSAT_BS_TEXTURE_PAGE_OFFSET", None)
     servers = [Server(name, path) for name, path in paths]
     for s in servers:
         unknown = set(methods) - set(s.methods)
