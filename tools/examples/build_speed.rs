@@ -122,12 +122,6 @@ impl<T: Pod> Buf<T> {
         b.fill(fill);
         b
     }
-
-    fn from_slice(v: &[T], huge: bool) -> Self {
-        let mut b = Buf::new(v.len(), T::zeroed(), huge);
-        b.copy_from_slice(v);
-        b
-    }
 }
 
 impl<T: Pod> Deref for Buf<T> {
@@ -195,18 +189,15 @@ impl Case {
         let mwords_needed = Modular::<u32>::words_needed(side, side, k).expect("words");
         let mwords = Buf::new(mwords_needed, 0, out);
         let huge_tex = out && side * side >= HUGE_MIN_BYTES;
-        let (tex, at) = match page_offset {
-            None => (Buf::from_slice(&tex, huge_tex), 0),
-            Some(b) => {
-                let mut buf = Buf::new(tex.len() + PAGE, 0, huge_tex);
-                let at = (b % PAGE + PAGE - buf.as_ptr() as usize % PAGE) % PAGE;
-                buf[at..at + tex.len()].copy_from_slice(&tex);
-                (buf, at)
-            }
-        };
+        // The texels from byte `at` (0 unless placed: then a page more, to place them in).
+        let mut buf = Buf::new(tex.len() + page_offset.map_or(0, |_| PAGE), 0, huge_tex);
+        let at = page_offset.map_or(0, |b| {
+            (b % PAGE + PAGE - buf.as_ptr() as usize % PAGE) % PAGE
+        });
+        buf[at..at + tex.len()].copy_from_slice(&tex);
         Case {
             side,
-            tex,
+            tex: buf,
             at,
             gray,
             reference,
