@@ -3608,13 +3608,35 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
     T::BITS == 8 && E::BITS == 32 && C == 1
 }
 
+/// Where the band form keeps its `n` column sums inside acc_0's storage of `n` words at
+/// `storage`: the `u16` index of the first. At `n - d`, the `d` (0 to 15) that puts them on a
+/// 32-byte boundary, when `n >= 128`; else at `n` (the upper half). Every band kernel loads and
+/// stores them 32 bytes at a time, so aligned, none of those accesses splits a cache line.
+/// With them at `n` wherever the scratch starts, a tiled build of 1,024^2 took 0.303 ns per
+/// texel where they missed a 32-byte boundary and 0.292 where they fell on one (medians, one
+/// process, the scratch moved to each word offset of 32 bytes in turn); placed here, every
+/// offset took the same (Zen 3, AVX2; docs/benchmarks.md, twenty-third session). Room: they end at `u16` `2 n - d`, inside the
+/// storage; [`band_rows`] keeps a row's `n - n / 8` local sums and one more below them, in
+/// `u16` `0..n - n / 8 + 1`, which is at most `n - 15` from `n / 8 >= 16` on. A function of
+/// the address, so every call on the same storage (a builder's scratch, borrowed for its
+/// life) finds them at the same place; [`band_flush`] moves them back to `n` first.
+pub(crate) fn column_sums_at(storage: *const u32, n: usize) -> usize {
+    if n < 128 {
+        return n;
+    }
+    // Bytes past the last 32-byte boundary at or below u16 n (an even count: the storage is
+    // 4-byte aligned).
+    let past = storage.addr().wrapping_add(2 * n) % 32;
+    n - past / 2
+}
+
 /// The tiled builder's row step for a row that ends no tile row (`q = 0`), tiles of 8 texels,
 /// in the band form: instead of the level-0 accumulator (per position its local sum or, at a
 /// tile boundary, its total over the tile row's rows so far, 32 bits), the row `acc0` holds
-/// the *column sums* of the tile row's rows so far, 16 bits each, in the upper half of its
-/// storage (`u16` index `n + i` for column `i`; the lower half unused). The accumulator is a
-/// function of them: the local sum at `x` is the prefix of the column sums inside its tile,
-/// and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
+/// the *column sums* of the tile row's rows so far, 16 bits each, from `u16` index
+/// [`column_sums_at`] of its storage (at or just below its upper half, 32-byte aligned; the
+/// rest unused). The accumulator is a function of them: the local sum at `x` is the prefix of
+/// the column sums inside its tile, and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
 /// added to the column sums (one 16-bit add), their prefix inside each tile (a multiply, two
 /// shuffles and two adds within each 128-bit half, which holds one tile: `band256::prefix8`),
 /// the 14 local sums stored as 16-bit values, the two tiles' totals added into the running
@@ -3663,7 +3685,10 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     }
     let base = local.as_mut_ptr();
     let loc = base.cast::<u16>();
-    let cs = acc0.as_mut_ptr().cast::<u16>().wrapping_add(n);
+    let cs = acc0
+        .as_mut_ptr()
+        .cast::<u16>()
+        .wrapping_add(column_sums_at(acc0.as_ptr(), n));
     let bp = bnd.as_mut_ptr();
     // The packing target, if the fields start on a byte and have a width the packers take:
     // its first byte and the bytes available from it. (Exact local sums, below 2^k, need no
@@ -3703,8 +3728,8 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
         // SAFETY: AVX-512F, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI, whose
         // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum
         // below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (<= n), reads
-        // and writes the column sums cs[..32 pairs] (u16 n..n + 32 pairs <= 2 n of acc0's
-        // storage), writes bnd[..4 pairs] (<= nb) and out[..7 k / 2 pairs] (inside the
+        // and writes the column sums cs[..32 pairs] (u16 c..c + 32 pairs <= 2 n of acc0's
+        // storage, c = column_sums_at <= n), writes bnd[..4 pairs] (<= nb) and out[..7 k / 2 pairs] (inside the
         // target's words, checked above, not local's storage); distinct slices.
         let run = unsafe { band512::row_packed(t.as_ptr(), cs, bp, pairs, out, k, ahead) };
         (
@@ -3717,7 +3742,8 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     } else {
         // SAFETY: AVX2 is available (Kernel::best is AVX2 or AVX-512 VNNI, whose detection
         // includes it); the kernel reads t[..16 blocks], reads and writes the column sums
-        // cs[..16 blocks] (u16 n..n + 16 blocks <= 2 n of acc0's storage), writes loc[..14
+        // cs[..16 blocks] (u16 c..c + 16 blocks <= 2 n of acc0's storage, c = column_sums_at
+        // <= n), writes loc[..14
         // blocks + 1] (inside local's 2 nl u16, checked above) and bnd[..2 blocks] (<= nb);
         // distinct slices.
         let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
@@ -3725,7 +3751,7 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     };
     // The tail, column by column (it starts on a tile boundary).
     let col = |i: usize| {
-        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0.
+        // SAFETY: i < n: column sum c + i < 2 n u16 of acc0 (c = column_sums_at <= n).
         unsafe {
             let c = cs.add(i).read().wrapping_add(u16::from(t[i]));
             cs.add(i).write(c);
@@ -3857,7 +3883,7 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
         return false;
     }
     let loc = acc0.as_mut_ptr().cast::<u16>();
-    let cs = loc.wrapping_add(n);
+    let cs = loc.wrapping_add(column_sums_at(acc0.as_ptr(), n));
     let out = words.as_mut_ptr().cast::<u8>().wrapping_add(skip);
     // Each row's share of the boundaries' words (a hint: never read).
     let share = ahead.map(|(p, len)| (p, len / r.max(1)));
@@ -3891,8 +3917,8 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
             // SAFETY: AVX-512F, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI,
             // whose detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every
             // local sum below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs]
-            // (= n, checked above), reads and writes the column sums cs[..32 pairs] (u16 n..2
-            // n of acc0's n words), writes bj[..4 pairs] = bnd[j nb..(j + 1) nb] (4 pairs =
+            // (= n, checked above), reads and writes the column sums cs[..32 pairs] (u16 c..c
+            // + n <= 2 n of acc0's n words, c = column_sums_at <= n), writes bj[..4 pairs] = bnd[j nb..(j + 1) nb] (4 pairs =
             // nb, r nb <= bnd.len()) and to[..stride] = out[j stride..(j + 1) stride] (7 k / 2
             // pairs = stride, inside the words from byte skip: skip + r stride <= 4
             // words.len()); distinct slices.
@@ -3903,8 +3929,9 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
         // whose detection includes it); n is a multiple of 128 (`band_rows_apply`): the row
         // is whole blocks (16 blocks = n), its 14 blocks = 7 n / 8 local sums are whole steps
         // (16 steps = 7 n / 8), and 2 k steps = 7 k n / 64 = stride bytes; band256::row reads
-        // t[..n], reads and writes the column sums cs[..n] (u16 n..2 n of acc0's n words),
-        // writes loc[..7 n / 8 + 1] (u16 0..n, below the column sums: n >= 128) and bj[..2
+        // t[..n], reads and writes the column sums cs[..n] (u16 c..c + n <= 2 n of acc0's n
+        // words, c = column_sums_at <= n), writes loc[..7 n / 8 + 1] (u16 0..n - n / 8 + 1 <=
+        // n - 15 <= c, below the column sums: n >= 128, column_sums_at's room) and bj[..2
         // blocks] (= nb, as above); `even` reads loc[..16 steps], written just before, every
         // value below 2^k (`exact`: the width proof), and writes to[..2 k steps] (= stride, as
         // above); distinct slices.
@@ -3971,7 +3998,10 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     if acc0.len() != n || acc.len() < n || bnd.len() < nb || local.len() < nl {
         return None;
     }
-    let cs = acc0.as_mut_ptr().cast::<u16>().wrapping_add(n);
+    let cs = acc0
+        .as_mut_ptr()
+        .cast::<u16>()
+        .wrapping_add(column_sums_at(acc0.as_ptr(), n));
     let (ap, bp, lp) = (acc.as_mut_ptr(), bnd.as_mut_ptr(), local.as_mut_ptr());
     // The chunks packed in the pass: as many whole ones as the row and both rows of words
     // hold.
@@ -3997,8 +4027,8 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
         Some((chunks, (wl, kl), (wb, kb))) => {
             // SAFETY: AVX-512F, VL, BW and DQ are available (the AVX-512 kernel's detection
             // includes F and VL, `vbmi` BW and DQ); the kernel reads t[..256 chunks] (<= n), reads
-            // and writes the column sums cs[..256 chunks] (u16 n..n + 256 chunks <= 2 n of acc0's
-            // storage) and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb chunks],
+            // and writes the column sums cs[..256 chunks] (u16 c..c + 256 chunks <= 2 n of
+            // acc0's storage, c = column_sums_at <= n) and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb chunks],
             // inside them (the chunks' bound above); both widths in 11..=32 (above); distinct
             // slices.
             let run = unsafe {
@@ -4022,8 +4052,8 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     };
     let first = done / BLOCK;
     // SAFETY: AVX2 is available (as in band_row); the kernel reads t[16 first..16 blocks],
-    // reads and writes the column sums cs[16 first..16 blocks] (u16 n..n + 16 blocks <= 2 n
-    // of acc0's storage) and acc[16 first..16 blocks] (<= n), writes local[14 first..14
+    // reads and writes the column sums cs[16 first..16 blocks] (u16 c..c + 16 blocks <= 2 n
+    // of acc0's storage, c = column_sums_at <= n) and acc[16 first..16 blocks] (<= n), writes local[14 first..14
     // blocks] (<= nl) and bnd[2 first..2 blocks] (<= nb), checked above; distinct slices.
     let run = unsafe {
         band256::end_row(
@@ -4039,7 +4069,7 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     // The tail, column by column (it starts on a tile boundary).
     let (mut kb, mut kl) = (2 * blocks, 14 * blocks);
     let col = |i: usize| {
-        // SAFETY: i < n: column sum n + i < 2 n u16 of acc0.
+        // SAFETY: i < n: column sum c + i < 2 n u16 of acc0 (c = column_sums_at <= n).
         unsafe {
             let c = u32::from(cs.add(i).read()) + u32::from(t[i]);
             cs.add(i).write(0);
@@ -4066,9 +4096,10 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
 /// Turns [`band_row`]'s column sums in `acc0` (`n` positions) back into the level-0
 /// accumulator (the local sums and boundaries of the column sums, `u32`), in place, before a
 /// row that ends a tile row (which adds it into the level above and clears it) or a row that
-/// leaves the band form. Forward: word `i` holds `u16` `2 i` and `2 i + 1`, that is column
-/// sums `2 i - n` and `2 i + 1 - n`, at most `i`: read already (a block of 16 reads its 16
-/// before it writes). With AVX2 per 16 columns ([`band256::flush`]), the rest column by
+/// leaves the band form. First the column sums move from [`column_sums_at`] up to the upper
+/// half (`u16` `n..2 n`; a rare step, one copy). Then forward: word `i` holds `u16` `2 i` and
+/// `2 i + 1`, that is column sums `2 i - n` and `2 i + 1 - n`, at most `i`: read already (a
+/// block of 16 reads its 16 before it writes). With AVX2 per 16 columns ([`band256::flush`]), the rest column by
 /// column. `false` (nothing done) for entries other than `u32` with one channel.
 pub(crate) fn band_flush<E: Entry, const C: usize>(acc0: &mut [E]) -> bool {
     let Some(a) = as_u32_mut::<E, C>(acc0) else {
@@ -4077,6 +4108,12 @@ pub(crate) fn band_flush<E: Entry, const C: usize>(acc0: &mut [E]) -> bool {
     let n = a.len();
     let base = a.as_mut_ptr();
     let cs = base.cast::<u16>().wrapping_add(n);
+    let at = column_sums_at(base, n);
+    if at != n {
+        // SAFETY: u16 at..at + n and n..2 n are inside the storage's 2 n u16 (at <= n); an
+        // overlapping copy (memmove), u16 to u16.
+        unsafe { core::ptr::copy(base.cast::<u16>().add(at), cs, n) };
+    }
     let blocks = if matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
         n / BLOCK
     } else {
@@ -5637,7 +5674,7 @@ mod tests {
     /// CPU runs: rows of 0 to 70 texels and a few long ones, column sums that start dirty (up
     /// to 6 rows of the largest texel, the most a tile row of 8 leaves before its last row),
     /// texels all 255, random, or random below the largest whose local sums fit `k` bits. The
-    /// column sums after the row (the upper half of `acc0`), the boundaries (the running sum of
+    /// column sums after the row (in `acc0` from `column_sums_at`), the boundaries (the running sum of
     /// the tiles' column totals), the local sums (the prefix of the column sums inside each
     /// tile) and their counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10
     /// and 12 bits from bits 16, 0 and 8 and of 14 bits from bit 3 (not byte-aligned: nothing
@@ -5699,7 +5736,7 @@ mod tests {
                     };
                     let t: Vec<u8> = (0..n).map(|_| texel(&mut seed)).collect();
                     let cs0: Vec<u16> = (0..n).map(|_| u16::from(texel(&mut seed)) * 6).collect();
-                    // acc0's storage: the column sums in u16 n..2 n, the lower half dirty.
+                    // acc0's storage: the column sums from column_sums_at, the rest dirty.
                     let (_, mut acc0) = band_storage(&cs0);
                     // The reference.
                     let cs: Vec<u16> = cs0.iter().zip(&t).map(|(c, &x)| c + u16::from(x)).collect();
@@ -5760,12 +5797,7 @@ mod tests {
                         0
                     };
                     assert_eq!((kb, kl, kp), (nb, nl, want_kp), "n {n} k {k} bit {bit}");
-                    let cs_got: Vec<u16> = acc0
-                        .iter()
-                        .flat_map(|w| [*w as u16, (w >> 16) as u16])
-                        .skip(n)
-                        .collect();
-                    assert_eq!(cs_got, cs, "column sums, n {n}");
+                    assert_eq!(column_sums_in(&acc0), cs, "column sums, n {n}");
                     assert_eq!(&bnd[..nb], &want_b[..], "boundaries, n {n}");
                     assert_eq!(bnd[nb], 0xdead_beef);
                     assert_eq!(
@@ -5940,7 +5972,7 @@ mod tests {
             }
             let applies = band_rows_apply::<u8, u32, 1>(n, k, true);
             for exact in [true, false] {
-                let (_, mut acc) = band_storage(&std::vec![0u16; n]);
+                let (halves, mut acc) = band_storage(&std::vec![0u16; n]);
                 let mut words = noise.clone();
                 let mut bnd = std::vec![0u32; r * nb];
                 let hint = Some((words.as_ptr(), words.len()));
@@ -5956,12 +5988,13 @@ mod tests {
                 if ran {
                     assert_eq!(words, want_w, "{what}");
                     assert_eq!(bnd, want_b, "{what}");
-                    // The column sums (u16 n..2 n: the upper n / 2 words); the words below
-                    // are the AVX2 run's scratch (its 16-bit local sums), untouched where the
-                    // kernel packs in its pass.
-                    assert_eq!(acc[n / 2..], acc_ref[n / 2..], "{what}");
+                    // The column sums; the rest of the storage is the AVX2 run's scratch (its
+                    // 16-bit local sums), untouched where the kernel packs in its pass.
+                    assert_eq!(column_sums_in(&acc), column_sums_in(&acc_ref), "{what}");
                     if vbmi() && Kernel::best() == Kernel::Avx512Vnni {
-                        assert_eq!(acc, acc_ref, "{what}");
+                        let (after, at) = (halves_of(&acc), column_sums_at(acc.as_ptr(), n));
+                        assert_eq!(after[..at], halves[..at], "{what}");
+                        assert_eq!(after[at + n..], halves[at + n..], "{what}");
                     }
                 } else {
                     assert_eq!(words, noise, "{what}");
@@ -6012,6 +6045,103 @@ mod tests {
         }
     }
 
+    /// The column sums' place (`column_sums_at`) wherever acc_0's storage starts: from each of 8
+    /// word offsets into a larger allocation (every 32-byte alignment of the storage, so every
+    /// shift of 0 to 15 `u16`), 4 band rows (one by one, or as one `band_rows` run where it
+    /// applies), then either `band_flush`, whose accumulator must equal the reference form of
+    /// the rows' column sums (local sums inside each tile, the running sum at each boundary),
+    /// or a row that ends the tile row (`band_end_row`), whose boundaries, local sums and level
+    /// above must equal those from offset 0, with the column sums cleared; the run's packed
+    /// words and boundaries too. Rows of 100 (below 128: the column sums at `u16` `n`), 128,
+    /// 200, 256 and 1,000.
+    #[test]
+    fn band_form_wherever_the_storage_starts() {
+        extern crate std;
+        use std::vec::Vec;
+        let sizes: &[usize] = if cfg!(miri) {
+            &[100, 128]
+        } else {
+            &[100, 128, 200, 256, 1000]
+        };
+        let mut seed = 0x51a7_ed0f_f5e7_0001u64;
+        for kernel in [Kernel::Avx2, Kernel::Avx512Vnni]
+            .into_iter()
+            .filter(|k| k.available())
+        {
+            kernel.cap(|| {
+                for &n in sizes {
+                    let (nb, nl, r) = (n / 8, n - n / 8, 4);
+                    let rows: Vec<Vec<u8>> = (0..=r)
+                        .map(|_| (0..n).map(|_| rng(&mut seed)).collect())
+                        .collect();
+                    let refs: Vec<&[u8]> = rows[..r].iter().map(|v| v.as_slice()).collect();
+                    // The reference form of the first r rows' column sums.
+                    let (mut form, mut run, mut inner) = (Vec::new(), 0u32, 0u32);
+                    for i in 0..n {
+                        inner += refs.iter().map(|row| u32::from(row[i])).sum::<u32>();
+                        if (i + 1) % 8 == 0 {
+                            run += inner;
+                            inner = 0;
+                            form.push(run);
+                        } else {
+                            form.push(inner);
+                        }
+                    }
+                    let acc1: Vec<u32> = (0..n as u32).map(|i| i.wrapping_mul(0x9e37)).collect();
+                    let mut first = None;
+                    for o in 0..8 {
+                        let what = std::format!("n {n}, offset {o}, {kernel:?}");
+                        // Band rows, then the flush.
+                        let mut big = std::vec![0u32; n + 8];
+                        let acc0 = &mut big[o..o + n];
+                        let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
+                        for row in &refs {
+                            let none = [(core::ptr::null(), 0); 2];
+                            let got =
+                                band_row::<u8, u32, 1>(row, acc0, &mut bnd, &mut local, none, None);
+                            assert!(got.is_some(), "{what}");
+                        }
+                        assert!(band_flush::<u32, 1>(acc0), "{what}");
+                        assert_eq!(acc0, &form[..], "flushed, {what}");
+                        // Band rows (a run where it applies), then the row that ends the tile row.
+                        let mut big = std::vec![0u32; n + 8];
+                        let acc0 = &mut big[o..o + n];
+                        let mut words = std::vec![0u32; r * 7 * nl / 8 + 8];
+                        let mut run_b = std::vec![0u32; r * nb];
+                        let out = PackTo {
+                            words: &mut words,
+                            bit: 0,
+                            k: 14,
+                            exact: true,
+                        };
+                        if !band_rows::<u8, u32, 1>(&refs, acc0, &mut run_b, None, out) {
+                            for row in &refs {
+                                let none = [(core::ptr::null(), 0); 2];
+                                let got = band_row::<u8, u32, 1>(
+                                    row, acc0, &mut bnd, &mut local, none, None,
+                                );
+                                assert!(got.is_some(), "{what}");
+                            }
+                        }
+                        let mut acc = acc1.clone();
+                        let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
+                        let none = [(core::ptr::null(), 0); 2];
+                        let got = band_end_row::<u8, u32, 1>(
+                            &rows[r], acc0, &mut acc, &mut bnd, &mut local, none, None,
+                        );
+                        assert_eq!(got, Some((nb, nl, 0, 0)), "{what}");
+                        assert!(column_sums_in(acc0).iter().all(|&c| c == 0), "{what}");
+                        let this = (acc, bnd, local, words, run_b);
+                        match &first {
+                            None => first = Some(this),
+                            Some(f) => assert!(*f == this, "end row, {what}"),
+                        }
+                    }
+                }
+            });
+        }
+    }
+
     /// The row lengths of the band tests: 0 to 70 and 255, 256 and 1,000 (a few under Miri).
     fn band_sizes() -> std::vec::Vec<usize> {
         if cfg!(miri) {
@@ -6038,16 +6168,32 @@ mod tests {
     }
 
     /// acc_0's storage in the band form for column sums `cs0` (`n` of them): its `u16`
-    /// halves (the lower `n` dirty, then the column sums) and the words that hold them.
+    /// halves (dirty, the column sums from `column_sums_at` of the words' address) and the
+    /// words that hold them.
     fn band_storage(cs0: &[u16]) -> (std::vec::Vec<u16>, std::vec::Vec<u32>) {
         let n = cs0.len();
-        let mut halves: std::vec::Vec<u16> = (0..n).map(|i| (i as u16) ^ 0x5a5a).collect();
-        halves.extend(cs0);
-        let words = halves
-            .chunks(2)
-            .map(|p| u32::from(p[0]) | u32::from(p[1]) << 16)
-            .collect();
+        let mut words = std::vec![0u32; n];
+        let mut halves: std::vec::Vec<u16> = (0..2 * n).map(|i| (i as u16) ^ 0x5a5a).collect();
+        let at = column_sums_at(words.as_ptr(), n);
+        halves[at..at + n].copy_from_slice(cs0);
+        for (w, p) in words.iter_mut().zip(halves.chunks(2)) {
+            *w = u32::from(p[0]) | u32::from(p[1]) << 16;
+        }
         (halves, words)
+    }
+
+    /// The `u16` halves of `words`, in memory order.
+    fn halves_of(words: &[u32]) -> std::vec::Vec<u16> {
+        words
+            .iter()
+            .flat_map(|w| [*w as u16, (w >> 16) as u16])
+            .collect()
+    }
+
+    /// The column sums acc_0's storage `words` holds in the band form (from `column_sums_at`).
+    fn column_sums_in(words: &[u32]) -> std::vec::Vec<u16> {
+        let (n, at) = (words.len(), column_sums_at(words.as_ptr(), words.len()));
+        halves_of(words)[at..at + n].to_vec()
     }
 
     /// `band_end_row` against an independent reference: rows of 0 to 70 texels and 255, 256, 512,
@@ -6215,12 +6361,14 @@ mod tests {
                     reference(wb0, &want_b[..pb], kb),
                     "boundary row, n {n}, {w:?}"
                 );
-                let after: Vec<u16> = acc0
-                    .iter()
-                    .flat_map(|w| [*w as u16, (w >> 16) as u16])
-                    .collect();
-                assert_eq!(&after[..n], &halves[..n], "lower half, n {n}");
-                assert!(after[n..].iter().all(|&c| c == 0), "column sums, n {n}");
+                // The column sums cleared, the rest of the storage untouched.
+                let (after, at) = (halves_of(&acc0), column_sums_at(acc0.as_ptr(), n));
+                assert_eq!(&after[..at], &halves[..at], "below the column sums, n {n}");
+                assert!(
+                    after[at..at + n].iter().all(|&c| c == 0),
+                    "column sums, n {n}"
+                );
+                assert_eq!(&after[at + n..], &halves[at + n..], "above, n {n}");
             }
         }
         assert_eq!(ran > 0, avx2);
