@@ -5674,8 +5674,8 @@ mod tests {
     /// CPU runs: rows of 0 to 70 texels and a few long ones, column sums that start dirty (up
     /// to 6 rows of the largest texel, the most a tile row of 8 leaves before its last row),
     /// texels all 255, random, or random below the largest whose local sums fit `k` bits. The
-    /// column sums after the row (in `acc0` from `column_sums_at`), the boundaries (the running sum of
-    /// the tiles' column totals), the local sums (the prefix of the column sums inside each
+    /// column sums after the row (in `acc0` from `column_sums_at`), the boundaries (the running
+    /// sum of the tiles' column totals), the local sums (the prefix of the column sums inside each
     /// tile) and their counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10
     /// and 12 bits from bits 16, 0 and 8 and of 14 bits from bit 3 (not byte-aligned: nothing
     /// packed). Packed: with AVX-512 VBMI and exact fields, the pairs of blocks' in the row
