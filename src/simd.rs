@@ -121,11 +121,12 @@
 //!    [`band_row`] checks `acc0.len() = n`, `bnd.len() >= n / 8` and `local.len() >= n - n /
 //!    8` (its 16-bit local sums, `14 (n / 16) + 1` with the last block's overhang, and the
 //!    tail's, fit the `2 (n - n / 8)` halves of `local`'s words) before its kernel touches
-//!    block `b < n / 16`: texels `t[16 b..][..16]`, column sums `u16` `n + 16 b..` of `acc0`'s
-//!    `2 n` halves, local sums `14 b..14 b + 15`, boundaries `2 b`, `2 b + 1` (for four blocks
+//!    block `b < n / 16`: texels `t[16 b..][..16]`, column sums `u16` `c + 16 b..` of `acc0`'s
+//!    `2 n` halves (`c` = [`column_sums_at`], `n - 15 <= c <= n`), local sums `14 b..14 b +
+//!    15`, boundaries `2 b`, `2 b + 1` (for four blocks
 //!    `b..b + 4` at once, `b + 4 <= n / 16`: boundaries `2 b..2 b + 8`, one store). With
 //!    `band512::row_packed` it touches pair `p < n / 32` instead (texels `t[32 p..][..32]`,
-//!    column sums `u16` `n + 32 p..` (32), boundaries `4 p..4 p + 4`), after checking that the
+//!    column sums `u16` `c + 32 p..` (32), boundaries `4 p..4 p + 4`), after checking that the
 //!    `7 k / 2` bytes per pair from byte `bit / 8` lie inside the target's words, and writes
 //!    them as `tiled512::kernel8_packed` does (a full 64-byte store only when it ends inside
 //!    those bytes, else a masked store of exactly the pair's); the 16-bit values of the tail
@@ -145,9 +146,13 @@
 //!    stack (the gathers of 8 steps: 28 words each, stored 32 from `28 s`, into 228; 4 each
 //!    into 32), and writes words `7 kl j..7 kl (j + 1)` and `kb j..kb (j + 1)` of the two
 //!    rows ([`pack_u32`]'s AVX-512 kernel's stores); the AVX2 kernel goes on from block `16
-//!    c`. [`band_flush`] rewrites
-//!    `acc0` in place, forward: word `i` holds the halves of column sums `2 i - n` and
-//!    `2 i + 1 - n`, at most `i`, which a block reads before it writes its words.
+//!    c`. [`band_rows`] checks `acc0.len() = n`, `r n / 8` boundaries and the rows' bytes in
+//!    the target before its kernels, which touch each row as [`band_row`]'s do; on AVX2 each
+//!    row's 16-bit local sums go to `u16` `0..n - n / 8 + 1` of `acc0`'s halves, below `c`
+//!    (`n >= 128`: at most `n - 15`). [`band_flush`] first moves the column sums from `c` to
+//!    `n` (one overlapping copy inside the `2 n` halves), then rewrites `acc0` in place,
+//!    forward: word `i` holds the halves of column sums `2 i - n` and `2 i + 1 - n`, at most
+//!    `i`, which a block reads before it writes its words.
 //!    [`row_u8_u32`] takes slices, `n = min(len)` over all of them; it does the head (the
 //!    `h` entries before `out` reaches 32 bytes: `h < 8`, `h <= n`, and `h = 0` for rows built
 //!    into a table, for rows that end before 32 bytes, and where a non-temporal copy would
@@ -3608,18 +3613,19 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
     T::BITS == 8 && E::BITS == 32 && C == 1
 }
 
-/// Where the band form keeps its `n` column sums inside acc_0's storage of `n` words at
-/// `storage`: the `u16` index of the first. At `n - d`, the `d` (0 to 15) that puts them on a
-/// 32-byte boundary, when `n >= 128`; else at `n` (the upper half). Every band kernel loads and
-/// stores them 32 bytes at a time, so aligned, none of those accesses splits a cache line.
-/// With them at `n` wherever the scratch starts, a tiled build of 1,024^2 took 0.303 ns per
-/// texel where they missed a 32-byte boundary and 0.292 where they fell on one (medians, one
-/// process, the scratch moved to each word offset of 32 bytes in turn); placed here, every
-/// offset took the same (Zen 3, AVX2; docs/benchmarks.md, twenty-third session). Room: they end at `u16` `2 n - d`, inside the
-/// storage; [`band_rows`] keeps a row's `n - n / 8` local sums and one more below them, in
-/// `u16` `0..n - n / 8 + 1`, which is at most `n - 15` from `n / 8 >= 16` on. A function of
-/// the address, so every call on the same storage (a builder's scratch, borrowed for its
-/// life) finds them at the same place; [`band_flush`] moves them back to `n` first.
+/// Where the band form keeps its `n` column sums inside acc_0's storage of `n` words at `storage`:
+/// the `u16` index of the first. At `n - d`, the `d` (0 to 15) that puts them on a 32-byte
+/// boundary, when `n >= 128`; else at `n` (the upper half). The AVX2 kernels load and store them 32
+/// bytes at a time, so aligned, none of those accesses splits a cache line (the AVX-512 ones, 64
+/// bytes at a time, still split one where the start is 32 bytes past 64: not measured). With them
+/// at `n`, a tiled build of 1,024^2 took 0.302 to 0.305 ns per texel where they missed a 32-byte
+/// boundary and 0.292 where they fell on one (medians, one process, the scratch moved to each
+/// 8-byte offset of 64 bytes in turn); placed here, 0.260 to 0.262 at every offset (Zen 3, AVX2;
+/// docs/benchmarks.md, twenty-third session). Room: they end at `u16` `2 n - d`, inside the
+/// storage; [`band_rows`] keeps a row's `n - n / 8` local sums and one more below them, in `u16`
+/// `0..n - n / 8 + 1`, which is at most `n - 15` from `n / 8 >= 16` on. A function of the address,
+/// so every call on the same storage (a builder's scratch, borrowed for its life) finds them at the
+/// same place; [`band_flush`] moves them back to `n` first.
 pub(crate) fn column_sums_at(storage: *const u32, n: usize) -> usize {
     if n < 128 {
         return n;
@@ -3630,20 +3636,20 @@ pub(crate) fn column_sums_at(storage: *const u32, n: usize) -> usize {
     n - past / 2
 }
 
-/// The tiled builder's row step for a row that ends no tile row (`q = 0`), tiles of 8 texels,
-/// in the band form: instead of the level-0 accumulator (per position its local sum or, at a
-/// tile boundary, its total over the tile row's rows so far, 32 bits), the row `acc0` holds
-/// the *column sums* of the tile row's rows so far, 16 bits each, from `u16` index
-/// [`column_sums_at`] of its storage (at or just below its upper half, 32-byte aligned; the
-/// rest unused). The accumulator is a function of them: the local sum at `x` is the prefix of
-/// the column sums inside its tile, and a boundary the prefix of the tiles' totals. Per 16 columns ([`band256::row`]): the row
-/// added to the column sums (one 16-bit add), their prefix inside each tile (a multiply, two
-/// shuffles and two adds within each 128-bit half, which holds one tile: `band256::prefix8`),
-/// the 14 local sums stored as 16-bit values, the two tiles' totals added into the running
-/// boundary sum (four blocks' 8 boundaries by one vector prefix sum, [`band256::row`]). Then
-/// the local sums packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for
-/// `k` = 8, 10, 12 and 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16 on this
-/// path), the rest widened into `local`.
+/// The tiled builder's row step for a row that ends no tile row (`q = 0`), tiles of 8 texels, in
+/// the band form: instead of the level-0 accumulator (per position its local sum or, at a tile
+/// boundary, its total over the tile row's rows so far, 32 bits), the row `acc0` holds the *column
+/// sums* of the tile row's rows so far, 16 bits each, from `u16` index [`column_sums_at`] of its
+/// storage (at or just below its upper half, 32-byte aligned from `n = 128` on; the rest unused).
+/// The accumulator is a function of them: the local sum at `x` is the prefix of the column sums
+/// inside its tile, and a boundary the prefix of the tiles' totals. Per 16 columns
+/// ([`band256::row`]): the row added to the column sums (one 16-bit add), their prefix inside each
+/// tile (a multiply, two shuffles and two adds within each 128-bit half, which holds one tile:
+/// `band256::prefix8`), the 14 local sums stored as 16-bit values, the two tiles' totals added into
+/// the running boundary sum (four blocks' 8 boundaries by one vector prefix sum, [`band256::row`]).
+/// Then the local sums packed as `pack`'s fields straight from 16 bits ([`pack256::even`], for `k`
+/// = 8, 10, 12 and 14 from a byte-aligned `bit`: `kp` fields, a multiple of 16 on this path), the
+/// rest widened into `local`.
 ///
 /// With AVX-512BW, DQ and VBMI, fields below `2^k` (`exact`) and room for them, the pairs of
 /// blocks go through `band512::row_packed` instead, which packs their local sums in the same pass
@@ -3726,10 +3732,10 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     });
     let (run, from, mut kb, mut kl, packed) = if let Some((out, _, k, _)) = fused {
         // SAFETY: AVX-512F, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI, whose
-        // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum
-        // below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (<= n), reads
-        // and writes the column sums cs[..32 pairs] (u16 c..c + 32 pairs <= 2 n of acc0's
-        // storage, c = column_sums_at <= n), writes bnd[..4 pairs] (<= nb) and out[..7 k / 2 pairs] (inside the
+        // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum below
+        // 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (<= n), reads and writes
+        // the column sums cs[..32 pairs] (u16 c..c + 32 pairs <= 2 n of acc0's storage, c =
+        // column_sums_at <= n), writes bnd[..4 pairs] (<= nb) and out[..7 k / 2 pairs] (inside the
         // target's words, checked above, not local's storage); distinct slices.
         let run = unsafe { band512::row_packed(t.as_ptr(), cs, bp, pairs, out, k, ahead) };
         (
@@ -3826,24 +3832,23 @@ pub(crate) fn band_rows_apply<T: Texel, E: Entry, const C: usize>(
         }
 }
 
-/// [`band_row`] for a run of consecutive band rows of one tile row (`rows`, each `n` texels),
-/// exact fields of 8, 10, 12 or 14 bits from a byte-aligned `bit`, the checks and constants
-/// once for the run: with AVX-512BW, DQ and VBMI, whole pairs of blocks (`n` a multiple of
-/// 32), `band512::row_packed` on each row in turn; else with AVX2, `n` a multiple of 128,
-/// `band256::row` and `pack256::even` on each row in turn (the row's 16-bit local sums in u16
-/// `0..n` of `acc0`'s storage, below the column sums, which the band form leaves unused; whole
-/// steps of 16 of them). On AVX2 the run took a tiled build of 1,024^2 from 3.50 to 2.86
-/// instructions per texel (callgrind) and 0.85x to 0.94x the time in three runs (Zen 3;
-/// 4,096^2: 0.96x to 0.99x; docs/benchmarks.md, twentieth session): the builder's per-row
-/// work, and the boundaries packed in one call per run. Row
-/// `j`'s local sums are packed at `bit + j stride_bits` of `out` (the rows of component `(0,
-/// 0)` follow each other: `stride_bits = 28 (n / 32) k`), its `n / 8` boundaries stored at
-/// `bnd[j n / 8..]` (the caller packs them, one call for the run). `ahead`: the words of the
-/// run's boundaries' rows, when the layout is large enough; each row asks, at its pace, for
-/// the packed bytes [`BAND_WORDS_AHEAD`] bytes (at most a row) past its own, and for the next
-/// row's share of `ahead` (the run's last row for those after the run, which the next tile
-/// row's first band row writes: the rows of both components follow each other). Returns
-/// whether it ran; `false` (nothing written) for other types, CPUs, widths or short slices:
+/// [`band_row`] for a run of consecutive band rows of one tile row (`rows`, each `n` texels), exact
+/// fields of 8, 10, 12 or 14 bits from a byte-aligned `bit`, the checks and constants once for the
+/// run: with AVX-512BW, DQ and VBMI, whole pairs of blocks (`n` a multiple of 32),
+/// `band512::row_packed` on each row in turn; else with AVX2, `n` a multiple of 128, `band256::row`
+/// and `pack256::even` on each row in turn (the row's 16-bit local sums in u16 `0..n - n / 8 + 1`
+/// of `acc0`'s storage, below the column sums ([`column_sums_at`]), which the band form leaves
+/// unused; whole steps of 16 of them). On AVX2 the run took a tiled build of 1,024^2 from 3.50 to
+/// 2.86 instructions per texel (callgrind) and 0.85x to 0.94x the time in three runs (Zen 3;
+/// 4,096^2: 0.96x to 0.99x; docs/benchmarks.md, twentieth session): the builder's per-row work, and
+/// the boundaries packed in one call per run. Row `j`'s local sums are packed at `bit + j
+/// stride_bits` of `out` (the rows of component `(0, 0)` follow each other: `stride_bits = 28 (n /
+/// 32) k`), its `n / 8` boundaries stored at `bnd[j n / 8..]` (the caller packs them, one call for
+/// the run). `ahead`: the words of the run's boundaries' rows, when the layout is large enough;
+/// each row asks, at its pace, for the packed bytes [`BAND_WORDS_AHEAD`] bytes (at most a row) past
+/// its own, and for the next row's share of `ahead` (the run's last row for those after the run,
+/// which the next tile row's first band row writes: the rows of both components follow each other).
+/// Returns whether it ran; `false` (nothing written) for other types, CPUs, widths or short slices:
 /// the caller then takes the rows one by one.
 pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     rows: &[&[T]],
@@ -3888,8 +3893,9 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     // Each row's share of the boundaries' words (a hint: never read).
     let share = ahead.map(|(p, len)| (p, len / r.max(1)));
     // The AVX-512 VBMI kernel packs in its pass; else each row is the AVX2 step, which
-    // stores its local sums as 16-bit values in u16 0..n of acc0's storage (the half below
-    // the column sums, unused in the band form), then `pack256::even` from there.
+    // stores its local sums as 16-bit values in u16 0..n - n / 8 + 1 of acc0's storage
+    // (below the column sums at column_sums_at, unused in the band form), then
+    // `pack256::even` from there.
     let packs = Kernel::best() == Kernel::Avx512Vnni && vbmi();
     let (blocks, steps) = (n / BLOCK, (n - nb) / 16);
     for (j, row) in rows.iter().enumerate() {
@@ -3914,14 +3920,14 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
         };
         let bj = bnd.as_mut_ptr().wrapping_add(j * nb);
         if packs {
-            // SAFETY: AVX-512F, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI,
-            // whose detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every
-            // local sum below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs]
-            // (= n, checked above), reads and writes the column sums cs[..32 pairs] (u16 c..c
-            // + n <= 2 n of acc0's n words, c = column_sums_at <= n), writes bj[..4 pairs] = bnd[j nb..(j + 1) nb] (4 pairs =
-            // nb, r nb <= bnd.len()) and to[..stride] = out[j stride..(j + 1) stride] (7 k / 2
-            // pairs = stride, inside the words from byte skip: skip + r stride <= 4
-            // words.len()); distinct slices.
+            // SAFETY: AVX-512F, BW, DQ and VBMI are available (Kernel::best is AVX-512 VNNI, whose
+            // detection includes AVX-512F, and `vbmi`); k is 8, 10, 12 or 14 and every local sum
+            // below 2^k (`exact`: the width proof); the kernel reads t[..32 pairs] (= n, checked
+            // above), reads and writes the column sums cs[..32 pairs] (u16 c..c + n <= 2 n of
+            // acc0's n words, c = column_sums_at <= n), writes bj[..4 pairs] = bnd[j nb..(j + 1)
+            // nb] (4 pairs = nb, r nb <= bnd.len()) and to[..stride] = out[j stride..(j + 1)
+            // stride] (7 k / 2 pairs = stride, inside the words from byte skip: skip + r stride <=
+            // 4 words.len()); distinct slices.
             unsafe { band512::row_packed(t.as_ptr(), cs, bj, pairs, to, k, lines) };
             continue;
         }
@@ -4027,10 +4033,10 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
         Some((chunks, (wl, kl), (wb, kb))) => {
             // SAFETY: AVX-512F, VL, BW and DQ are available (the AVX-512 kernel's detection
             // includes F and VL, `vbmi` BW and DQ); the kernel reads t[..256 chunks] (<= n), reads
-            // and writes the column sums cs[..256 chunks] (u16 c..c + 256 chunks <= 2 n of
-            // acc0's storage, c = column_sums_at <= n) and acc[..256 chunks] (<= n), writes wl[..7 kl chunks] and wb[..kb chunks],
-            // inside them (the chunks' bound above); both widths in 11..=32 (above); distinct
-            // slices.
+            // and writes the column sums cs[..256 chunks] (u16 c..c + 256 chunks <= 2 n of acc0's
+            // storage, c = column_sums_at <= n) and acc[..256 chunks] (<= n), writes wl[..7 kl
+            // chunks] and wb[..kb chunks], inside them (the chunks' bound above); both widths in
+            // 11..=32 (above); distinct slices.
             let run = unsafe {
                 band512::end_row_packed(
                     t.as_ptr(),
@@ -4051,10 +4057,10 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
         None => (0, 0, ahead),
     };
     let first = done / BLOCK;
-    // SAFETY: AVX2 is available (as in band_row); the kernel reads t[16 first..16 blocks],
-    // reads and writes the column sums cs[16 first..16 blocks] (u16 c..c + 16 blocks <= 2 n
-    // of acc0's storage, c = column_sums_at <= n) and acc[16 first..16 blocks] (<= n), writes local[14 first..14
-    // blocks] (<= nl) and bnd[2 first..2 blocks] (<= nb), checked above; distinct slices.
+    // SAFETY: AVX2 is available (as in band_row); the kernel reads t[16 first..16 blocks], reads
+    // and writes the column sums cs[16 first..16 blocks] (u16 c..c + 16 blocks <= 2 n of acc0's
+    // storage, c = column_sums_at <= n) and acc[16 first..16 blocks] (<= n), writes local[14
+    // first..14 blocks] (<= nl) and bnd[2 first..2 blocks] (<= nb), checked above; distinct slices.
     let run = unsafe {
         band256::end_row(
             t.as_ptr().add(BLOCK * first),
@@ -4093,14 +4099,14 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     Some((kb, kl, done - done / 8, done / 8))
 }
 
-/// Turns [`band_row`]'s column sums in `acc0` (`n` positions) back into the level-0
-/// accumulator (the local sums and boundaries of the column sums, `u32`), in place, before a
-/// row that ends a tile row (which adds it into the level above and clears it) or a row that
-/// leaves the band form. First the column sums move from [`column_sums_at`] up to the upper
-/// half (`u16` `n..2 n`; a rare step, one copy). Then forward: word `i` holds `u16` `2 i` and
-/// `2 i + 1`, that is column sums `2 i - n` and `2 i + 1 - n`, at most `i`: read already (a
-/// block of 16 reads its 16 before it writes). With AVX2 per 16 columns ([`band256::flush`]), the rest column by
-/// column. `false` (nothing done) for entries other than `u32` with one channel.
+/// Turns [`band_row`]'s column sums in `acc0` (`n` positions) back into the level-0 accumulator
+/// (the local sums and boundaries of the column sums, `u32`), in place, before a row that ends a
+/// tile row (which adds it into the level above and clears it) or a row that leaves the band form.
+/// First the column sums move from [`column_sums_at`] up to the upper half (`u16` `n..2 n`; a rare
+/// step, one copy). Then forward: word `i` holds `u16` `2 i` and `2 i + 1`, that is column sums `2
+/// i - n` and `2 i + 1 - n`, at most `i`: read already (a block of 16 reads its 16 before it
+/// writes). With AVX2 per 16 columns ([`band256::flush`]), the rest column by column. `false`
+/// (nothing done) for entries other than `u32` with one channel.
 pub(crate) fn band_flush<E: Entry, const C: usize>(acc0: &mut [E]) -> bool {
     let Some(a) = as_u32_mut::<E, C>(acc0) else {
         return false;
@@ -6046,22 +6052,41 @@ mod tests {
     }
 
     /// The column sums' place (`column_sums_at`) wherever acc_0's storage starts: from each of 8
-    /// word offsets into a larger allocation (every 32-byte alignment of the storage, so every
-    /// shift of 0 to 15 `u16`), 4 band rows (one by one, or as one `band_rows` run where it
-    /// applies), then either `band_flush`, whose accumulator must equal the reference form of
-    /// the rows' column sums (local sums inside each tile, the running sum at each boundary),
-    /// or a row that ends the tile row (`band_end_row`), whose boundaries, local sums and level
-    /// above must equal those from offset 0, with the column sums cleared; the run's packed
-    /// words and boundaries too. Rows of 100 (below 128: the column sums at `u16` `n`), 128,
-    /// 200, 256 and 1,000.
+    /// word offsets into a larger allocation (every 32-byte alignment of the storage: the even
+    /// shifts of 0 to 14 `u16` for even `n`, the odd ones of 1 to 15 for odd `n`), 4 band rows
+    /// (one by one, or as one `band_rows` run where it applies, which must run then), then
+    /// either `band_flush`, whose accumulator must equal the reference form of the rows' column
+    /// sums (local sums inside each tile, the running sum at each boundary), or a row that ends
+    /// the tile row (`band_end_row`, with packing targets of 23 and 32 bits, which AVX-512 VBMI
+    /// fills for whole chunks of 256 columns), whose level above, boundaries and local sums
+    /// (packed or not) must equal the level above plus the form of all 5 rows, with the column
+    /// sums cleared; the run's packed words and boundaries must equal those from offset 0.
+    /// Rows of 100 (below 128: the column sums at `u16` `n`), 128, 201, 256 and 1,000 (129
+    /// and 256 under Miri).
     #[test]
     fn band_form_wherever_the_storage_starts() {
         extern crate std;
         use std::vec::Vec;
         let sizes: &[usize] = if cfg!(miri) {
-            &[100, 128]
+            &[129, 256]
         } else {
-            &[100, 128, 200, 256, 1000]
+            &[100, 128, 201, 256, 1000]
+        };
+        // The reference form of rows' column sums: the local sums inside each tile, the running
+        // sum at each boundary.
+        let form_of = |rows: &[&[u8]], n: usize| {
+            let (mut form, mut run, mut inner) = (Vec::new(), 0u32, 0u32);
+            for i in 0..n {
+                inner += rows.iter().map(|row| u32::from(row[i])).sum::<u32>();
+                if (i + 1) % 8 == 0 {
+                    run += inner;
+                    inner = 0;
+                    form.push(run);
+                } else {
+                    form.push(inner);
+                }
+            }
+            form
         };
         let mut seed = 0x51a7_ed0f_f5e7_0001u64;
         for kernel in [Kernel::Avx2, Kernel::Avx512Vnni]
@@ -6074,20 +6099,29 @@ mod tests {
                     let rows: Vec<Vec<u8>> = (0..=r)
                         .map(|_| (0..n).map(|_| rng(&mut seed)).collect())
                         .collect();
-                    let refs: Vec<&[u8]> = rows[..r].iter().map(|v| v.as_slice()).collect();
-                    // The reference form of the first r rows' column sums.
-                    let (mut form, mut run, mut inner) = (Vec::new(), 0u32, 0u32);
-                    for i in 0..n {
-                        inner += refs.iter().map(|row| u32::from(row[i])).sum::<u32>();
-                        if (i + 1) % 8 == 0 {
-                            run += inner;
-                            inner = 0;
-                            form.push(run);
-                        } else {
-                            form.push(inner);
-                        }
-                    }
-                    let acc1: Vec<u32> = (0..n as u32).map(|i| i.wrapping_mul(0x9e37)).collect();
+                    let refs: Vec<&[u8]> = rows.iter().map(|v| v.as_slice()).collect();
+                    let form = form_of(&refs[..r], n);
+                    // The end row's reference: the level above plus the form of all r + 1 rows,
+                    // split into boundaries and local sums.
+                    let acc1: Vec<u32> =
+                        (0..n as u32).map(|i| i.wrapping_mul(0x9e37_79b9)).collect();
+                    let want_acc: Vec<u32> = acc1
+                        .iter()
+                        .zip(form_of(&refs, n))
+                        .map(|(a, f)| a.wrapping_add(f))
+                        .collect();
+                    let want_b: Vec<u32> = want_acc.iter().skip(7).step_by(8).copied().collect();
+                    let want_l: Vec<u32> = (0..n)
+                        .filter(|i| (i + 1) % 8 != 0)
+                        .map(|i| want_acc[i])
+                        .collect();
+                    let (kl, kb) = (23u32, 32u32);
+                    let noise = |len: usize, salt: u32| -> Vec<u32> {
+                        (0..len as u32)
+                            .map(|i| 0x9e37_79b9u32.rotate_left(i ^ salt))
+                            .collect()
+                    };
+                    let (wl0, wb0) = (noise((nl * 23).div_ceil(32) + 1, 5), noise(nb + 1, 9));
                     let mut first = None;
                     for o in 0..8 {
                         let what = std::format!("n {n}, offset {o}, {kernel:?}");
@@ -6095,7 +6129,7 @@ mod tests {
                         let mut big = std::vec![0u32; n + 8];
                         let acc0 = &mut big[o..o + n];
                         let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
-                        for row in &refs {
+                        for row in &refs[..r] {
                             let none = [(core::ptr::null(), 0); 2];
                             let got =
                                 band_row::<u8, u32, 1>(row, acc0, &mut bnd, &mut local, none, None);
@@ -6114,8 +6148,10 @@ mod tests {
                             k: 14,
                             exact: true,
                         };
-                        if !band_rows::<u8, u32, 1>(&refs, acc0, &mut run_b, None, out) {
-                            for row in &refs {
+                        let ran = band_rows::<u8, u32, 1>(&refs[..r], acc0, &mut run_b, None, out);
+                        assert_eq!(ran, band_rows_apply::<u8, u32, 1>(n, 14, true), "{what}");
+                        if !ran {
+                            for row in &refs[..r] {
                                 let none = [(core::ptr::null(), 0); 2];
                                 let got = band_row::<u8, u32, 1>(
                                     row, acc0, &mut bnd, &mut local, none, None,
@@ -6125,16 +6161,41 @@ mod tests {
                         }
                         let mut acc = acc1.clone();
                         let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
+                        let (mut wl, mut wb) = (wl0.clone(), wb0.clone());
+                        let pack = EndPackTo {
+                            local: (&mut wl, kl),
+                            bnd: (&mut wb, kb),
+                        };
                         let none = [(core::ptr::null(), 0); 2];
                         let got = band_end_row::<u8, u32, 1>(
-                            &rows[r], acc0, &mut acc, &mut bnd, &mut local, none, None,
+                            &rows[r],
+                            acc0,
+                            &mut acc,
+                            &mut bnd,
+                            &mut local,
+                            none,
+                            Some(pack),
                         );
-                        assert_eq!(got, Some((nb, nl, 0, 0)), "{what}");
+                        // Packed in the pass: whole chunks of 256 columns with AVX-512 VBMI.
+                        let chunks = if Kernel::best() == Kernel::Avx512Vnni && vbmi() {
+                            n / 256
+                        } else {
+                            0
+                        };
+                        let (pl, pb) = (224 * chunks, 32 * chunks);
+                        assert_eq!(got, Some((nb, nl, pl, pb)), "{what}");
+                        assert_eq!(acc, want_acc, "level above, {what}");
+                        assert_eq!(&bnd[pb..], &want_b[pb..], "boundaries, {what}");
+                        assert_eq!(&local[pl..], &want_l[pl..], "local sums, {what}");
+                        let packed_l = field_by_field(wl0.clone(), &want_l[..pl], kl);
+                        assert_eq!(wl, packed_l, "packed local sums, {what}");
+                        let packed_b = field_by_field(wb0.clone(), &want_b[..pb], kb);
+                        assert_eq!(wb, packed_b, "packed boundaries, {what}");
                         assert!(column_sums_in(acc0).iter().all(|&c| c == 0), "{what}");
-                        let this = (acc, bnd, local, words, run_b);
+                        let this = (words, run_b);
                         match &first {
                             None => first = Some(this),
-                            Some(f) => assert!(*f == this, "end row, {what}"),
+                            Some(f) => assert!(*f == this, "the run's words, {what}"),
                         }
                     }
                 }
