@@ -122,9 +122,9 @@
 //!    8` (its 16-bit local sums, `14 (n / 16) + 1` with the last block's overhang, and the
 //!    tail's, fit the `2 (n - n / 8)` halves of `local`'s words) before its kernel touches
 //!    block `b < n / 16`: texels `t[16 b..][..16]`, column sums `u16` `c + 16 b..` of `acc0`'s
-//!    `2 n` halves (`c` = [`column_sums_at`], `n - 15 <= c <= n`), local sums `14 b..14 b +
-//!    15`, boundaries `2 b`, `2 b + 1` (for four blocks
-//!    `b..b + 4` at once, `b + 4 <= n / 16`: boundaries `2 b..2 b + 8`, one store). With
+//!    `2 n` halves (`c` = [`column_sums_at`], `n - 15 <= c <= n`), local sums
+//!    `14 b..14 b + 15`, boundaries `2 b`, `2 b + 1` (for four blocks `b..b + 4` at once,
+//!    `b + 4 <= n / 16`: boundaries `2 b..2 b + 8`, one store). With
 //!    `band512::row_packed` it touches pair `p < n / 32` instead (texels `t[32 p..][..32]`,
 //!    column sums `u16` `c + 32 p..` (32), boundaries `4 p..4 p + 4`), after checking that the
 //!    `7 k / 2` bytes per pair from byte `bit / 8` lie inside the target's words, and writes
@@ -3749,9 +3749,8 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
         // SAFETY: AVX2 is available (Kernel::best is AVX2 or AVX-512 VNNI, whose detection
         // includes it); the kernel reads t[..16 blocks], reads and writes the column sums
         // cs[..16 blocks] (u16 c..c + 16 blocks <= 2 n of acc0's storage, c = column_sums_at
-        // <= n), writes loc[..14
-        // blocks + 1] (inside local's 2 nl u16, checked above) and bnd[..2 blocks] (<= nb);
-        // distinct slices.
+        // <= n), writes loc[..14 blocks + 1] (inside local's 2 nl u16, checked above) and
+        // bnd[..2 blocks] (<= nb); distinct slices.
         let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
         (run, BLOCK * blocks, 2 * blocks, 14 * blocks, 0)
     };
