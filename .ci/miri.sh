@@ -75,32 +75,43 @@ step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512
 # The last set adds AVX-512BW, DQ and VBMI: the tiled kernels that pack their local sums in the row
 # step, tiled512::kernel8_packed, band512::row_packed and band512::end_row_packed (Miri emulates
 # their loads and stores; the word and byte permutes it cannot emulate are computed field by
-# field under cfg(miri), src/simd.rs). Miri is single-threaded: two sets at a time, each in its
-# own target dir with its own log, printed when both are done.
+# field under cfg(miri), src/simd.rs). Miri is single-threaded: two sets run at a time, each in
+# its own target dir with its own log, the longest first and the next set started as soon as
+# either slot frees (on a Zen 3 the sets took about 125, 227, 267 and 327 s: 452 and 494 s of
+# work per slot this way, against 227 + 327 s when the sets went in fixed pairs); the logs are
+# printed in the sets' order when all are done.
 simd_pass() {
   local flags=$1 log=$2
   RUSTFLAGS="$flags" CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-target}/miri-$(echo "x$flags" | tr -cd 'a-z0-9')" \
     cargo +nightly miri test -p texsat --lib --features simd --locked -- simd:: cast:: >"$log" 2>&1
 }
+# From the narrowest set to the widest; the queue below starts them from the last.
+sets=(
+  ""
+  "-C target-feature=+avx2"
+  "-C target-feature=+avx512f,+avx512vl,+avx512vnni"
+  "-C target-feature=+avx512f,+avx512vl,+avx512vnni,+avx512bw,+avx512dq,+avx512vbmi"
+)
 logs=$(mktemp -d)
 trap 'rm -rf "$logs"' EXIT
+running=0
+for ((i = ${#sets[@]} - 1; i >= 0; i--)); do
+  if [ "$running" -ge 2 ]; then
+    # A slot frees when either set ends (its status is in its file, read below).
+    wait -n || true
+    running=$((running - 1))
+  fi
+  { s=0; simd_pass "${sets[$i]}" "$logs/$i.log" || s=$?; echo "$s" >"$logs/$i.status"; } &
+  running=$((running + 1))
+done
+wait
 failed=0
-pair() {
-  local a=$1 b=$2 pa pb sa=0 sb=0
-  simd_pass "$a" "$logs/a.log" &
-  pa=$!
-  simd_pass "$b" "$logs/b.log" &
-  pb=$!
-  wait "$pa" || sa=$?
-  wait "$pb" || sb=$?
-  printf -- '--- Miri, simd::, RUSTFLAGS="%s" (exit %s) ---\n' "$a" "$sa"
-  cat "$logs/a.log"
-  printf -- '--- Miri, simd::, RUSTFLAGS="%s" (exit %s) ---\n' "$b" "$sb"
-  cat "$logs/b.log"
-  if [ "$sa" -ne 0 ] || [ "$sb" -ne 0 ]; then failed=1; fi
-}
-pair "" "-C target-feature=+avx2"
-pair "-C target-feature=+avx512f,+avx512vl,+avx512vnni" "-C target-feature=+avx512f,+avx512vl,+avx512vnni,+avx512bw,+avx512dq,+avx512vbmi"
+for i in "${!sets[@]}"; do
+  s=$(cat "$logs/$i.status" 2>/dev/null || echo missing)
+  printf -- '--- Miri, simd::, RUSTFLAGS="%s" (exit %s) ---\n' "${sets[$i]}" "$s"
+  cat "$logs/$i.log"
+  if [ "$s" != 0 ]; then failed=1; fi
+done
 if [ "$failed" -ne 0 ]; then
   echo "miri: the simd kernels FAILED under Miri (logs above)"
   exit 1
