@@ -77,9 +77,10 @@ step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512
 # their loads and stores; the word and byte permutes it cannot emulate are computed field by
 # field under cfg(miri), src/simd.rs). Miri is single-threaded: two sets run at a time, each in
 # its own target dir with its own log, the longest first and the next set started as soon as
-# either slot frees (on a Zen 3 the sets took about 125, 227, 267 and 327 s: 452 and 494 s of
-# work per slot this way, against 227 + 327 s when the sets went in fixed pairs); the logs are
-# printed in the sets' order when all are done.
+# either slot frees (on a Zen 3 the sets' tests take 125, 227, 267 and 327 s by Miri's own
+# clock, which counts interpreted work and reads the same in every run: 452 and 494 s per slot
+# this way, against 227 + 327 s when the sets went in fixed pairs); the logs are printed in the
+# sets' order when all are done.
 simd_pass() {
   local flags=$1 log=$2
   RUSTFLAGS="$flags" CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-target}/miri-$(echo "x$flags" | tr -cd 'a-z0-9')" \
