@@ -3021,19 +3021,49 @@ impl TexturePages {
     }
 }
 
+/// When the AVX2 band rows' kernels ([`band_row`], [`band_rows`], [`band_end_row`]) ask for the
+/// lines of their `ahead` slices ([`Prefetch`]): chosen per layout by its size, as the flat
+/// build chooses its non-temporal stores ([`Pace::for_layout`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pace {
+    /// All of them by the middle of the row ([`Prefetch::new`]): for a layout that stays in
+    /// the caches, whose lines come back soon, so the packing after the row step finds every
+    /// one of them there.
+    Early,
+    /// Evenly over the row ([`Prefetch::even`]): for a layout past the caches, whose lines
+    /// come from memory. Asked for in the first half of the row, twice as many misses are in
+    /// flight at once, and the kernel waits on them: on a Zen 3 guest (AVX2, 2 MiB pages) a
+    /// tiled build of 4,096^2 took 0.93x to 0.97x the time with the band rows and the rows
+    /// that end a tile row paced evenly, one of 1,024^2 1.03x to 1.05x
+    /// (`tools/examples/build_speed.py --servers`; docs/benchmarks.md, twenty-fifth session).
+    Even,
+}
+
+impl Pace {
+    /// [`Pace::Even`] for a layout of `bytes` past the caches ([`past_the_caches`]), else
+    /// [`Pace::Early`].
+    pub(crate) const fn for_layout(bytes: usize) -> Pace {
+        if past_the_caches(bytes) {
+            Pace::Even
+        } else {
+            Pace::Early
+        }
+    }
+}
+
 /// The prefetch schedule of the tiled row kernels ([`tiled512::kernel`], [`tiled256::kernel`], the
 /// band rows' kernels): the 64-byte lines of each `ahead` slice (the words the row's fields go to,
 /// or [`band_rows`]' next row's), spread over the first half of the row's blocks
-/// ([`Prefetch::new`]) or over all of them a lead ahead ([`Prefetch::paced`]), asked for a group of
-/// blocks at a time.
+/// ([`Prefetch::new`]), over all of them ([`Prefetch::even`]) or over all of them a lead ahead
+/// ([`Prefetch::paced`]), asked for a group of blocks at a time.
 struct Prefetch {
     ahead: Ahead,
     lines: [usize; 2],
     asked: [usize; 2],
     /// Lines due per block, `2 lines / blocks` in 16.16 fixed point (one division per row, not
-    /// per group), or `lines / blocks` ([`Prefetch::paced`]).
+    /// per group), or `lines / blocks` ([`Prefetch::even`], [`Prefetch::paced`]).
     rate: [usize; 2],
-    /// Blocks ahead of the one asked for ([`Prefetch::paced`]; 0 for [`Prefetch::new`]).
+    /// Blocks ahead of the one asked for ([`Prefetch::paced`]; 0 for the others).
     lead: usize,
 }
 
@@ -3042,6 +3072,21 @@ impl Prefetch {
     /// row step (the packing then needs every line soon after it).
     fn new(ahead: Ahead, blocks: usize) -> Self {
         Self::with_rate(ahead, blocks, 17, 0)
+    }
+
+    /// [`Prefetch::new`] or [`Prefetch::even`], as `pace` says.
+    fn at_pace(ahead: Ahead, blocks: usize, pace: Pace) -> Self {
+        match pace {
+            Pace::Early => Self::new(ahead, blocks),
+            Pace::Even => Self::even(ahead, blocks),
+        }
+    }
+
+    /// The lines at the row's pace, evenly from its first block to its last (those due by the
+    /// end of each group of blocks asked for before the group): for the band rows' kernels
+    /// when the layout is past the caches ([`Pace::Even`]).
+    fn even(ahead: Ahead, blocks: usize) -> Self {
+        Self::with_rate(ahead, blocks, 16, 0)
     }
 
     /// The lines at the row's pace, `lead` blocks ahead of the block asked for: for kernels
@@ -3125,6 +3170,13 @@ impl Prefetch {
     /// A stream whose lines are all asked for costs one comparison per group.
     #[inline(always)]
     fn ask(&mut self, end: usize) {
+        self.ask_with(end, |p| hint(p.cast()));
+    }
+
+    /// [`Prefetch::ask`] with `each` called on each line's first word instead of asking for it
+    /// (the tests record the schedule).
+    #[inline(always)]
+    fn ask_with(&mut self, end: usize, mut each: impl FnMut(*const u32)) {
         for r in 0..2 {
             let (asked, lines) = (self.asked[r], self.lines[r]);
             if asked >= lines {
@@ -3137,7 +3189,7 @@ impl Prefetch {
             let mut left = due.saturating_sub(asked);
             // The lines asked..due < lines of the slice `ahead[r]` (16 line < len), which may
             // lie past the words ([`band_rows`] asks for the next row's): hints.
-            let ask = |p: *const u32| hint(p.cast());
+            let mut ask = |p: *const u32| each(p);
             while left >= 4 {
                 ask(at);
                 ask(at.wrapping_add(16));
@@ -3668,7 +3720,7 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
     acc0: &mut [E],
     bnd: &mut [E],
     local: &mut [E],
-    ahead: Ahead,
+    (ahead, pace): (Ahead, Pace),
     pack: Option<PackTo<'_>>,
 ) -> Option<(usize, usize, usize)> {
     if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
@@ -3751,7 +3803,7 @@ pub(crate) fn band_row<T: Texel, E: Entry, const C: usize>(
         // cs[..16 blocks] (u16 c..c + 16 blocks <= 2 n of acc0's storage, c = column_sums_at
         // <= n), writes loc[..14 blocks + 1] (inside local's 2 nl u16, checked above) and
         // bnd[..2 blocks] (<= nb); distinct slices.
-        let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, ahead) };
+        let run = unsafe { band256::row(t.as_ptr(), cs, loc, bp, blocks, (ahead, pace)) };
         (run, BLOCK * blocks, 2 * blocks, 14 * blocks, 0)
     };
     // The tail, column by column (it starts on a tile boundary).
@@ -3853,7 +3905,7 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
     rows: &[&[T]],
     acc0: &mut [E],
     bnd: &mut [E],
-    ahead: Option<(*const u32, usize)>,
+    (ahead, pace): (Option<(*const u32, usize)>, Pace),
     out: PackTo<'_>,
 ) -> bool {
     let n = acc0.len();
@@ -3941,7 +3993,7 @@ pub(crate) fn band_rows<T: Texel, E: Entry, const C: usize>(
         // value below 2^k (`exact`: the width proof), and writes to[..2 k steps] (= stride, as
         // above); distinct slices.
         unsafe {
-            band256::row(t.as_ptr(), cs, loc, bj, blocks, lines);
+            band256::row(t.as_ptr(), cs, loc, bj, blocks, (lines, pace));
             pack256::even_u16(k, true, loc.cast::<u8>().cast_const(), to, steps);
         }
     }
@@ -3987,7 +4039,7 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
     acc: &mut [E],
     bnd: &mut [E],
     local: &mut [E],
-    ahead: Ahead,
+    (ahead, pace): (Ahead, Pace),
     pack: Option<EndPackTo<'_>>,
 ) -> Option<(usize, usize, usize, usize)> {
     if !band_types::<T, E, C>() || !matches!(Kernel::best(), Kernel::Avx2 | Kernel::Avx512Vnni) {
@@ -4067,7 +4119,7 @@ pub(crate) fn band_end_row<T: Texel, E: Entry, const C: usize>(
             ap.add(BLOCK * first),
             (bp.add(2 * first), lp.add(14 * first)),
             blocks - first,
-            ahead,
+            (ahead, pace),
             run,
         )
     };
@@ -4230,9 +4282,9 @@ mod band256 {
         loc: *mut u16,
         bnd: *mut u32,
         blocks: usize,
-        ahead: Ahead,
+        (ahead, pace): (Ahead, Pace),
     ) -> u32 {
-        let mut prefetch = Prefetch::new(ahead, blocks);
+        let mut prefetch = Prefetch::at_pace(ahead, blocks, pace);
         let seven = lane7();
         let prefix = Prefix::new();
         // The running sum in every lane.
@@ -4402,10 +4454,10 @@ mod band256 {
         acc: *mut u32,
         (bnd, local): (*mut u32, *mut u32),
         blocks: usize,
-        ahead: Ahead,
+        (ahead, pace): (Ahead, Pace),
         run: u32,
     ) -> u32 {
-        let mut prefetch = Prefetch::new(ahead, blocks);
+        let mut prefetch = Prefetch::at_pace(ahead, blocks, pace);
         let seven = lane7();
         let prefix = Prefix::new();
         let zero = _mm256_setzero_si256();
@@ -5690,6 +5742,58 @@ mod tests {
     /// bit 8; masked for the others, whose local sums pass `2^k` (so a missing mask fails).
     /// Then `band_flush` gives the level-0 accumulator of the column sums (local sums,
     /// boundaries at multiples of 8).
+    /// Each pace asks for every line of both slices once, in order, the last by the row's
+    /// last group: [`Pace::Even`] by the end of the group ending at block `e` the `ceil(L e /
+    /// B)` lines due there (one more at most, from the rounded-up rate), [`Pace::Early`] twice
+    /// as many (all of them by the group that holds the middle block). `L` lines (slices of
+    /// `16 L - 3` words: the last line partial), `B` blocks, groups of [`Prefetch::GROUP`]
+    /// blocks as [`Prefetch::for_blocks`] asks. Records the schedule: nothing is asked for.
+    #[test]
+    fn prefetch_asks_every_line_once_at_its_pace() {
+        let bases = [
+            core::ptr::null::<u32>().wrapping_add(1 << 20),
+            core::ptr::null::<u32>().wrapping_add(1 << 24),
+        ];
+        let blocks_list: std::vec::Vec<usize> = if cfg!(miri) {
+            std::vec![1, 16, 17, 256]
+        } else {
+            (1..=300).collect()
+        };
+        for &blocks in &blocks_list {
+            for lines in [0usize, 1, 2, 5, 16, 25, 98, 130, 400] {
+                for pace in [Pace::Early, Pace::Even] {
+                    let len = (16 * lines).saturating_sub(3);
+                    let ahead: Ahead = [(bases[0], len), (bases[1], len / 2 + 1)];
+                    let want = ahead.map(|(_, l)| l.div_ceil(16));
+                    let mut p = Prefetch::at_pace(ahead, blocks, pace);
+                    let mut got = [std::vec::Vec::new(), std::vec::Vec::new()];
+                    let mut from = 0;
+                    while from < blocks {
+                        let end = (from + Prefetch::GROUP).min(blocks);
+                        p.ask_with(end, |q| {
+                            let r = usize::from(q.addr() >= bases[1].addr());
+                            got[r].push((q.addr() - bases[r].addr()) / 64);
+                        });
+                        for r in 0..2 {
+                            let l = want[r];
+                            let scale = if pace == Pace::Even { 1 } else { 2 };
+                            let due = (scale * l * end).div_ceil(blocks).min(l);
+                            let what =
+                                std::format!("{pace:?}, {blocks} blocks, {l} lines, end {end}");
+                            assert!(got[r].len() >= due, "{what}: {} asked", got[r].len());
+                            assert!(got[r].len() <= (due + 1).min(l), "{what}: {}", got[r].len());
+                        }
+                        from = end;
+                    }
+                    for r in 0..2 {
+                        let all: std::vec::Vec<usize> = (0..want[r]).collect();
+                        assert_eq!(got[r], all, "{pace:?}, {blocks} blocks, slice {r}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn band_rows_equal_the_reference() {
         // Each kernel this CPU runs: with AVX-512BW and VBMI the local sums of whole pairs of
@@ -5779,7 +5883,7 @@ mod tests {
                         &mut acc0,
                         &mut bnd[..nb],
                         &mut local[..nl],
-                        [(core::ptr::null(), 0); 2],
+                        ([(core::ptr::null(), 0); 2], Pace::Early),
                         pack,
                     );
                     if !avx2 {
@@ -5881,7 +5985,7 @@ mod tests {
                         &mut acc0,
                         &mut bnd,
                         &mut local,
-                        [(core::ptr::null(), 0); 2],
+                        ([(core::ptr::null(), 0); 2], Pace::Early),
                         Some(PackTo {
                             words: &mut words,
                             bit: 0,
@@ -5954,7 +6058,7 @@ mod tests {
                     &mut acc_ref,
                     &mut want_b[j * nb..(j + 1) * nb],
                     &mut local,
-                    [(core::ptr::null(), 0); 2],
+                    ([(core::ptr::null(), 0); 2], Pace::Early),
                     Some(PackTo {
                         words: &mut want_w[w0..],
                         bit: b0,
@@ -5977,6 +6081,8 @@ mod tests {
             }
             let applies = band_rows_apply::<u8, u32, 1>(n, k, true);
             for exact in [true, false] {
+                // Both paces (they move only the hints, never the output).
+                let pace = if exact { Pace::Even } else { Pace::Early };
                 let (halves, mut acc) = band_storage(&std::vec![0u16; n]);
                 let mut words = noise.clone();
                 let mut bnd = std::vec![0u32; r * nb];
@@ -5987,7 +6093,7 @@ mod tests {
                     k,
                     exact,
                 };
-                let ran = band_rows::<u8, u32, 1>(&refs, &mut acc, &mut bnd, hint, out);
+                let ran = band_rows::<u8, u32, 1>(&refs, &mut acc, &mut bnd, (hint, pace), out);
                 let what = std::format!("n {n}, {r} rows, k {k}, skip {skip}, exact {exact}");
                 assert_eq!(ran, applies && exact, "{what}");
                 if ran {
@@ -6019,7 +6125,11 @@ mod tests {
                     exact: true,
                 };
                 assert!(!band_rows::<u8, u32, 1>(
-                    &refs, &mut acc, &mut bnd, None, out
+                    &refs,
+                    &mut acc,
+                    &mut bnd,
+                    (None, Pace::Early),
+                    out
                 ));
                 assert_eq!(words, noise[..short]);
             }
@@ -6130,8 +6240,14 @@ mod tests {
                         let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
                         for row in &refs[..r] {
                             let none = [(core::ptr::null(), 0); 2];
-                            let got =
-                                band_row::<u8, u32, 1>(row, acc0, &mut bnd, &mut local, none, None);
+                            let got = band_row::<u8, u32, 1>(
+                                row,
+                                acc0,
+                                &mut bnd,
+                                &mut local,
+                                (none, Pace::Even),
+                                None,
+                            );
                             assert!(got.is_some(), "{what}");
                         }
                         assert!(band_flush::<u32, 1>(acc0), "{what}");
@@ -6147,13 +6263,24 @@ mod tests {
                             k: 14,
                             exact: true,
                         };
-                        let ran = band_rows::<u8, u32, 1>(&refs[..r], acc0, &mut run_b, None, out);
+                        let ran = band_rows::<u8, u32, 1>(
+                            &refs[..r],
+                            acc0,
+                            &mut run_b,
+                            (None, Pace::Even),
+                            out,
+                        );
                         assert_eq!(ran, band_rows_apply::<u8, u32, 1>(n, 14, true), "{what}");
                         if !ran {
                             for row in &refs[..r] {
                                 let none = [(core::ptr::null(), 0); 2];
                                 let got = band_row::<u8, u32, 1>(
-                                    row, acc0, &mut bnd, &mut local, none, None,
+                                    row,
+                                    acc0,
+                                    &mut bnd,
+                                    &mut local,
+                                    (none, Pace::Even),
+                                    None,
                                 );
                                 assert!(got.is_some(), "{what}");
                             }
@@ -6172,7 +6299,7 @@ mod tests {
                             &mut acc,
                             &mut bnd,
                             &mut local,
-                            none,
+                            (none, Pace::Early),
                             Some(pack),
                         );
                         // Packed in the pass: whole chunks of 256 columns with AVX-512 VBMI.
@@ -6383,7 +6510,7 @@ mod tests {
                     &mut acc,
                     &mut bnd[..nb],
                     &mut local[..nl],
-                    [(core::ptr::null(), 0); 2],
+                    ([(core::ptr::null(), 0); 2], Pace::Early),
                     pack,
                 );
                 if !avx2 {

@@ -2287,6 +2287,13 @@ mod row_step_tests {
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 const PREFETCH_MIN_WORDS: usize = 1 << 16;
 
+/// When the band rows' kernels ask for the lines of a layout of `words` words
+/// (`simd::Pace::for_layout` of its bytes; a size past `usize` is past the caches).
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+fn pace_for(words: usize) -> crate::simd::Pace {
+    crate::simd::Pace::for_layout(words.saturating_mul(4))
+}
+
 /// Builds a [`Tiled`] layout one texture row at a time, holding one accumulator row per y
 /// component (two for one level of tiles) plus one row of fields.
 ///
@@ -2363,6 +2370,9 @@ struct BandPlan {
     split: usize,
     /// The layout is large enough for prefetch hints (`PREFETCH_MIN_WORDS`).
     prefetch: bool,
+    /// When the band rows' kernels ask for their lines: evenly over the row for a layout past
+    /// the caches (`simd::Pace::for_layout`).
+    pace: crate::simd::Pace,
     /// No modulus: every local sum is below `2^k` (the width proof), packed unmasked.
     exact: bool,
     /// The layout's words (`Geometry::words`), for the refusal of short storage.
@@ -2488,6 +2498,7 @@ impl BandPlan {
             nl,
             split,
             prefetch: g.words >= PREFETCH_MIN_WORDS,
+            pace: pace_for(g.words),
             exact: g.spec.modulus.is_none(),
             words: g.words,
         })
@@ -2779,7 +2790,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
         // The local sums' component row, which the row step may pack into directly (with
         // `simd`; the rest of its fields below). Not on other targets (flash).
         #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-        let (ahead, pack) = {
+        let (ahead, pace, pack) = {
             let mut ahead: Ahead = [(core::ptr::null(), 0); 2];
             let mut rows = [(0usize, 0usize); 2];
             for (p, (a, r)) in ahead.iter_mut().zip(&mut rows).enumerate() {
@@ -2801,6 +2812,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             if g.words < PREFETCH_MIN_WORDS {
                 ahead = [(core::ptr::null(), 0); 2];
             }
+            let pace = pace_for(g.words);
             let [row0, _] = rows;
             let (bit0, k0) = g
                 .component(0, q)
@@ -2809,6 +2821,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             let exact = g.spec.modulus.is_none();
             (
                 ahead,
+                pace,
                 words.get_mut(row0.0..row0.1).map(|w| (w, bit0, k0, exact)),
             )
         };
@@ -2828,12 +2841,20 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
                 k,
                 exact,
             });
-            crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, pack)
+            crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, (ahead, pace), pack)
         } else if band_end {
             // q = 1: `lower` is acc_0's storage (n positions from its first), in the band form.
             let acc0 = lower.and_then(|l| l.get_mut(..n)).ok_or(short)?;
-            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, None)
-                .map(|(kb, kl, _, _)| (kb, kl, 0))
+            crate::simd::band_end_row::<T, E, C>(
+                texels,
+                acc0,
+                acc,
+                bnd_out,
+                local,
+                (ahead, pace),
+                None,
+            )
+            .map(|(kb, kl, _, _)| (kb, kl, 0))
         } else {
             row_fields::<T, E, C>(texels, lower, acc, t, bnd_out, local, ahead, pack)
         };
@@ -3067,7 +3088,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             k: plan.local.bits,
             exact: plan.exact,
         };
-        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, ahead, out) {
+        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, (ahead, plan.pace), out) {
             return Ok(0);
         }
         if !pack_fields(words, at1, bnd, plan.bnd.bits) {
@@ -3112,9 +3133,15 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             k: plan.local.bits,
             exact: plan.exact,
         };
-        let (kb, kl, kp) =
-            crate::simd::band_row::<T, E, C>(texels, acc, bnd_out, local, ahead, Some(pack))
-                .ok_or(short)?;
+        let (kb, kl, kp) = crate::simd::band_row::<T, E, C>(
+            texels,
+            acc,
+            bnd_out,
+            local,
+            (ahead, plan.pace),
+            Some(pack),
+        )
+        .ok_or(short)?;
         plan.end(
             words,
             [at0, at1],
@@ -3161,8 +3188,15 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             local: (w0, k0),
             bnd: (w1, k1),
         });
-        let packed =
-            crate::simd::band_end_row::<T, E, C>(texels, acc0, acc, bnd_out, local, ahead, pack);
+        let packed = crate::simd::band_end_row::<T, E, C>(
+            texels,
+            acc0,
+            acc,
+            bnd_out,
+            local,
+            (ahead, plan.pace),
+            pack,
+        );
         let (kb, kl, pl, pb) = packed.ok_or(short)?;
         plan.end(
             words,
