@@ -3163,8 +3163,9 @@ impl Prefetch {
     /// Asks for the lines due by the end of the group ending at block `end`: with
     /// [`Prefetch::new`] all of them by the middle of the row (2 lines end / blocks, rounded
     /// up: the last lines are packed soon after the row step, so they need the lead; asking
-    /// for all of them at once measured slower at 4096^2), with [`Prefetch::paced`] those up
-    /// to block `end + lead` (lines (end + lead) / blocks). The lines of a slice (fewer than
+    /// for all of them at once measured slower at 4096^2), with [`Prefetch::even`] those up to
+    /// block `end` (lines end / blocks), with [`Prefetch::paced`] those up to block `end +
+    /// lead` (lines (end + lead) / blocks). The lines of a slice (fewer than
     /// 2^28) times 2^17, and `rate (end + lead) <= 2^17 lines (1 + lead / blocks) + end +
     /// lead`: no overflow on x86-64.
     /// A stream whose lines are all asked for costs one comparison per group.
