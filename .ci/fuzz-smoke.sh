@@ -72,6 +72,7 @@ for t in "${targets[@]}"; do
   running=$((running + 1))
 done
 wait
+failed=0
 for t in "${targets[@]}"; do
   printf '\n=== fuzz smoke: %s, %s s ===\n' "$t" "$SECONDS_EACH"
   status=$(cat "$scratch/$t.status" 2>/dev/null || echo missing)
@@ -79,8 +80,13 @@ for t in "${targets[@]}"; do
   if [ "$status" != 0 ]; then
     tail -n 60 "$scratch/$t.log"
     echo "fuzz smoke: $t FAILED (exit $status; the input is under fuzz/artifacts/$t/)"
-    exit 1
+    failed=$((failed + 1))
   fi
 done
+if [ "$failed" -ne 0 ]; then
+  echo
+  echo "fuzz smoke: $failed of ${#targets[@]} targets FAILED (reports above)"
+  exit 1
+fi
 echo
 echo "fuzz smoke: ${#targets[@]} targets, no crash"

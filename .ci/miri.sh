@@ -78,9 +78,9 @@ step "Miri: the simd feature's unsafe kernels (SSE2, AVX2, AVX-512 VNNI, AVX-512
 # either slot frees (on a Zen 3 the sets' tests take 125, 227, 267 and 327 s by Miri's own
 # clock, which counts interpreted work and reads the same in every run: 452 and 494 s per slot
 # this way, against 227 + 327 s when the sets went in fixed pairs); the logs are printed in the
-# sets' order when all are done. The core's doctests (no features, about 40 s on one core, in
-# Miri's default target dir) are the queue's last and shortest job: they take the slot that
-# frees first (452 + 40 s), where they ran alone before the sets.
+# sets' order when all are done. The core's doctests (no features, about 40 s when they ran alone
+# before the sets, in Miri's default target dir) are the queue's last and shortest job: they
+# take the slot that frees first (after 452 s of the sets' work).
 simd_pass() {
   local flags=$1 log=$2
   RUSTFLAGS="$flags" CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-target}/miri-$(echo "x$flags" | tr -cd 'a-z0-9')" \

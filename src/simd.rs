@@ -4270,7 +4270,7 @@ mod band256 {
     /// instead of 7 for two extracts, three additions and two stores: 5 % of a tiled build of
     /// 1,024^2). The blocks after the last four (at the row's end): each tile's total
     /// extracted and added to the running sum, each sum after a tile stored. The lines of
-    /// `ahead` asked for as in [`tiled256::kernel`].
+    /// `ahead` asked for at `pace` ([`Prefetch::at_pace`]).
     ///
     /// # Safety
     /// The CPU has AVX2; `t` valid for reads of `16 blocks` bytes, `cs` for reads and writes
@@ -4441,8 +4441,8 @@ mod band256 {
     /// sum `run` (that of the columns before them); returns it after them. Per block: 16
     /// texels widened and added to the column sums, which are cleared (one 32-byte store of
     /// zeros); the sums' [`form`] added to `acc` and stored; the new values split into the
-    /// streams ([`tiled256::split`]). The lines of `ahead` asked for as in
-    /// [`tiled256::kernel`].
+    /// streams ([`tiled256::split`]). The lines of `ahead` asked for at `pace`
+    /// ([`Prefetch::at_pace`]).
     ///
     /// # Safety
     /// The CPU has AVX2; `t` valid for reads of `16 blocks` bytes, `cs` for reads and writes
@@ -5728,21 +5728,6 @@ mod tests {
         assert!(ran >= 1);
     }
 
-    /// `band_row` and `band_flush` against an independent reference, under each kernel this
-    /// CPU runs: rows of 0 to 70 texels and a few long ones, column sums that start dirty (up
-    /// to 6 rows of the largest texel, the most a tile row of 8 leaves before its last row),
-    /// texels all 255, random, or random below the largest whose local sums fit `k` bits. The
-    /// column sums after the row (in `acc0` from `column_sums_at`), the boundaries (the running
-    /// sum of the tiles' column totals), the local sums (the prefix of the column sums inside each
-    /// tile) and their counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10
-    /// and 12 bits from bits 16, 0 and 8 and of 14 bits from bit 3 (not byte-aligned: nothing
-    /// packed). Packed: with AVX-512 VBMI and exact fields, the pairs of blocks' in the row
-    /// step (`band512::row_packed`), then whole steps of 16 of the rest from 16 bits
-    /// (`pack256::even`); `kp` exactly that, the fields as `write_bits` writes them, the words
-    /// past them untouched. Exact (no mask) for the small texels and for 14 bits except from
-    /// bit 8; masked for the others, whose local sums pass `2^k` (so a missing mask fails).
-    /// Then `band_flush` gives the level-0 accumulator of the column sums (local sums,
-    /// boundaries at multiples of 8).
     /// Each pace asks for every line of both slices once, in order, the last by the row's
     /// last group: [`Pace::Even`] by the end of the group ending at block `e` the `ceil(L e /
     /// B)` lines due there (one more at most, from the rounded-up rate), [`Pace::Early`] twice
@@ -5795,6 +5780,21 @@ mod tests {
         }
     }
 
+    /// `band_row` and `band_flush` against an independent reference, under each kernel this
+    /// CPU runs: rows of 0 to 70 texels and a few long ones, column sums that start dirty (up
+    /// to 6 rows of the largest texel, the most a tile row of 8 leaves before its last row),
+    /// texels all 255, random, or random below the largest whose local sums fit `k` bits. The
+    /// column sums after the row (in `acc0` from `column_sums_at`), the boundaries (the running
+    /// sum of the tiles' column totals), the local sums (the prefix of the column sums inside each
+    /// tile) and their counts; with a packing target of 14 bits from bits 0, 8, 24, of 8, 10
+    /// and 12 bits from bits 16, 0 and 8 and of 14 bits from bit 3 (not byte-aligned: nothing
+    /// packed). Packed: with AVX-512 VBMI and exact fields, the pairs of blocks' in the row
+    /// step (`band512::row_packed`), then whole steps of 16 of the rest from 16 bits
+    /// (`pack256::even`); `kp` exactly that, the fields as `write_bits` writes them, the words
+    /// past them untouched. Exact (no mask) for the small texels and for 14 bits except from
+    /// bit 8; masked for the others, whose local sums pass `2^k` (so a missing mask fails).
+    /// Then `band_flush` gives the level-0 accumulator of the column sums (local sums,
+    /// boundaries at multiples of 8).
     #[test]
     fn band_rows_equal_the_reference() {
         // Each kernel this CPU runs: with AVX-512BW and VBMI the local sums of whole pairs of
