@@ -5728,6 +5728,9 @@ mod tests {
         assert!(ran >= 1);
     }
 
+    /// No lines to ask for (the even pace: the hints move no output).
+    const NO_HINTS: (Ahead, Pace) = ([(core::ptr::null(), 0); 2], Pace::Even);
+
     /// Each pace asks for every line of both slices once, in order, the last by the row's
     /// last group: [`Pace::Even`] by the end of the group ending at block `e` the `ceil(L e /
     /// B)` lines due there (one more at most, from the rounded-up rate), [`Pace::Early`] twice
@@ -6240,14 +6243,8 @@ mod tests {
                         let acc0 = &mut big[o..o + n];
                         let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
                         for row in &refs[..r] {
-                            let none = [(core::ptr::null(), 0); 2];
                             let got = band_row::<u8, u32, 1>(
-                                row,
-                                acc0,
-                                &mut bnd,
-                                &mut local,
-                                (none, Pace::Even),
-                                None,
+                                row, acc0, &mut bnd, &mut local, NO_HINTS, None,
                             );
                             assert!(got.is_some(), "{what}");
                         }
@@ -6274,14 +6271,8 @@ mod tests {
                         assert_eq!(ran, band_rows_apply::<u8, u32, 1>(n, 14, true), "{what}");
                         if !ran {
                             for row in &refs[..r] {
-                                let none = [(core::ptr::null(), 0); 2];
                                 let got = band_row::<u8, u32, 1>(
-                                    row,
-                                    acc0,
-                                    &mut bnd,
-                                    &mut local,
-                                    (none, Pace::Even),
-                                    None,
+                                    row, acc0, &mut bnd, &mut local, NO_HINTS, None,
                                 );
                                 assert!(got.is_some(), "{what}");
                             }
