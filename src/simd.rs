@@ -3190,17 +3190,16 @@ impl Prefetch {
             let mut left = due.saturating_sub(asked);
             // The lines asked..due < lines of the slice `ahead[r]` (16 line < len), which may
             // lie past the words ([`band_rows`] asks for the next row's): hints.
-            let mut ask = |p: *const u32| each(p);
             while left >= 4 {
-                ask(at);
-                ask(at.wrapping_add(16));
-                ask(at.wrapping_add(32));
-                ask(at.wrapping_add(48));
+                each(at);
+                each(at.wrapping_add(16));
+                each(at.wrapping_add(32));
+                each(at.wrapping_add(48));
                 at = at.wrapping_add(64);
                 left -= 4;
             }
             while left > 0 {
-                ask(at);
+                each(at);
                 at = at.wrapping_add(16);
                 left -= 1;
             }

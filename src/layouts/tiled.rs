@@ -2370,9 +2370,6 @@ struct BandPlan {
     split: usize,
     /// The layout is large enough for prefetch hints (`PREFETCH_MIN_WORDS`).
     prefetch: bool,
-    /// When the band rows' kernels ask for their lines: evenly over the row for a layout past
-    /// the caches (`simd::Pace::for_layout`).
-    pace: crate::simd::Pace,
     /// No modulus: every local sum is below `2^k` (the width proof), packed unmasked.
     exact: bool,
     /// The layout's words (`Geometry::words`), for the refusal of short storage.
@@ -2405,6 +2402,12 @@ impl BandPlan {
             }
         }
         ahead
+    }
+
+    /// When the band rows' kernels ask for their lines: evenly over the row for a layout past
+    /// the caches (`simd::Pace::for_layout`).
+    fn pace(&self) -> crate::simd::Pace {
+        pace_for(self.words)
     }
 
     /// The refusal of storage shorter than the layout (`got` words).
@@ -2498,7 +2501,6 @@ impl BandPlan {
             nl,
             split,
             prefetch: g.words >= PREFETCH_MIN_WORDS,
-            pace: pace_for(g.words),
             exact: g.spec.modulus.is_none(),
             words: g.words,
         })
@@ -3088,7 +3090,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             k: plan.local.bits,
             exact: plan.exact,
         };
-        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, (ahead, plan.pace), out) {
+        if !crate::simd::band_rows::<T, E, C>(rows, acc, bnd, (ahead, plan.pace()), out) {
             return Ok(0);
         }
         if !pack_fields(words, at1, bnd, plan.bnd.bits) {
@@ -3138,7 +3140,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             acc,
             bnd_out,
             local,
-            (ahead, plan.pace),
+            (ahead, plan.pace()),
             Some(pack),
         )
         .ok_or(short)?;
@@ -3194,7 +3196,7 @@ impl<'a, 's, E: Entry, const C: usize> TiledBuilder<'a, 's, E, C> {
             acc,
             bnd_out,
             local,
-            (ahead, plan.pace),
+            (ahead, plan.pace()),
             pack,
         );
         let (kb, kl, pl, pb) = packed.ok_or(short)?;
