@@ -1,11 +1,12 @@
 //! Slices of the crate's generic texel and entry types seen as the concrete types of the `simd`
-//! feature's row kernels: `u8` texels, `u32` entries. Shared by both kernel modules
+//! feature's row kernels: `u8` texels, `u32` entries (and, on ARMv7E-M, `u16` entries). Shared
+//! by both kernel modules
 //! (`src/simd.rs` on x86-64, `src/dsp.rs` on ARMv7E-M), so that the one cast they need is
 //! written and argued once.
 //!
 //! # Safety argument
 //! Each function casts only after `TypeId` equality shows that the element type *is* the
-//! target type (`T = u8`, `E = u32`): the same type, so the same size, alignment, validity and
+//! target type (`T = u8`, `E = u32` or `E = u16`): the same type, so the same size, alignment, validity and
 //! length. The new slice covers exactly the old one's elements and takes over its borrow
 //! (shared for shared; for mutable, the `&mut` borrow is moved into the result), so no two live
 //! references alias.
@@ -50,6 +51,26 @@ pub(crate) fn u32s_mut<E: Entry>(s: &mut [E]) -> Option<&mut [u32]> {
     })
 }
 
+/// `s` as `&[u16]` when `E` is `u16`, else `None` (the ARMv7E-M row scan's `u16` tables).
+#[cfg_attr(not(any(test, texsat_armv7em)), allow(dead_code))]
+pub(crate) fn u16s<E: Entry>(s: &[E]) -> Option<&[u16]> {
+    (TypeId::of::<E>() == TypeId::of::<u16>()).then(|| {
+        // SAFETY: E is u16 (TypeId equality): the same layout and length; the shared borrow of
+        // `s` carries over.
+        unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u16>(), s.len()) }
+    })
+}
+
+/// `s` as `&mut [u16]` when `E` is `u16`, else `None`; the borrow is moved into the result.
+#[cfg_attr(not(any(test, texsat_armv7em)), allow(dead_code))]
+pub(crate) fn u16s_mut<E: Entry>(s: &mut [E]) -> Option<&mut [u16]> {
+    (TypeId::of::<E>() == TypeId::of::<u16>()).then(|| {
+        // SAFETY: E is u16 (TypeId equality): the same layout and length; the mutable borrow
+        // of `s` is moved into the result.
+        unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().cast::<u16>(), s.len()) }
+    })
+}
+
 #[cfg(test)]
 #[allow(clippy::indexing_slicing, reason = "tests: a panic is a failed test")]
 mod tests {
@@ -73,5 +94,15 @@ mod tests {
         let mut wide = [1u64];
         assert!(u32s_mut(&mut wide).is_none());
         assert_eq!(u8s::<u8>(&[]), Some(&[][..]));
+        let halves = [7u16, 0, u16::MAX];
+        assert_eq!(u16s(&halves), Some(&halves[..]));
+        assert_eq!(u16s(&entries), None);
+        assert_eq!(u16s(&[7u64]), None);
+        let mut row16 = [1u16, 2, 3];
+        if let Some(r) = u16s_mut(&mut row16) {
+            r[2] = 9;
+        }
+        assert_eq!(row16, [1, 2, 9]);
+        assert!(u16s_mut(&mut row).is_none());
     }
 }

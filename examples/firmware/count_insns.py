@@ -55,6 +55,9 @@ ENTRIES = [
     ("hand_build", "", None),
     ("stream_build", "6b. `RowStreamBuilder::push_row_into`, row by row", "hand_build"),
     ("modular_build", "6c. `Modular::build`, k = 20", None),
+    ("modular_build_u16", "6d. `Modular::build` into `u16` values, k = 12", None),
+    ("sat_build_u16", "6e. `Sat::build`", "hand_build_u16"),
+    ("hand_build_u16", "", None),
     ("tiled_int_border", "7a. `Tiled` 8x8 tiles `box_sum_int` Border (4 corners)", None),
     ("tiled_stable_border", "7b. `Tiled` 8x8 tiles `box_sum` Stable Border", None),
 ]
@@ -401,7 +404,13 @@ def main():
                 f"| {label}, 64x64 u32 table: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** "
                 f"| {hv:g} / **{hv / a.texels:.2f}** |"
             )
-        elif key == "modular_build":
+        elif key == "sat_build_u16":
+            hv = per_call[hand] - base
+            print(
+                f"| {label}, 64x4 u16 table: per build / **per entry** | {v:g} / **{v / 256:.2f}** "
+                f"| {hv:g} / **{hv / 256:.2f}** |"
+            )
+        elif key in ("modular_build", "modular_build_u16"):
             print(f"| {label}, 64x64: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** | |")
         else:
             print(f"| {label} | {v:g} | {h} |")

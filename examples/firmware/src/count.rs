@@ -27,6 +27,7 @@ use cortex_m_rt::entry;
 #[allow(dead_code)]
 mod hand;
 use texsat::layouts::{Modular, Tiled, TiledSpec};
+use texsat::texel::Entry;
 use texsat::{
     Border, BoxSum, DefaultCoord, NoCount, Rect, Repeat, RepeatWithinPeriod, RowStreamBuilder, Sat,
     Stable, Texture,
@@ -195,6 +196,25 @@ fn m_sat_build(t: &Texture<'_, Tx>, storage: &mut [En]) {
     keep(Sat::build(t, storage));
 }
 
+/// The `u16` table measured: `SMALL_W` x `SMALL_H` texels (at most 255 x 256 = 65,280, so the
+/// width proof holds for `u16`), rows as wide as the other builds' (the row scan declines `u16`
+/// rows under 32 entries, where it does not pay: texsat's src/dsp.rs).
+const SMALL_W: usize = 64;
+const SMALL_H: usize = 4;
+/// Its entries.
+const SMALL: usize = SMALL_W * SMALL_H;
+
+#[inline(never)]
+fn m_sat_build_u16(t: &Texture<'_, Tx>, storage: &mut [u16]) {
+    keep(Sat::build(t, storage));
+}
+
+#[inline(never)]
+fn h_build_u16(texels: &[Tx], storage: &mut [u16]) {
+    hand::build(texels, black_box(SMALL_W), storage);
+    keep(&*storage);
+}
+
 #[inline(never)]
 fn m_tiled_box_sum_int_border(l: &Tiled<'_, En>, r: &Rect<i32>) {
     keep(texsat::BoxLookup::box_sum_int(l, r, Border, &mut NoCount));
@@ -283,32 +303,40 @@ fn m_stream_build(texels: &[Tx], storage: &mut [En]) {
 /// The modulus of the measured modular build (fields of 20 bits: not byte-aligned).
 const MODULAR_K: u32 = 20;
 
+/// The modulus bits of the measured `u16` modular layout (the demo's `small` plan's kind).
+const MODULAR_K16: u32 = 12;
+
+#[inline(never)]
+fn m_modular_build_u16(tex: &Texture<'_, Tx>, words: &mut [u32], row: &mut [u16]) {
+    keep(Modular::<u16>::build(tex, MODULAR_K16, words, row).is_ok());
+}
+
 #[inline(never)]
 fn m_modular_build(tex: &Texture<'_, Tx>, words: &mut [u32], row: &mut [En]) {
     keep(Modular::<En>::build(tex, MODULAR_K, words, row).is_ok());
 }
 
-/// Every corner of a modular layout of `k` bits built from `tex` equals the reference table's
-/// entry (`w` wide) modulo `2^k`.
-fn modular_agrees(
+/// Every corner of a modular layout of `k` bits (`E` values) built from `tex` equals the
+/// reference table's entry (`w` wide) modulo `2^k`.
+fn modular_agrees<E: Entry>(
     tex: &Texture<'_, Tx>,
     k: u32,
     words: &mut [u32],
-    row: &mut [En],
+    row: &mut [E],
     reference: &[En],
 ) -> bool {
     use texsat::Layout;
     let (w, h) = (tex.width(), tex.height());
-    let Ok(m) = Modular::<En>::build(tex, k, words, row) else {
+    let Ok(m) = Modular::<E>::build(tex, k, words, row) else {
         return false;
     };
-    let mask = if k >= 32 { En::MAX } else { (1 << k) - 1 };
+    let mask = u64::MAX >> (64 - k);
     for y in 1..=h {
         for x in 1..=w {
             let Some(&want) = reference.get((y - 1) * w + (x - 1)) else {
                 return false;
             };
-            if m.corner(x, y, &mut NoCount)[0] & mask != want & mask {
+            if m.corner(x, y, &mut NoCount)[0].to_u64() & mask != u64::from(want) & mask {
                 return false;
             }
         }
@@ -326,61 +354,104 @@ fn h_build(texels: &[Tx], storage: &mut [En]) {
 /// with each row copied out) equal the hand-written build (`hand::build`, the plain loop) for
 /// every width 1 to 40 and height 1 to 4, the texels at byte offsets 0 to 3 (unaligned word
 /// loads in the `simd` feature's row scan, texsat's src/dsp.rs) of the harness's random texels
-/// and of all 255, each output first filled with a sentinel: on the device, the one place that
-/// scan runs. A mismatch exits before the first mark, and count_insns.py then fails (no
-/// regions).
-fn builds_agree(texels: &[Tx], a: &mut [En], b: &mut [En], words: &mut [u32]) -> bool {
-    const SENTINEL: En = 0xDEAD_BEEF;
+/// and of all 255, each output first filled with a sentinel; and so do the modular layout's
+/// rows (in place, wrapping) at two moduli: into `u32` entries, and with `simd` into `u16`
+/// entries too, the table and the builder's row from `a16[0]`, `row16[0]` and from `a16[1]`,
+/// `row16[1]` (rows 2 bytes off a word: the scan's first entry one by one, or the portable loop
+/// where the rows cannot all be on words; rows of 16 entries and more). On the device, the one
+/// place that scan runs. A mismatch exits before the first mark, and count_insns.py then fails
+/// (no regions).
+fn builds_agree(
+    texels: &[Tx],
+    (a32, row32): (&mut [En], &mut [En]),
+    (a16, row16): (&mut [u16], &mut [u16]),
+    b: &mut [En],
+    words: &mut [u32],
+) -> bool {
+    #[cfg(not(feature = "simd"))]
+    let _ = (a16, row16);
     let full = [255u8; 4 + 40 * 4];
-    let mut row = [0 as En; 40];
     for w in 1..=40 {
         for h in 1..=4 {
             for skip in 0..4 {
                 for src in [texels, &full[..]] {
-                    let Some(t) = src.get(skip..skip + w * h) else {
-                        return false;
-                    };
-                    let (Some(a), Some(b)) = (a.get_mut(..w * h), b.get_mut(..w * h)) else {
+                    let (Some(t), Some(b)) = (src.get(skip..skip + w * h), b.get_mut(..w * h))
+                    else {
                         return false;
                     };
                     hand::build(t, w, b);
                     let Ok(tex) = Texture::<Tx>::new(t, black_box(w), h) else {
                         return false;
                     };
-                    a.fill(SENTINEL);
-                    if Sat::build(&tex, black_box(&mut a[..])).is_err() || a != b {
+                    if !entries_agree(&tex, a32, b, words, row32, &[MODULAR_K, 32], 1) {
                         return false;
                     }
-                    // The modular layout's rows (in place, wrapping) at two moduli.
-                    for k in [MODULAR_K, 32] {
-                        words.fill(SENTINEL);
-                        row.fill(SENTINEL);
-                        if !modular_agrees(&tex, k, words, &mut row[..w], b) {
-                            return false;
-                        }
-                    }
-                    for into in [true, false] {
-                        a.fill(SENTINEL);
-                        let Ok(mut s) = RowStreamBuilder::<En>::new(w, h, 8, &mut row[..]) else {
-                            return false;
-                        };
-                        for (src, dst) in t.chunks_exact(w).zip(a.chunks_exact_mut(w)) {
-                            let ok = if into {
-                                s.push_row_into(black_box(src), dst).is_ok()
-                            } else {
-                                s.push_row(black_box(src))
-                                    .map(|r| dst.iter_mut().zip(r).for_each(|(d, v)| *d = *v))
-                                    .is_ok()
-                            };
-                            if !ok {
-                                return false;
-                            }
-                        }
-                        if s.finish().is_err() || a != b {
-                            return false;
-                        }
+                    // `u16` with the scan only: its sweep in the portable loop took QEMU's
+                    // `-singlestep` run (CI's cross-check) past 7 minutes; host tests have it.
+                    #[cfg(feature = "simd")]
+                    if !entries_agree(&tex, &mut *a16, b, words, &mut *row16, &[], 2) {
+                        return false;
                     }
                 }
+            }
+        }
+    }
+    true
+}
+
+/// One case of [`builds_agree`] with `E` entries: `b` the hand-written table of `tex`.
+fn entries_agree<E: Entry>(
+    tex: &Texture<'_, Tx>,
+    a: &mut [E],
+    b: &[En],
+    words: &mut [u32],
+    row: &mut [E],
+    ks: &[u32],
+    offsets: usize,
+) -> bool {
+    let (w, h) = (tex.width(), tex.height());
+    let sentinel = E::from(0xBEEF);
+    let same = |a: &[E]| a.iter().zip(b).all(|(x, y)| x.to_u64() == u64::from(*y));
+    for &k in ks {
+        words.fill(0xDEAD_BEEF);
+        row.fill(sentinel);
+        let Some(row) = row.get_mut(..w) else {
+            return false;
+        };
+        if !modular_agrees(tex, k, words, row, b) {
+            return false;
+        }
+    }
+    for off in 0..offsets {
+        let (Some(a), Some(row)) = (a.get_mut(off..off + w * h), row.get_mut(off..off + w)) else {
+            return false;
+        };
+        a.fill(sentinel);
+        if Sat::build(tex, black_box(&mut a[..])).is_err() || !same(a) {
+            return false;
+        }
+        for into in [true, false] {
+            a.fill(sentinel);
+            let Ok(mut s) = RowStreamBuilder::<E>::new(w, h, 8, &mut row[..]) else {
+                return false;
+            };
+            for (y, dst) in a.chunks_exact_mut(w).enumerate() {
+                let Some(src) = tex.row(y) else {
+                    return false;
+                };
+                let ok = if into {
+                    s.push_row_into(black_box(src), dst).is_ok()
+                } else {
+                    s.push_row(black_box(src))
+                        .map(|r| dst.iter_mut().zip(r).for_each(|(d, v)| *d = *v))
+                        .is_ok()
+                };
+                if !ok {
+                    return false;
+                }
+            }
+            if s.finish().is_err() || !same(a) {
+                return false;
             }
         }
     }
@@ -427,6 +498,7 @@ fn same_results(
 static mut TEXELS: [Tx; W * H] = [0; W * H];
 static mut TABLE: [En; W * H] = [0; W * H];
 static mut TABLE2: [En; W * H] = [0; W * H];
+static mut TABLE16: [u16; SMALL] = [0; SMALL];
 static mut WORDS: [u32; 4 * W * H] = [0; 4 * W * H];
 static mut SCRATCH: [En; 16 * (W + 1)] = [0; 16 * (W + 1)];
 #[cfg(feature = "filter-mip")]
@@ -436,11 +508,12 @@ static mut MIP: [Tx; W * H] = [0; W * H];
 fn main() -> ! {
     // SAFETY: single-threaded, no interrupts: `main` is the only user of these statics, each
     // borrowed once.
-    let (texels, table, table2, words, scratch) = unsafe {
+    let (texels, table, table2, table16, words, scratch) = unsafe {
         (
             &mut *core::ptr::addr_of_mut!(TEXELS),
             &mut *core::ptr::addr_of_mut!(TABLE),
             &mut *core::ptr::addr_of_mut!(TABLE2),
+            &mut *core::ptr::addr_of_mut!(TABLE16),
             &mut *core::ptr::addr_of_mut!(WORDS),
             &mut *core::ptr::addr_of_mut!(SCRATCH),
         )
@@ -454,7 +527,19 @@ fn main() -> ! {
         *t = (s >> 24) as u8;
     }
     let texels: &[Tx] = black_box(&texels[..]);
-    if !builds_agree(texels, &mut table[..], &mut table2[..], &mut words[..]) {
+    // u32 tables; u16 tables (at most 255 x 160 = 40,800: the width proof holds) in 2 + 160
+    // entries and a 41-entry row on the stack.
+    let (mut sweep16, mut row16) = ([0u16; 2 + 40 * 4], [0u16; 41]);
+    let Some(row32) = scratch.get_mut(..41) else {
+        exit()
+    };
+    if !builds_agree(
+        texels,
+        (&mut table[..], row32),
+        (&mut sweep16[..], &mut row16[..]),
+        &mut table2[..],
+        &mut words[..],
+    ) {
         exit()
     }
     let Ok(tex) = Texture::<Tx>::new(texels, black_box(W), black_box(H)) else {
@@ -569,6 +654,38 @@ fn main() -> ! {
         &mut scratch[..W],
         sat.entries(),
     ) {
+        exit()
+    }
+    // The modular layout with u16 values, k = 12, of the whole W x H texture.
+    let mut row_u16 = [0u16; W];
+    measure!(m_modular_build_u16(
+        &tex,
+        black_box(&mut words[..]),
+        &mut row_u16[..]
+    ));
+    if !modular_agrees(
+        &tex,
+        MODULAR_K16,
+        &mut words[..],
+        &mut row_u16[..],
+        sat.entries(),
+    ) {
+        exit()
+    }
+    // Sat::build of a SMALL_W x SMALL_H u16 table (per entry: divided by SMALL in count_insns.py),
+    // beside the hand-written build into u16.
+    let (Some(small_texels), Some(reference)) =
+        (texels.get(..SMALL), table2.get_mut(..SMALL))
+    else {
+        exit()
+    };
+    let Ok(small) = Texture::<Tx>::new(small_texels, black_box(SMALL_W), SMALL_H) else {
+        exit()
+    };
+    measure!(m_sat_build_u16(&small, black_box(&mut table16[..])));
+    let built = table16.map(u32::from);
+    measure!(h_build_u16(small_texels, black_box(&mut table16[..])));
+    if Sat::build(&small, &mut reference[..]).is_err() || built[..] != reference[..] || table16.map(u32::from) != built {
         exit()
     }
     // Tiled, 8 x 8 tiles.

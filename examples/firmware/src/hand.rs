@@ -135,25 +135,29 @@ pub fn mean_rounded(sum: u64, g: u32, w_raw: u64, h_raw: u64) -> u64 {
 }
 
 /// Builds the `w x h` table of 8-bit texels into `t` (`S(x, y)` at `(y - 1) w + (x - 1)`): a
-/// running row sum plus the entry above, in `u32` (the caller knows `255 w h` fits).
+/// running row sum plus the entry above, in `E` (`u32`, or `u16` for a small table: the caller
+/// knows `255 w h` fits).
 #[inline(always)]
-pub fn build(texels: &[u8], w: usize, t: &mut [u32]) {
+pub fn build<E>(texels: &[u8], w: usize, t: &mut [E])
+where
+    E: Copy + Default + From<u8> + core::ops::Add<Output = E>,
+{
     if w == 0 {
         return;
     }
-    let mut above: Option<&[u32]> = None;
+    let mut above: Option<&[E]> = None;
     for (row, out) in texels.chunks_exact(w).zip(t.chunks_exact_mut(w)) {
-        let mut run = 0u32;
+        let mut run = E::default();
         match above {
             Some(up) => {
                 for ((o, &v), &u) in out.iter_mut().zip(row).zip(up) {
-                    run += v as u32;
+                    run = run + E::from(v);
                     *o = run + u;
                 }
             }
             None => {
                 for (o, &v) in out.iter_mut().zip(row) {
-                    run += v as u32;
+                    run = run + E::from(v);
                     *o = run;
                 }
             }
