@@ -30,8 +30,8 @@
 //!
 //! The rest of a row (fewer than 4 entries, and for `u16` a first entry that puts the row on a
 //! word) goes one entry at a time in safe Rust here ([`tail`], [`scalar`]); other types and the
-//! checked builds take the portable loop in `table.rs`. Used by `Sat::build`, `Sat::build_strips`,
-//! `RowStreamBuilder` and the modular and tiled layouts' flat rows (`Modular::build`,
+//! checked builds take the portable loop in `table.rs`. Used by `Sat::build`,
+//! `Sat::build_strips`, `RowStreamBuilder` and the modular layout's rows (`Modular::build`,
 //! `ModularBuilder`, in place: [`build_row_in_place`]).
 //!
 //! Exactness: the same additions as the portable loop, in the same order, on 32-bit registers
@@ -57,27 +57,29 @@
 //!    for `u16` 0 or 1, see 3), the assembly runs `q = (n - h) / 4` turns, each reading 4 bytes
 //!    of the texels and 4 entries of the row above (16 bytes, or 8 for `u16`) and writing 4
 //!    entries of the row out (and of the copy) at the turn's offset: all inside the slices
-//!    from `h`. It runs only for `q >= 1` (the count is decremented before the test).
+//!    from `h`. The callers run it only for `q >= 1` (`turns > 0`): the count is decremented
+//!    before its test, so `q = 0` would run `2^32` turns.
 //! 3. *Alignment.* `LDM` and `STM` need word-aligned addresses. `u32` rows are. A `u16` row may
 //!    start 2 bytes off a word: then its first entry goes the portable way (`h` = 1), and the
 //!    turns start on a word; if the row above or the copy is not on a word from the same entry
-//!    (a table of odd width: every other row), the row is declined (the caller's portable loop;
-//!    nothing written). The texels' word load may be unaligned, which ARMv7-M's single `LDR`
-//!    allows unless the program sets `CCR.UNALIGN_TRP` (then a row of texels not on a 4-byte
-//!    boundary takes a UsageFault: a fault, not undefined behaviour; documented with the
-//!    feature). Texels in Device memory (which faults on unaligned access on the Cortex-M7) are
+//!    (an odd width: in a table every row after the first, in the streaming builder every
+//!    other row), the row is declined (the caller's portable loop; nothing written). The
+//!    texels' word loads (from texel `h`) may be unaligned, which ARMv7-M's single `LDR` allows
+//!    unless the program sets `CCR.UNALIGN_TRP` (then a row of texels not on a 4-byte boundary,
+//!    or a `u16` row 2 bytes off a word, whose loads start one texel in, takes a UsageFault: a
+//!    fault, not undefined behaviour; documented with the feature). Texels in Device memory (which faults on unaligned access on the Cortex-M7) are
 //!    not supported.
 //! 4. *Aliasing.* In [`build_row`], `out` is a `&mut` borrow, so it overlaps neither the texels
 //!    nor the row above. In place, the row above and the row out are one `&mut` slice: each
 //!    turn's `LDM` reads its bytes before its `STM` writes them, and turns move forward, so
 //!    every entry is read as the row above before it is overwritten; the copy is another `&mut`
 //!    borrow, disjoint from both.
-//! 5. *Registers.* The entries live in `r0` to `r3` (`u16`: the two words out in `r0`, `r1`,
-//!    the two above in `r2`, `r3`), named as outputs (clobbered): `LDM` and `STM` take their
+//! 5. *Registers.* The entries live in `r0` to `r3` (`u16`: the two words out in `r2`, `r3`,
+//!    the two above in `r0`, `r1`, which first hold a prefix sum), named as outputs (clobbered): `LDM` and `STM` take their
 //!    register lists in ascending order, so the lowest register holds the lowest address, as
 //!    the code assumes. They are early-clobber outputs (`out`, not `lateout`), so no input
 //!    shares them: no base register of an `LDM` or `STM` is in its own list, and the texel
-//!    word's register `w` (also `out`, as `u16`'s `lo`) is never the texel pointer `t` (`LDR w,
+//!    word's register `w` (also `out`) is never the texel pointer `t` (`LDR w,
 //!    [t], #4` with `w = t` is UNPREDICTABLE). The pointers and the count are in-out operands
 //!    the assembly advances (their final values discarded), the running sum an in-out operand
 //!    (`u16`: its value in both halves).
@@ -293,6 +295,11 @@ fn turns_row16(t: &[u8], up: Up<'_, u16>, out: &mut [u16], mut copy: Option<&mut
     if !above_on_word || copy.as_deref().is_some_and(|c| !on_word(c.as_ptr())) {
         return false;
     }
+    // A separate row above comes without a copy ([`build_row16`]); declined otherwise, so that
+    // the turns need no case for both.
+    if matches!(up, Up::Row(_)) && copy.is_some() {
+        return false;
+    }
     let mut run = 0;
     if head > 0 {
         run = scalar(t, up, out, copy.as_deref_mut(), 0..head, run);
@@ -326,19 +333,12 @@ fn turns_row16(t: &[u8], up: Up<'_, u16>, out: &mut [u16], mut copy: Option<&mut
                     o = inout(reg) o => _,
                     c = inout(reg) c => _,
                 ),
-                (Up::Row(a), None) => turns16!(
+                // No copy here (declined above).
+                (Up::Row(a), _) => turns16!(
                     tp, turns, run2; ["ldm {a}!, {{r0, r1}}"];
                     ["uadd16 r2, r2, r0", "uadd16 r3, r3, r1"]; ["stm {o}!, {{r2, r3}}"];
                     a = inout(reg) a.as_ptr().wrapping_add(head) => _,
                     o = inout(reg) o => _,
-                ),
-                (Up::Row(a), Some(c)) => turns16!(
-                    tp, turns, run2; ["ldm {a}!, {{r0, r1}}"];
-                    ["uadd16 r2, r2, r0", "uadd16 r3, r3, r1"];
-                    ["stm {o}!, {{r2, r3}}", "stm {c}!, {{r2, r3}}"];
-                    a = inout(reg) a.as_ptr().wrapping_add(head) => _,
-                    o = inout(reg) o => _,
-                    c = inout(reg) c => _,
                 ),
                 (Up::InPlace, None) => turns16!(
                     tp, turns, run2; ["ldm {o}, {{r0, r1}}"];

@@ -82,10 +82,12 @@ cp "$TARGET_DIR/$TARGET/release/$BIN" "$ELF"
 # With simd the build's row scan must be the ARMv7E-M one (texsat's src/dsp.rs), else the
 # harness's check of it (count.rs, builds_agree) would pass on the portable loop.
 if [[ ",${COUNT_FEATURES:-}," == *",simd,"* ]]; then
-  UXTAB=$("$LLVM_BIN/llvm-objdump" -d "$ELF" | grep -c uxtab || true)
-  [ "${UXTAB:-0}" -gt 0 ] ||
-    die "COUNT_FEATURES=simd, but the binary has no UXTAB: texsat's ARMv7E-M row scan (src/dsp.rs) is not compiled in"
-  echo "count-insns: simd: $UXTAB UXTAB instructions in the binary (texsat's src/dsp.rs)" >&2
+  DISASM=$("$LLVM_BIN/llvm-objdump" -d "$ELF")
+  UXTAB=$(grep -cw uxtab <<<"$DISASM" || true)
+  UXTB16=$(grep -cw uxtb16 <<<"$DISASM" || true)
+  [ "${UXTAB:-0}" -gt 0 ] && [ "${UXTB16:-0}" -gt 0 ] ||
+    die "COUNT_FEATURES=simd, but the binary has $UXTAB UXTAB and $UXTB16 UXTB16: texsat's ARMv7E-M row scans (src/dsp.rs, u32 and u16) are not both compiled in"
+  echo "count-insns: simd: $UXTAB UXTAB and $UXTB16 UXTB16 instructions in the binary (texsat's src/dsp.rs)" >&2
 fi
 
 loud() {

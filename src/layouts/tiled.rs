@@ -1743,7 +1743,8 @@ pub(super) fn add_prefix_row<T: Texel, E: Entry, const C: usize>(texels: &[T], r
     if crate::simd::build_row_in_place::<T, E, C>(texels, row, false, None, false) {
         return;
     }
-    // ARMv7E-M: the same row in place (its 32-bit additions wrap as these do).
+    // ARMv7E-M: the same row in place (its additions, on 32-bit registers or, for `u16`, on
+    // 16-bit halves, wrap as these do).
     #[cfg(all(feature = "simd", texsat_armv7em))]
     if crate::dsp::build_row_in_place::<T, E, C>(texels, row, false, None) {
         return;

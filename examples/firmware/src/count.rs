@@ -198,7 +198,8 @@ fn m_sat_build(t: &Texture<'_, Tx>, storage: &mut [En]) {
 
 /// The `u16` table measured: `SMALL_W` x `SMALL_H` texels (at most 255 x 256 = 65,280, so the
 /// width proof holds for `u16`), rows as wide as the other builds' (the row scan declines `u16`
-/// rows under 32 entries, where it does not pay: texsat's src/dsp.rs).
+/// rows under 16 entries, where it does not pay: texsat's src/dsp.rs). count_insns.py divides
+/// row 6e by 256 and labels it 64x4: change them together.
 const SMALL_W: usize = 64;
 const SMALL_H: usize = 4;
 /// Its entries.
@@ -498,7 +499,12 @@ fn same_results(
 static mut TEXELS: [Tx; W * H] = [0; W * H];
 static mut TABLE: [En; W * H] = [0; W * H];
 static mut TABLE2: [En; W * H] = [0; W * H];
-static mut TABLE16: [u16; SMALL] = [0; SMALL];
+static mut TABLE16: Words16<SMALL> = Words16([0; SMALL]);
+
+/// `u16` entries on a word (4 bytes): the harness places `u16` rows on a word or 2 bytes off
+/// one by the index it starts them at, which a plain `[u16; N]` (on 2 bytes) would not fix.
+#[repr(C, align(4))]
+struct Words16<const N: usize>([u16; N]);
 static mut WORDS: [u32; 4 * W * H] = [0; 4 * W * H];
 static mut SCRATCH: [En; 16 * (W + 1)] = [0; 16 * (W + 1)];
 #[cfg(feature = "filter-mip")]
@@ -513,7 +519,7 @@ fn main() -> ! {
             &mut *core::ptr::addr_of_mut!(TEXELS),
             &mut *core::ptr::addr_of_mut!(TABLE),
             &mut *core::ptr::addr_of_mut!(TABLE2),
-            &mut *core::ptr::addr_of_mut!(TABLE16),
+            &mut (*core::ptr::addr_of_mut!(TABLE16)).0,
             &mut *core::ptr::addr_of_mut!(WORDS),
             &mut *core::ptr::addr_of_mut!(SCRATCH),
         )
@@ -529,14 +535,14 @@ fn main() -> ! {
     let texels: &[Tx] = black_box(&texels[..]);
     // u32 tables; u16 tables (at most 255 x 160 = 40,800: the width proof holds) in 2 + 160
     // entries and a 41-entry row on the stack.
-    let (mut sweep16, mut row16) = ([0u16; 2 + 40 * 4], [0u16; 41]);
+    let (mut sweep16, mut row16) = (Words16([0u16; 2 + 40 * 4]), Words16([0u16; 41]));
     let Some(row32) = scratch.get_mut(..41) else {
         exit()
     };
     if !builds_agree(
         texels,
         (&mut table[..], row32),
-        (&mut sweep16[..], &mut row16[..]),
+        (&mut sweep16.0[..], &mut row16.0[..]),
         &mut table2[..],
         &mut words[..],
     ) {
@@ -656,26 +662,37 @@ fn main() -> ! {
     ) {
         exit()
     }
-    // The modular layout with u16 values, k = 12, of the whole W x H texture.
-    let mut row_u16 = [0u16; W];
+    // The modular layout with u16 values, k = 12, of the whole W x H texture (sums past 16
+    // bits: the rows wrap).
+    let mut row_u16 = Words16([0u16; W + 1]);
     measure!(m_modular_build_u16(
         &tex,
         black_box(&mut words[..]),
-        &mut row_u16[..]
+        &mut row_u16.0[..W]
     ));
-    if !modular_agrees(
-        &tex,
-        MODULAR_K16,
-        &mut words[..],
-        &mut row_u16[..],
-        sat.entries(),
-    ) {
-        exit()
+    // Its corners = the u32 table's (Sat::build, checked against the hand-written build above)
+    // modulo 2^12, at widths 61 to 64 (every tail) and the builder's row on a word and 2 bytes
+    // off one (the scan's head entry), one call site in the loop.
+    for (w, off) in (61..=W).flat_map(|w| [(w, 0), (w, 1)]) {
+        let (Some(t), Some(reference), Some(row)) = (
+            texels.get(..w * H),
+            table2.get_mut(..w * H),
+            row_u16.0.get_mut(off..off + w),
+        ) else {
+            exit()
+        };
+        let Ok(tex_w) = Texture::<Tx>::new(t, black_box(w), H) else {
+            exit()
+        };
+        if Sat::build(&tex_w, &mut reference[..]).is_err()
+            || !modular_agrees(&tex_w, MODULAR_K16, &mut words[..], row, reference)
+        {
+            exit()
+        }
     }
-    // Sat::build of a SMALL_W x SMALL_H u16 table (per entry: divided by SMALL in count_insns.py),
+    // Sat::build of a SMALL_W x SMALL_H u16 table (per entry: divided by 256 in count_insns.py),
     // beside the hand-written build into u16.
-    let (Some(small_texels), Some(reference)) =
-        (texels.get(..SMALL), table2.get_mut(..SMALL))
+    let (Some(small_texels), Some(reference)) = (texels.get(..SMALL), table2.get_mut(..SMALL))
     else {
         exit()
     };
@@ -685,7 +702,10 @@ fn main() -> ! {
     measure!(m_sat_build_u16(&small, black_box(&mut table16[..])));
     let built = table16.map(u32::from);
     measure!(h_build_u16(small_texels, black_box(&mut table16[..])));
-    if Sat::build(&small, &mut reference[..]).is_err() || built[..] != reference[..] || table16.map(u32::from) != built {
+    if Sat::build(&small, &mut reference[..]).is_err()
+        || built[..] != reference[..]
+        || table16.map(u32::from) != built
+    {
         exit()
     }
     // Tiled, 8 x 8 tiles.
