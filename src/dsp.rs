@@ -149,8 +149,8 @@ macro_rules! turns32 {
 /// [`turns!`] for `u16` entries, two a word: the prefix sums in `r0` (`(p0, p2)`) and `{w}`
 /// (`(p1, p3)`), the entries' words in `r2` and `r3`; then `$load` (none for the first row)
 /// puts the two words above in `r0`, `r1` and `$add` adds them. `$run` holds the running sum
-/// in both halves. No register beyond [`turns!`]'s: more spilled a row's pointers to the
-/// stack (about 30 instructions a row).
+/// in both halves. No register beyond [`turns!`]'s: with one more, more of the row's state
+/// spilled to the stack (about 4 instructions a row).
 macro_rules! turns16 {
     ($t:expr, $turns:expr, $run:ident; [$($load:literal),*]; [$($add:literal),*];
      [$($store:literal),+]; $($operands:tt)*) => {
@@ -365,7 +365,8 @@ fn turns_row16(t: &[u8], up: Up<'_, u16>, out: &mut [u16], mut copy: Option<&mut
 }
 
 /// `out = above + prefix sums of texels` for `u8` texels and one channel, four entries per
-/// turn (the module's doc): `u32` entries with a row above; `u16` entries ([`build_row16`]);
+/// turn (the module's doc): `u32` entries with a row above; `u16` entries, rows of
+/// [`U16_MIN_ROW`] and more ([`build_row16`]);
 /// `false` (nothing written) otherwise, and the caller takes the portable loop. The caller has
 /// proved that no sum exceeds the entry type. (`u32`'s first row by turns, tried: 2.25 instead
 /// of about 5 instructions an entry, but the other rows spent more on choosing, and on the
@@ -465,8 +466,8 @@ pub(crate) fn build_row_in_place<T: Texel, E: Entry, const C: usize>(
     true
 }
 
-/// [`build_row`] for `u16` entries (`out`, `E` being `u16`). Out of line, so that the
-/// caller's portable loop, where this declines, keeps its registers.
+/// [`build_row`] for `u16` entries (`out`, `E` being `u16`). Inlined by the compiler: out of
+/// line, `Sat::build` of a 64 x 4 `u16` table took 6.00 instead of 5.69 instructions an entry.
 fn build_row16<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     above: Option<&[E]>,
@@ -484,8 +485,8 @@ fn build_row16<T: Texel, E: Entry, const C: usize>(
     }
 }
 
-/// [`build_row_in_place`] for `u16` entries (`row`, `E` being `u16`), the first row too. Out
-/// of line, as [`build_row16`].
+/// [`build_row_in_place`] for `u16` entries (`row`, `E` being `u16`), the first row too
+/// (inlined, as [`build_row16`]).
 fn build_row_in_place16<T: Texel, E: Entry, const C: usize>(
     texels: &[T],
     row: &mut [u16],

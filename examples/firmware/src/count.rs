@@ -355,13 +355,14 @@ fn h_build(texels: &[Tx], storage: &mut [En]) {
 /// with each row copied out) equal the hand-written build (`hand::build`, the plain loop) for
 /// every width 1 to 40 and height 1 to 4, the texels at byte offsets 0 to 3 (unaligned word
 /// loads in the `simd` feature's row scan, texsat's src/dsp.rs) of the harness's random texels
-/// and of all 255, each output first filled with a sentinel; and so do the modular layout's
-/// rows (in place, wrapping) at two moduli: into `u32` entries, and with `simd` into `u16`
-/// entries too, the table and the builder's row from `a16[0]`, `row16[0]` and from `a16[1]`,
-/// `row16[1]` (rows 2 bytes off a word: the scan's first entry one by one, or the portable loop
-/// where the rows cannot all be on words; rows of 16 entries and more). On the device, the one
-/// place that scan runs. A mismatch exits before the first mark, and count_insns.py then fails
-/// (no regions).
+/// and of all 255, each output first filled with a sentinel, into `u32` entries, and so do the
+/// modular layout's rows (in place, wrapping) at two moduli into `u32` values. With `simd`,
+/// `Sat::build` and the streaming builder into `u16` entries too, the table and the builder's
+/// row from `a16[0]`, `row16[0]` and from `a16[1]`, `row16[1]` (rows 2 bytes off a word: the
+/// scan's first entry one by one, or the portable loop where the rows cannot all be on words;
+/// rows of 16 entries and more; the `u16` modular rows are checked in `main`). On the device,
+/// the one place that scan runs. A mismatch exits before the first mark, and count_insns.py
+/// then fails (no regions).
 fn builds_agree(
     texels: &[Tx],
     (a32, row32): (&mut [En], &mut [En]),
@@ -496,15 +497,15 @@ fn same_results(
 
 // --- main ------------------------------------------------------------------------------------
 
-static mut TEXELS: [Tx; W * H] = [0; W * H];
-static mut TABLE: [En; W * H] = [0; W * H];
-static mut TABLE2: [En; W * H] = [0; W * H];
-static mut TABLE16: Words16<SMALL> = Words16([0; SMALL]);
-
 /// `u16` entries on a word (4 bytes): the harness places `u16` rows on a word or 2 bytes off
 /// one by the index it starts them at, which a plain `[u16; N]` (on 2 bytes) would not fix.
 #[repr(C, align(4))]
 struct Words16<const N: usize>([u16; N]);
+
+static mut TEXELS: [Tx; W * H] = [0; W * H];
+static mut TABLE: [En; W * H] = [0; W * H];
+static mut TABLE2: [En; W * H] = [0; W * H];
+static mut TABLE16: Words16<SMALL> = Words16([0; SMALL]);
 static mut WORDS: [u32; 4 * W * H] = [0; 4 * W * H];
 static mut SCRATCH: [En; 16 * (W + 1)] = [0; 16 * (W + 1)];
 #[cfg(feature = "filter-mip")]
