@@ -219,6 +219,9 @@ fn tail(t: &[u8], above: Option<&[u32]>, out: &mut [u32], copy: Option<&mut [u32
 /// `out[x] = above[x] + run`, written to `copy` too; the rest of a row the turns leave.
 /// Wrapping additions, as the turns' (the module's doc). Indices are checked: a range past a
 /// slice writes nothing past it.
+/// The `u16` rows' head and tail. ([`tail`] stays for `u32`: this in its place, called only for
+/// rows with a tail, took `Sat::build` of 64 x 64 from 4.07 to 4.16 instructions an entry on
+/// the Cortex-M4.)
 fn scalar<E: Entry>(
     t: &[u8],
     up: Up<'_, E>,

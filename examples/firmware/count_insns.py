@@ -61,6 +61,13 @@ ENTRIES = [
     ("tiled_int_border", "7a. `Tiled` 8x8 tiles `box_sum_int` Border (4 corners)", None),
     ("tiled_stable_border", "7b. `Tiled` 8x8 tiles `box_sum` Stable Border", None),
 ]
+# The builds beside a hand-written build: the table printed and its entries (None: --texels;
+# 256: count.rs's SMALL, the 64 x 4 u16 table).
+BUILDS = {
+    "sat_build": ("64x64 u32", None),
+    "stream_build": ("64x64 u32", None),
+    "sat_build_u16": ("64x4 u16", 256),
+}
 MIP_ENTRIES = [
     ("mip_trilinear", "8a. `MipPyramid::trilinear` Border (20.25 x 15.25 box)", None),
     ("mip_trilinear_repeat", "8b. `MipPyramid::trilinear` Repeat (same box, 2nd period)", None),
@@ -398,17 +405,13 @@ def main():
         h = f"{per_call[hand] - base:g}" if hand else ""
         if key == "baseline":
             print(f"| {label} | {per_call[key]:g} (subtracted from the rows below) | |")
-        elif key in ("sat_build", "stream_build"):
+        elif key in BUILDS:
+            table, n = BUILDS[key]
+            n = n or a.texels
             hv = per_call[hand] - base
             print(
-                f"| {label}, 64x64 u32 table: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** "
-                f"| {hv:g} / **{hv / a.texels:.2f}** |"
-            )
-        elif key == "sat_build_u16":
-            hv = per_call[hand] - base
-            print(
-                f"| {label}, 64x4 u16 table: per build / **per entry** | {v:g} / **{v / 256:.2f}** "
-                f"| {hv:g} / **{hv / 256:.2f}** |"
+                f"| {label}, {table} table: per build / **per entry** | {v:g} / **{v / n:.2f}** "
+                f"| {hv:g} / **{hv / n:.2f}** |"
             )
         elif key in ("modular_build", "modular_build_u16"):
             print(f"| {label}, 64x64: per build / **per entry** | {v:g} / **{v / a.texels:.2f}** | |")
