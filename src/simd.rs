@@ -155,9 +155,13 @@
 //!    `i`, which a block reads before it writes its words.
 //!    [`row_u8_u32`] takes slices, `n = min(len)` over all of them; it does the head (the
 //!    `h` entries before `out` reaches 32 bytes: `h < 8`, `h <= n`, and `h = 0` for rows built
-//!    into a table, for rows that end before 32 bytes, and where a non-temporal copy would
-//!    leave 16 bytes) with checked indexing and passes the kernels each slice from `h` on,
-//!    `n - h` entries. A kernel touches entries `i..i + 16` of those slices only while `i + 16
+//!    into a table, for rows that end before 32 bytes, where a non-temporal copy would
+//!    leave 16 bytes, and where [`aligns_rows`] says no) with checked indexing, or for `n >= 8`
+//!    with an AVX2 or AVX-512 kernel by [`avx2::head`]: it reads `texels[..8]` and `out[..8]`
+//!    and writes `out[..h]` and the copy's `[..h]` only, by `vpmaskmovd` with lanes `h..8`
+//!    masked off (not accessed), or with a non-temporal copy (then `h = 4` and the copy on 16
+//!    bytes) one aligned 16-byte store. It passes the kernels each slice from `h` on, `n - h`
+//!    entries. A kernel touches entries `i..i + 16` of those slices only while `i + 16
 //!    <= n - h`, through unaligned loads and stores (`loadu`/`storeu`, or `read_unaligned` for
 //!    the 4-byte groups), then the tail is finished with checked indexing. Every pointer is
 //!    derived from its slice and stays in bounds. The copy's stores are non-temporal
@@ -165,7 +169,8 @@
 //!    has checked that the copy starts on 16 bytes, and then `h` is 0 or 4: block `b`'s four
 //!    16-byte stores are at `4 h + 64 b`, `4 h + 64 b + 16`, ... bytes from it, all aligned;
 //!    the head's and the tail's whole 4 entries are stored non-temporally only where
-//!    `copy_run` finds them on 16 bytes. Each row whose
+//!    `copy_run` finds them on 16 bytes (and the head's by [`avx2::head`], at the copy's
+//!    start, which is). Each row whose
 //!    copy took non-temporal stores ends with an `sfence`, so they are ordered before every
 //!    later store (the
 //!    table is handed out, possibly to another thread, through ordinary release/acquire
@@ -410,18 +415,20 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 /// [`Above::Slice`]; `copy` (at least as long as `out`) receives the row too, by non-temporal
 /// stores if `stream` and it starts on 16 bytes ([`STREAM_MIN_BYTES`]).
 ///
-/// A working row (the row above in place, [`Above::InPlace`], or none yet, [`Above::Zero`]):
-/// the entries before `out` reaches 32 bytes (up to 7, the head) go the portable way, as the
-/// tail after the last block does, and the kernel starts after them with their running sum,
-/// so that its 32-byte loads and stores of the working row never straddle two cache lines.
-/// The builders' working rows are the caller's storage, anywhere on 4 bytes: on a Zen 4
-/// guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into` take 1.4x to 1.5x the
-/// flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own time at 500^2
-/// (docs/benchmarks.md, ninth session). A head that would move a non-temporal copy off 16
-/// bytes is not taken. Rows built into a table after its first ([`Above::Slice`], `Sat::build`
-/// below [`WORKING_ROW_MIN_BYTES`]) take no head: with it, a table of rows 16 bytes off 32
-/// (512 x 480) took 1.08x to 1.13x the time. All the row's non-temporal stores (the kernel's
-/// and `copy_run`'s) are followed by one `sfence`.
+/// A working row (the row above in place, [`Above::InPlace`], or none yet, [`Above::Zero`]),
+/// where [`aligns_rows`] says so (every CPU but AMD's Zen 5 and later): the entries before
+/// `out` reaches 32 bytes (up to 7, the head) go first, and the kernel starts after them with
+/// their running sum, so that its 32-byte loads and stores of the working row never straddle
+/// two cache lines. The head is one AVX2 step with masked stores ([`avx2::head`]); with
+/// SSE2's kernel, or in a row under 8 entries, it goes the portable way, as the tail after
+/// the last block always does. The builders' working rows are the caller's storage, anywhere
+/// on 4 bytes: on a Zen 4 guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into`
+/// take 1.4x to 1.5x the flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own
+/// time at 500^2 (docs/benchmarks.md, ninth session). A head that would move a non-temporal
+/// copy off 16 bytes is not taken. Rows built into a table after its first ([`Above::Slice`],
+/// `Sat::build` below [`WORKING_ROW_MIN_BYTES`]) take no head: with it, a table of rows 16
+/// bytes off 32 (512 x 480) took 1.08x to 1.13x the time. All the row's non-temporal stores
+/// (the kernel's, the head's and `copy_run`'s) are followed by one `sfence`.
 #[inline]
 fn row_u8_u32(
     kernel: Kernel,
@@ -445,20 +452,51 @@ fn row_u8_u32(
         && copy
             .as_ref()
             .is_some_and(|c| (c.as_ptr() as usize).is_multiple_of(16));
-    // The entries before `out` reaches 32 bytes (none for rows built into a table).
+    // The entries before `out` reaches 32 bytes (none for rows built into a table, nor where
+    // the CPU takes no head).
     let to_line = match mode {
         Above::Slice => 0,
-        Above::Zero | Above::InPlace => (32 - (out.as_ptr() as usize) % 32) % 32 / 4,
+        Above::Zero | Above::InPlace if aligns_rows() => {
+            (32 - (out.as_ptr() as usize) % 32) % 32 / 4
+        }
+        Above::Zero | Above::InPlace => 0,
     };
-    // The head, done the portable way: those entries, unless the row ends before 32 bytes (no
-    // block could run) or a non-temporal copy would leave 16 bytes (its head must be 0 or 4).
+    // The head: those entries, unless the row ends before 32 bytes (no block could run) or a
+    // non-temporal copy would leave 16 bytes (its head must be 0 or 4).
     let head = if to_line > n || (nt && !to_line.is_multiple_of(4)) {
         0
     } else {
         to_line
     };
-    let start = row_portable(texels, above, out, mode, 0..head, 0);
-    copy_run(out, copy.as_deref_mut(), 0..head, nt);
+    let start = if head == 0 {
+        0
+    } else if kernel == Kernel::Sse2 || n < 8 {
+        let r = row_portable(texels, above, out, mode, 0..head, 0);
+        copy_run(out, copy.as_deref_mut(), 0..head, nt);
+        r
+    } else {
+        let o = out.as_mut_ptr();
+        let o2: *mut u32 = match &mut copy {
+            Some(c) => c.as_mut_ptr(),
+            None => core::ptr::null_mut(),
+        };
+        // SAFETY: the kernel is AVX2's or AVX-512's (not SSE2's, above), which run only where
+        // the CPU has AVX2 (argument 1); `texels`, `out` and the copy hold at least `n >= 8`
+        // entries (argument 2); `1 <= head <= 7`; `head = 4` and the copy on 16 bytes when
+        // `nt` (above). A head is taken only for the working row (`mode` is not `Slice`).
+        unsafe {
+            match (mode, o2.is_null()) {
+                (Above::InPlace, true) => {
+                    avx2::head::<true, false>(texels.as_ptr(), o, o2, head, nt)
+                }
+                (Above::InPlace, false) => {
+                    avx2::head::<true, true>(texels.as_ptr(), o, o2, head, nt)
+                }
+                (_, true) => avx2::head::<false, false>(texels.as_ptr(), o, o2, head, nt),
+                (_, false) => avx2::head::<false, true>(texels.as_ptr(), o, o2, head, nt),
+            }
+        }
+    };
     let m = n - head;
     let t = texels[head..].as_ptr();
     let o = out[head..].as_mut_ptr();
@@ -580,6 +618,8 @@ extern crate std;
 std::thread_local! {
     /// The calling test thread's cap on [`Kernel::best`] ([`Kernel::cap`]).
     static CAP: core::cell::Cell<Option<Kernel>> = const { core::cell::Cell::new(None) };
+    /// The calling test thread's answer for [`aligns_rows`] (`with_heads`).
+    static HEADS: core::cell::Cell<Option<bool>> = const { core::cell::Cell::new(None) };
     /// The rows [`modular_row`] streamed on the calling test thread (tests: that the path ran).
     pub(crate) static STREAMED_ROWS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
     /// The chunks [`band_end_row`] packed in its pass on the calling test thread (tests: that
@@ -774,12 +814,22 @@ fn detect() -> Kernel {
 /// [`Kernel::best`], so that the cached answer does not depend on which test asked first; the
 /// packing kernels run only with the AVX-512 kernel).
 pub(crate) fn vbmi() -> bool {
-    match VBMI.load(Ordering::Relaxed) {
+    cached(&VBMI, || {
+        Kernel::detected() == Kernel::Avx512Vnni && detect_vbmi()
+    })
+}
+
+/// A CPU property held in `cell` (0 before the first detection, 1 no, 2 yes): `detect`'s
+/// answer on the first call, then the cached one (a relaxed atomic: every thread detects the
+/// same).
+#[inline]
+fn cached(cell: &AtomicU8, detect: impl FnOnce() -> bool) -> bool {
+    match cell.load(Ordering::Relaxed) {
         1 => false,
         2 => true,
         _ => {
-            let v = Kernel::detected() == Kernel::Avx512Vnni && detect_vbmi();
-            VBMI.store(1 + u8::from(v), Ordering::Relaxed);
+            let v = detect();
+            cell.store(1 + u8::from(v), Ordering::Relaxed);
             v
         }
     }
@@ -809,15 +859,7 @@ fn detect_vbmi() -> bool {
 /// Whether this CPU executes 256-bit AVX operations as two 128-bit halves (for
 /// [`Kernel::for_rows`]): detected once, then cached as [`vbmi`] is.
 pub(crate) fn splits_256() -> bool {
-    match SPLITS_256.load(Ordering::Relaxed) {
-        1 => false,
-        2 => true,
-        _ => {
-            let v = detect_splits_256();
-            SPLITS_256.store(1 + u8::from(v), Ordering::Relaxed);
-            v
-        }
-    }
+    cached(&SPLITS_256, detect_splits_256)
 }
 
 /// [`splits_256`]'s answer: 0 before the first detection, 1 no, 2 yes.
@@ -875,6 +917,72 @@ fn detect_splits_256() -> bool {
 #[cfg(miri)]
 fn detect_splits_256() -> bool {
     false
+}
+
+/// Whether [`row_u8_u32`] takes a head, the entries before a working row reaches 32 bytes, so
+/// that the kernel's 32-byte accesses to the row stay inside cache lines: yes, except on AMD's
+/// family 1Ah (Zen 5) and later ([`aligns_rows_from`]). Detected once, then cached as
+/// [`splits_256`] is; in the crate's unit tests a thread's `with_heads` decides, so that
+/// both forms are tested on every CPU.
+#[inline]
+pub(crate) fn aligns_rows() -> bool {
+    #[cfg(test)]
+    if let Some(heads) = HEADS.with(|c| c.get()) {
+        return heads;
+    }
+    cached(&ALIGNS_ROWS, detect_aligns_rows)
+}
+
+/// [`aligns_rows`]'s answer: 0 before the first detection, 1 no, 2 yes.
+static ALIGNS_ROWS: AtomicU8 = AtomicU8::new(0);
+
+/// The first AMD family whose working rows take no head: 1Ah (Zen 5).
+const NO_HEAD_FAMILY: u32 = 0x1A;
+
+/// [`aligns_rows`] from CPUID's answers: `vendor` (leaf 0) and `signature` (leaf 1 EAX, whose
+/// family is bits 8..12, plus bits 20..28 where those read 0xF). On AMD from family 1Ah no
+/// head is taken; on every other CPU it is. Both were measured:
+/// * Zen 4 guest: a working row 16 bytes off 32 took `push_row_into` at 4,096^2 to 1.4x to
+///   1.5x the flat build's time, 1.0x with the head (docs/benchmarks.md, ninth session).
+/// * Zen 5 guest (family 1Ah model 02h): `push_row_into` of 1,024^2 into a cold table,
+///   against the same build with every row on a cache line. Over the 16 places of the working
+///   row and the table (each 0, 16, 32 or 48 bytes past a line), without a head: 1.00x to
+///   1.03x. With the head: 1.27x to 1.32x wherever the table was off a line and the row 16
+///   bytes off 32, even with the head's vector form ([`avx2::head`]); 1.33x to 1.43x with its
+///   scalar one. At 2,048^2 and 4,096^2 without the head it was as fast or faster. Only a
+///   500^2 build in L2 took 1.11x without it, against 1.02x with it (docs/benchmarks.md,
+///   twenty-seventh session).
+fn aligns_rows_from(vendor: [u32; 3], signature: u32) -> bool {
+    let base = (signature >> 8) & 0xF;
+    let family = if base == 0xF {
+        base + ((signature >> 20) & 0xFF)
+    } else {
+        base
+    };
+    !(vendor == SPLIT_VENDORS[0] && family >= NO_HEAD_FAMILY)
+}
+
+/// CPUID leaves 0 and 1 into [`aligns_rows_from`].
+#[cfg(not(miri))]
+fn detect_aligns_rows() -> bool {
+    let v = __cpuid(0);
+    aligns_rows_from([v.ebx, v.edx, v.ecx], __cpuid(1).eax)
+}
+
+/// Under Miri, which cannot run CPUID: the head (the tests take both forms).
+#[cfg(miri)]
+fn detect_aligns_rows() -> bool {
+    true
+}
+
+/// Runs `f` with [`aligns_rows`] answering `heads` on this thread (tests only: the other
+/// test threads keep theirs).
+#[cfg(test)]
+pub(crate) fn with_heads<R>(heads: bool, f: impl FnOnce() -> R) -> R {
+    let before = HEADS.with(|c| c.replace(Some(heads)));
+    let r = f();
+    HEADS.with(|c| c.set(before));
+    r
 }
 
 /// XCR0.
@@ -1038,6 +1146,57 @@ mod avx2 {
             ),
             w.ones,
         )
+    }
+
+    /// A working row's head (see [`row_u8_u32`]): entries `0..h` (`1 <= h <= 7`) of a row
+    /// from running sum 0, by one [`chunk`] of the first 8 texels plus (if `ABOVE`, in place)
+    /// the 8 entries at `o`, stored to `o[..h]` and (if `COPY`) `o2[..h]` by `vpmaskmovd`
+    /// with lanes `h..8` masked off (not accessed), or with `nt` (then `h = 4`) the copy's 4
+    /// entries by one non-temporal 16-byte store. Returns the running sum after them, lane
+    /// `h - 1` of the chunk. One vector step in place of `h` scalar ones: on a Zen 5 guest,
+    /// `RowStreamBuilder::push_row_into` of 1,024^2 into a cold table on a cache line, with a
+    /// working row 16 or 48 bytes past one (a head of 4), took 1.42x to 1.43x the time of the
+    /// same build with the row on a line (no head) with the head done by scalar code, 1.03x
+    /// with this one. With the table off a line it still took 1.27x to 1.32x there, where no
+    /// head took 1.00x to 1.03x: that CPU takes none ([`aligns_rows`]; docs/benchmarks.md,
+    /// twenty-seventh session).
+    ///
+    /// # Safety
+    /// The CPU has AVX2; `t` is valid for reads of 8 bytes; `o` for reads (if `ABOVE`) of 8
+    /// entries and writes of `h`; `o2` (if `COPY`) for writes of `h` entries, on 16 bytes if
+    /// `nt`; `1 <= h <= 7`, and `h = 4` if `COPY` and `nt`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn head<const ABOVE: bool, const COPY: bool>(
+        t: *const u8,
+        o: *mut u32,
+        o2: *mut u32,
+        h: usize,
+        nt: bool,
+    ) -> u32 {
+        // SAFETY: t[0..8] readable (the caller's contract).
+        let p = unsafe { chunk(t, Weights::new()) };
+        let mut v = p;
+        if ABOVE {
+            // SAFETY: o[0..8] readable (the caller's contract); an unaligned load.
+            v = _mm256_add_epi32(v, unsafe { _mm256_loadu_si256(o.cast()) });
+        }
+        let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        let mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(h as i32), lanes);
+        // SAFETY: the lanes below `h` only (the mask), each inside `o[..h]` and `o2[..h]` (the
+        // caller's contract); with `nt`, `h = 4` and `o2` on 16 bytes: one aligned 16-byte
+        // store of lanes 0..4.
+        unsafe {
+            _mm256_maskstore_epi32(o.cast(), mask, v);
+            if COPY {
+                if nt {
+                    store_copy(o2, _mm256_castsi256_si128(v), true);
+                } else {
+                    _mm256_maskstore_epi32(o2.cast(), mask, v);
+                }
+            }
+        }
+        let at = _mm256_set1_epi32(h as i32 - 1);
+        _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(p, at)) as u32
     }
 
     /// See the SSE2 kernel. Per 8 texels, the prefix sums by [`chunk`]: two dot products of
@@ -5589,139 +5748,184 @@ mod tests {
         struct Line([u32; MAX + 8]);
         let mut seed = 0x9e37_79b9_7f4a_7c15;
         let mut ran = 0;
+        // With and without heads ([`aligns_rows`]); under Miri with them (the unsafe head).
+        let heads: &[bool] = if cfg!(miri) { &[true] } else { &[true, false] };
         for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
             ran += 1;
-            for w in 0..=MAX {
-                for pattern in if cfg!(miri) { 2..4 } else { 0..4 } {
-                    let mut t = [0u8; MAX];
-                    for (i, t) in t.iter_mut().enumerate() {
-                        *t = match pattern {
-                            0 => 0,
-                            1 => 255,
-                            2 => (i % 256) as u8,
-                            _ => rng(&mut seed),
-                        };
-                    }
-                    let t = &t[..w];
-                    let base = u32::MAX - 255 * 1024;
-                    let mut above = [0u32; MAX];
-                    for (i, a) in above.iter_mut().enumerate() {
-                        *a = base + 255 * i as u32;
-                    }
-                    let above = &above[..w];
-                    // The row `shift` entries past a cache line: over the widths and
-                    // patterns, every head (the entries before 32 bytes, `row_u8_u32`) from 0
-                    // to 7 with every length of the tail after the kernel's blocks (0 to 15).
-                    let shift = (w + pattern + 3 * (w / 16)) % 8;
-                    for a in [None, Some(above)] {
-                        let what = |how: &str| (kernel.name(), w, pattern, a.is_some(), how.len());
-                        let mut want = [0u32; MAX];
-                        reference(t, a, &mut want[..w]);
-                        // Separate rows.
-                        let mut got = Line([7u32; MAX + 8]);
-                        let mode = if a.is_some() {
-                            Above::Slice
-                        } else {
-                            Above::Zero
-                        };
-                        row_u8_u32(
-                            kernel,
-                            t,
-                            a.unwrap_or(&[]),
-                            &mut got.0[shift..shift + w],
-                            mode,
-                            None,
-                            false,
-                        );
-                        let row = shift..shift + w;
-                        // Only the row written: 7 before and after it.
-                        let untouched = |l: &Line| {
-                            l.0[..shift]
-                                .iter()
-                                .chain(&l.0[shift + w..])
-                                .all(|&v| v == 7)
-                        };
-                        assert_eq!(
-                            got.0[row.clone()],
-                            want[..w],
-                            "{:?} {shift}",
-                            what("separate")
-                        );
-                        assert!(untouched(&got), "wrote around the row");
-                        // In place, without and with a copy (each row on a line, `shift` in).
-                        let mut inplace = Line([7u32; MAX + 8]);
-                        if let Some(a) = a {
-                            inplace.0[row.clone()].copy_from_slice(a);
+            for &heads in heads {
+                with_heads(heads, || {
+                    for w in 0..=MAX {
+                        for pattern in if cfg!(miri) { 2..4 } else { 0..4 } {
+                            let mut t = [0u8; MAX];
+                            for (i, t) in t.iter_mut().enumerate() {
+                                *t = match pattern {
+                                    0 => 0,
+                                    1 => 255,
+                                    2 => (i % 256) as u8,
+                                    _ => rng(&mut seed),
+                                };
+                            }
+                            let t = &t[..w];
+                            let base = u32::MAX - 255 * 1024;
+                            let mut above = [0u32; MAX];
+                            for (i, a) in above.iter_mut().enumerate() {
+                                *a = base + 255 * i as u32;
+                            }
+                            let above = &above[..w];
+                            // The row `shift` entries past a cache line: over the widths and
+                            // patterns, every head (the entries before 32 bytes, `row_u8_u32`) from 0
+                            // to 7 with every length of the tail after the kernel's blocks (0 to 15).
+                            let shift = (w + pattern + 3 * (w / 16)) % 8;
+                            for a in [None, Some(above)] {
+                                let what = |how: &str| {
+                                    (kernel.name(), heads, w, pattern, a.is_some(), how.len())
+                                };
+                                let mut want = [0u32; MAX];
+                                reference(t, a, &mut want[..w]);
+                                // Separate rows.
+                                let mut got = Line([7u32; MAX + 8]);
+                                let mode = if a.is_some() {
+                                    Above::Slice
+                                } else {
+                                    Above::Zero
+                                };
+                                row_u8_u32(
+                                    kernel,
+                                    t,
+                                    a.unwrap_or(&[]),
+                                    &mut got.0[shift..shift + w],
+                                    mode,
+                                    None,
+                                    false,
+                                );
+                                let row = shift..shift + w;
+                                // Only the row written: 7 before and after it.
+                                let untouched = |l: &Line| {
+                                    l.0[..shift]
+                                        .iter()
+                                        .chain(&l.0[shift + w..])
+                                        .all(|&v| v == 7)
+                                };
+                                assert_eq!(
+                                    got.0[row.clone()],
+                                    want[..w],
+                                    "{:?} {shift}",
+                                    what("separate")
+                                );
+                                assert!(untouched(&got), "wrote around the row");
+                                // In place, without and with a copy (each row on a line, `shift` in).
+                                let mut inplace = Line([7u32; MAX + 8]);
+                                if let Some(a) = a {
+                                    inplace.0[row.clone()].copy_from_slice(a);
+                                }
+                                let mode = if a.is_some() {
+                                    Above::InPlace
+                                } else {
+                                    Above::Zero
+                                };
+                                let mut again = inplace;
+                                row_u8_u32(
+                                    kernel,
+                                    t,
+                                    &[],
+                                    &mut inplace.0[row.clone()],
+                                    mode,
+                                    None,
+                                    false,
+                                );
+                                assert_eq!(
+                                    inplace.0[row.clone()],
+                                    want[..w],
+                                    "{:?}",
+                                    what("in place")
+                                );
+                                assert!(untouched(&inplace), "wrote around the row in place");
+                                let mut copy = [9u32; MAX];
+                                let c = Some(&mut copy[..w]);
+                                let back = again;
+                                row_u8_u32(
+                                    kernel,
+                                    t,
+                                    &[],
+                                    &mut again.0[row.clone()],
+                                    mode,
+                                    c,
+                                    false,
+                                );
+                                assert_eq!(
+                                    again.0[row.clone()],
+                                    want[..w],
+                                    "{:?}",
+                                    what("in place + copy")
+                                );
+                                assert!(untouched(&again), "wrote around the row in place");
+                                assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
+                                assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
+                                // The copy by non-temporal stores: into a copy on 16 bytes (the stores
+                                // stream, the head and the tail's whole 4 entries too; a head that
+                                // would move them off 16 bytes is not taken), 16 bytes past a line,
+                                // and one 4 bytes off (they fall back to plain ones); nothing before
+                                // or past the row written.
+                                for off in [0, 4, 1] {
+                                    let mut again = back;
+                                    let mut line = Line([9; MAX + 8]);
+                                    let c = Some(&mut line.0[off..off + w]);
+                                    row_u8_u32(
+                                        kernel,
+                                        t,
+                                        &[],
+                                        &mut again.0[row.clone()],
+                                        mode,
+                                        c,
+                                        true,
+                                    );
+                                    let copy = &line.0[off..off + w];
+                                    let how = what("streamed");
+                                    assert_eq!(
+                                        again.0[row.clone()],
+                                        want[..w],
+                                        "{how:?} {off} {shift}"
+                                    );
+                                    assert!(untouched(&again), "wrote around the row, streamed");
+                                    assert_eq!(copy, &want[..w], "{how:?} copy {off} {shift}");
+                                    assert!(
+                                        line.0[..off].iter().all(|&v| v == 9),
+                                        "before the row"
+                                    );
+                                    assert!(
+                                        line.0[off + w..].iter().all(|&v| v == 9),
+                                        "past the row"
+                                    );
+                                }
+                                // The dispatching entry points (the best kernel).
+                                let what = |how: &str| {
+                                    (Kernel::best().name(), w, pattern, a.is_some(), how.len())
+                                };
+                                let mut got = [7u32; MAX];
+                                assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
+                                assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
+                                let mut inplace = [7u32; MAX];
+                                if let Some(a) = a {
+                                    inplace[..w].copy_from_slice(a);
+                                }
+                                let first = a.is_none();
+                                assert!(build_row_in_place::<u8, u32, 1>(
+                                    t,
+                                    &mut inplace[..w],
+                                    first,
+                                    None,
+                                    false
+                                ));
+                                assert_eq!(
+                                    inplace[..w],
+                                    want[..w],
+                                    "{:?}",
+                                    what("build_row_in_place")
+                                );
+                            }
                         }
-                        let mode = if a.is_some() {
-                            Above::InPlace
-                        } else {
-                            Above::Zero
-                        };
-                        let mut again = inplace;
-                        row_u8_u32(
-                            kernel,
-                            t,
-                            &[],
-                            &mut inplace.0[row.clone()],
-                            mode,
-                            None,
-                            false,
-                        );
-                        assert_eq!(inplace.0[row.clone()], want[..w], "{:?}", what("in place"));
-                        assert!(untouched(&inplace), "wrote around the row in place");
-                        let mut copy = [9u32; MAX];
-                        let c = Some(&mut copy[..w]);
-                        let back = again;
-                        row_u8_u32(kernel, t, &[], &mut again.0[row.clone()], mode, c, false);
-                        assert_eq!(
-                            again.0[row.clone()],
-                            want[..w],
-                            "{:?}",
-                            what("in place + copy")
-                        );
-                        assert!(untouched(&again), "wrote around the row in place");
-                        assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
-                        assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
-                        // The copy by non-temporal stores: into a copy on 16 bytes (the stores
-                        // stream, the head and the tail's whole 4 entries too; a head that
-                        // would move them off 16 bytes is not taken), 16 bytes past a line,
-                        // and one 4 bytes off (they fall back to plain ones); nothing before
-                        // or past the row written.
-                        for off in [0, 4, 1] {
-                            let mut again = back;
-                            let mut line = Line([9; MAX + 8]);
-                            let c = Some(&mut line.0[off..off + w]);
-                            row_u8_u32(kernel, t, &[], &mut again.0[row.clone()], mode, c, true);
-                            let copy = &line.0[off..off + w];
-                            let how = what("streamed");
-                            assert_eq!(again.0[row.clone()], want[..w], "{how:?} {off} {shift}");
-                            assert!(untouched(&again), "wrote around the row, streamed");
-                            assert_eq!(copy, &want[..w], "{how:?} copy {off} {shift}");
-                            assert!(line.0[..off].iter().all(|&v| v == 9), "before the row");
-                            assert!(line.0[off + w..].iter().all(|&v| v == 9), "past the row");
-                        }
-                        // The dispatching entry points (the best kernel).
-                        let what =
-                            |how: &str| (Kernel::best().name(), w, pattern, a.is_some(), how.len());
-                        let mut got = [7u32; MAX];
-                        assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
-                        assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
-                        let mut inplace = [7u32; MAX];
-                        if let Some(a) = a {
-                            inplace[..w].copy_from_slice(a);
-                        }
-                        let first = a.is_none();
-                        assert!(build_row_in_place::<u8, u32, 1>(
-                            t,
-                            &mut inplace[..w],
-                            first,
-                            None,
-                            false
-                        ));
-                        assert_eq!(inplace[..w], want[..w], "{:?}", what("build_row_in_place"));
                     }
-                }
+                });
             }
         }
         assert!(ran >= 1);
@@ -6802,6 +7006,27 @@ mod tests {
             [0x6874_7541, 0x6974_6E65, 0x444D_4163],
             "EBX, EDX, ECX as CPUID returns them"
         );
+    }
+
+    /// `aligns_rows_from` on CPUID's answers: no head on AMD from family 1Ah (its family
+    /// field 0xF plus the extended family 0Bh), a head on earlier AMD families, on Hygon and
+    /// on Intel.
+    #[test]
+    fn aligns_rows_reads_amds_family() {
+        let (amd, hygon) = (vendor(b"AuthenticAMD"), vendor(b"HygonGenuine"));
+        let intel = vendor(b"GenuineIntel");
+        // This session's Zen 5 guest (family 1Ah model 02h stepping 1), a later family.
+        assert!(!aligns_rows_from(amd, 0x00B0_0F21));
+        assert!(!aligns_rows_from(amd, 0x00C0_0F00));
+        // Zen 4 (19h, the ninth session's), Zen 1 (17h), Hygon's Dhyana (18h).
+        assert!(aligns_rows_from(amd, 0x00A1_0F11));
+        assert!(aligns_rows_from(amd, 0x0080_0F12));
+        assert!(aligns_rows_from(hygon, 0x0090_0F12));
+        // A family field under 0xF ignores the extended family bits.
+        assert!(aligns_rows_from(amd, 0x00B0_0621));
+        // Intel: Sapphire Rapids (family 6 model 143), and the same bits as Zen 5's.
+        assert!(aligns_rows_from(intel, 0x0008_06F8));
+        assert!(aligns_rows_from(intel, 0x00B0_0F21));
     }
 
     /// Other types and channel counts are left to the portable path, untouched.
