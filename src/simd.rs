@@ -3828,7 +3828,9 @@ pub(crate) fn band_types<T: Texel, E: Entry, const C: usize>() -> bool {
 /// the `u16` index of the first. At `n - d`, the `d` (0 to 15) that puts them on a 32-byte
 /// boundary, when `n >= 128`; else at `n` (the upper half). The AVX2 kernels load and store them 32
 /// bytes at a time, so aligned, none of those accesses splits a cache line (the AVX-512 ones, 64
-/// bytes at a time, still split one where the start is 32 bytes past 64: not measured). With them
+/// bytes at a time, still split one where the start is 32 bytes past 64: on a Zen 5 guest, on 64
+/// bytes or not made no difference to a tiled build of 1,024^2, docs/benchmarks.md,
+/// twenty-seventh session; not measured on Zen 4). With them
 /// at `n`, a tiled build of 1,024^2 took 0.302 to 0.305 ns per texel where they missed a 32-byte
 /// boundary and 0.292 where they fell on one (medians, one process, the scratch moved to each
 /// 8-byte offset of 64 bytes in turn); placed here, 0.260 to 0.262 at every offset (Zen 3, AVX2;
@@ -6446,6 +6448,16 @@ mod tests {
                         // Band rows, then the flush.
                         let mut big = std::vec![0u32; n + 8];
                         let acc0 = &mut big[o..o + n];
+                        // The column sums on 32 bytes from n = 128 on, above the local sums'
+                        // room.
+                        let at = column_sums_at(acc0.as_ptr(), n);
+                        if n >= 128 {
+                            let bytes = acc0.as_ptr() as usize + 2 * at;
+                            assert!(bytes % 32 == 0 && at >= n - 15, "{what}");
+                        } else {
+                            assert_eq!(at, n, "{what}");
+                        }
+                        assert!(at <= n && at >= n - n / 8 + 1, "{what}");
                         let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
                         for row in &refs[..r] {
                             let got = band_row::<u8, u32, 1>(
