@@ -156,12 +156,9 @@
 //!    [`row_u8_u32`] takes slices, `n = min(len)` over all of them; it does the head (the
 //!    `h` entries before `out` reaches 32 bytes: `h < 8`, `h <= n`, and `h = 0` for rows built
 //!    into a table, for rows that end before 32 bytes, where a non-temporal copy would
-//!    leave 16 bytes, and where [`aligns_rows`] says no) with checked indexing, or for `n >= 8`
-//!    with an AVX2 or AVX-512 kernel by [`avx2::head`]: it reads `texels[..8]` and `out[..8]`
-//!    and writes `out[..h]` and the copy's `[..h]` only, by `vpmaskmovd` with lanes `h..8`
-//!    masked off (not accessed), or with a non-temporal copy (then `h = 4` and the copy on 16
-//!    bytes) one aligned 16-byte store. It passes the kernels each slice from `h` on, `n - h`
-//!    entries. A kernel touches entries `i..i + 16` of those slices only while `i + 16
+//!    leave 16 bytes, and where [`aligns_rows`] says no) with checked indexing and passes the
+//!    kernels each slice from `h` on, `n - h` entries. A kernel touches entries `i..i + 16` of
+//!    those slices only while `i + 16
 //!    <= n - h`, through unaligned loads and stores (`loadu`/`storeu`, or `read_unaligned` for
 //!    the 4-byte groups), then the tail is finished with checked indexing. Every pointer is
 //!    derived from its slice and stays in bounds. The copy's stores are non-temporal
@@ -169,8 +166,7 @@
 //!    has checked that the copy starts on 16 bytes, and then `h` is 0 or 4: block `b`'s four
 //!    16-byte stores are at `4 h + 64 b`, `4 h + 64 b + 16`, ... bytes from it, all aligned;
 //!    the head's and the tail's whole 4 entries are stored non-temporally only where
-//!    `copy_run` finds them on 16 bytes (and the head's by [`avx2::head`], at the copy's
-//!    start, which is). Each row whose
+//!    `copy_run` finds them on 16 bytes. Each row whose
 //!    copy took non-temporal stores ends with an `sfence`, so they are ordered before every
 //!    later store (the
 //!    table is handed out, possibly to another thread, through ordinary release/acquire
@@ -419,16 +415,15 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 /// where [`aligns_rows`] says so (every CPU but AMD's Zen 5 and later): the entries before
 /// `out` reaches 32 bytes (up to 7, the head) go first, and the kernel starts after them with
 /// their running sum, so that its 32-byte loads and stores of the working row never straddle
-/// two cache lines. The head is one AVX2 step with masked stores ([`avx2::head`]); with
-/// SSE2's kernel, or in a row under 8 entries, it goes the portable way, as the tail after
-/// the last block always does. The builders' working rows are the caller's storage, anywhere
+/// two cache lines. The head goes the portable way, as the tail after the last block does.
+/// The builders' working rows are the caller's storage, anywhere
 /// on 4 bytes: on a Zen 4 guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into`
 /// take 1.4x to 1.5x the flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own
 /// time at 500^2 (docs/benchmarks.md, ninth session). A head that would move a non-temporal
 /// copy off 16 bytes is not taken. Rows built into a table after its first ([`Above::Slice`],
 /// `Sat::build` below [`WORKING_ROW_MIN_BYTES`]) take no head: with it, a table of rows 16
 /// bytes off 32 (512 x 480) took 1.08x to 1.13x the time. All the row's non-temporal stores
-/// (the kernel's, the head's and `copy_run`'s) are followed by one `sfence`.
+/// (the kernel's and `copy_run`'s) are followed by one `sfence`.
 #[inline]
 fn row_u8_u32(
     kernel: Kernel,
@@ -468,35 +463,8 @@ fn row_u8_u32(
     } else {
         to_line
     };
-    let start = if head == 0 {
-        0
-    } else if kernel == Kernel::Sse2 || n < 8 {
-        let r = row_portable(texels, above, out, mode, 0..head, 0);
-        copy_run(out, copy.as_deref_mut(), 0..head, nt);
-        r
-    } else {
-        let o = out.as_mut_ptr();
-        let o2: *mut u32 = match &mut copy {
-            Some(c) => c.as_mut_ptr(),
-            None => core::ptr::null_mut(),
-        };
-        // SAFETY: the kernel is AVX2's or AVX-512's (not SSE2's, above), which run only where
-        // the CPU has AVX2 (argument 1); `texels`, `out` and the copy hold at least `n >= 8`
-        // entries (argument 2); `1 <= head <= 7`; `head = 4` and the copy on 16 bytes when
-        // `nt` (above). A head is taken only for the working row (`mode` is not `Slice`).
-        unsafe {
-            match (mode, o2.is_null()) {
-                (Above::InPlace, true) => {
-                    avx2::head::<true, false>(texels.as_ptr(), o, o2, head, nt)
-                }
-                (Above::InPlace, false) => {
-                    avx2::head::<true, true>(texels.as_ptr(), o, o2, head, nt)
-                }
-                (_, true) => avx2::head::<false, false>(texels.as_ptr(), o, o2, head, nt),
-                (_, false) => avx2::head::<false, true>(texels.as_ptr(), o, o2, head, nt),
-            }
-        }
-    };
+    let start = row_portable(texels, above, out, mode, 0..head, 0);
+    copy_run(out, copy.as_deref_mut(), 0..head, nt);
     let m = n - head;
     let t = texels[head..].as_ptr();
     let o = out[head..].as_mut_ptr();
@@ -947,11 +915,11 @@ const NO_HEAD_FAMILY: u32 = 0x1A;
 /// * Zen 5 guest (family 1Ah model 02h): `push_row_into` of 1,024^2 into a cold table,
 ///   against the same build with every row on a cache line. Over the 16 places of the working
 ///   row and the table (each 0, 16, 32 or 48 bytes past a line), without a head: 1.00x to
-///   1.03x. With the head: 1.27x to 1.32x wherever the table was off a line and the row 16
-///   bytes off 32, even with the head's vector form ([`avx2::head`]); 1.33x to 1.43x with its
-///   scalar one. At 2,048^2 and 4,096^2 without the head it was as fast or faster. Only a
-///   500^2 build in L2 took 1.11x without it, against 1.02x with it (docs/benchmarks.md,
-///   twenty-seventh session).
+///   1.03x. With the head: 1.33x to 1.43x wherever the row was 16 bytes off 32. (A head by
+///   one AVX2 step with masked stores, tried, still took 1.27x to 1.32x where the table was
+///   off a line.) At 2,048^2 and 4,096^2, and 1,024^2 in cache, without the head it was as
+///   fast or faster. Only 500^2 in L2 took 1.04x to 1.11x without it, against 1.00x to 1.06x
+///   with it (docs/benchmarks.md, twenty-seventh session).
 fn aligns_rows_from(vendor: [u32; 3], signature: u32) -> bool {
     let base = (signature >> 8) & 0xF;
     let family = if base == 0xF {
@@ -1146,57 +1114,6 @@ mod avx2 {
             ),
             w.ones,
         )
-    }
-
-    /// A working row's head (see [`row_u8_u32`]): entries `0..h` (`1 <= h <= 7`) of a row
-    /// from running sum 0, by one [`chunk`] of the first 8 texels plus (if `ABOVE`, in place)
-    /// the 8 entries at `o`, stored to `o[..h]` and (if `COPY`) `o2[..h]` by `vpmaskmovd`
-    /// with lanes `h..8` masked off (not accessed), or with `nt` (then `h = 4`) the copy's 4
-    /// entries by one non-temporal 16-byte store. Returns the running sum after them, lane
-    /// `h - 1` of the chunk. One vector step in place of `h` scalar ones: on a Zen 5 guest,
-    /// `RowStreamBuilder::push_row_into` of 1,024^2 into a cold table on a cache line, with a
-    /// working row 16 or 48 bytes past one (a head of 4), took 1.42x to 1.43x the time of the
-    /// same build with the row on a line (no head) with the head done by scalar code, 1.03x
-    /// with this one. With the table off a line it still took 1.27x to 1.32x there, where no
-    /// head took 1.00x to 1.03x: that CPU takes none ([`aligns_rows`]; docs/benchmarks.md,
-    /// twenty-seventh session).
-    ///
-    /// # Safety
-    /// The CPU has AVX2; `t` is valid for reads of 8 bytes; `o` for reads (if `ABOVE`) of 8
-    /// entries and writes of `h`; `o2` (if `COPY`) for writes of `h` entries, on 16 bytes if
-    /// `nt`; `1 <= h <= 7`, and `h = 4` if `COPY` and `nt`.
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn head<const ABOVE: bool, const COPY: bool>(
-        t: *const u8,
-        o: *mut u32,
-        o2: *mut u32,
-        h: usize,
-        nt: bool,
-    ) -> u32 {
-        // SAFETY: t[0..8] readable (the caller's contract).
-        let p = unsafe { chunk(t, Weights::new()) };
-        let mut v = p;
-        if ABOVE {
-            // SAFETY: o[0..8] readable (the caller's contract); an unaligned load.
-            v = _mm256_add_epi32(v, unsafe { _mm256_loadu_si256(o.cast()) });
-        }
-        let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-        let mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(h as i32), lanes);
-        // SAFETY: the lanes below `h` only (the mask), each inside `o[..h]` and `o2[..h]` (the
-        // caller's contract); with `nt`, `h = 4` and `o2` on 16 bytes: one aligned 16-byte
-        // store of lanes 0..4.
-        unsafe {
-            _mm256_maskstore_epi32(o.cast(), mask, v);
-            if COPY {
-                if nt {
-                    store_copy(o2, _mm256_castsi256_si128(v), true);
-                } else {
-                    _mm256_maskstore_epi32(o2.cast(), mask, v);
-                }
-            }
-        }
-        let at = _mm256_set1_epi32(h as i32 - 1);
-        _mm256_cvtsi256_si32(_mm256_permutevar8x32_epi32(p, at)) as u32
     }
 
     /// See the SSE2 kernel. Per 8 texels, the prefix sums by [`chunk`]: two dot products of
@@ -6453,11 +6370,11 @@ mod tests {
                         let at = column_sums_at(acc0.as_ptr(), n);
                         if n >= 128 {
                             let bytes = acc0.as_ptr() as usize + 2 * at;
-                            assert!(bytes % 32 == 0 && at >= n - 15, "{what}");
+                            assert!(bytes.is_multiple_of(32) && at >= n - 15, "{what}");
                         } else {
                             assert_eq!(at, n, "{what}");
                         }
-                        assert!(at <= n && at >= n - n / 8 + 1, "{what}");
+                        assert!(at <= n && at > n - n / 8, "{what}");
                         let (mut bnd, mut local) = (std::vec![0u32; nb], std::vec![0u32; nl]);
                         for row in &refs[..r] {
                             let got = band_row::<u8, u32, 1>(
