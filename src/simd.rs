@@ -158,10 +158,10 @@
 //!    into a table, for rows that end before 32 bytes, where a non-temporal copy would
 //!    leave 16 bytes, and where [`aligns_rows`] says no) with checked indexing and passes the
 //!    kernels each slice from `h` on, `n - h` entries. A kernel touches entries `i..i + 16` of
-//!    those slices only while `i + 16
-//!    <= n - h`, through unaligned loads and stores (`loadu`/`storeu`, or `read_unaligned` for
-//!    the 4-byte groups), then the tail is finished with checked indexing. Every pointer is
-//!    derived from its slice and stays in bounds. The copy's stores are non-temporal
+//!    those slices only while `i + 16 <= n - h`, through unaligned loads and stores
+//!    (`loadu`/`storeu`, or `read_unaligned` for the 4-byte groups), then the tail is finished
+//!    with checked indexing. Every pointer is derived from its slice and stays in bounds. The
+//!    copy's stores are non-temporal
 //!    (`_mm_stream_si128`, which faults on an address off 16 bytes) only when [`row_u8_u32`]
 //!    has checked that the copy starts on 16 bytes, and then `h` is 0 or 4: block `b`'s four
 //!    16-byte stores are at `4 h + 64 b`, `4 h + 64 b + 16`, ... bytes from it, all aligned;
@@ -416,14 +416,14 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 /// `out` reaches 32 bytes (up to 7, the head) go first, and the kernel starts after them with
 /// their running sum, so that its 32-byte loads and stores of the working row never straddle
 /// two cache lines. The head goes the portable way, as the tail after the last block does.
-/// The builders' working rows are the caller's storage, anywhere
-/// on 4 bytes: on a Zen 4 guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into`
-/// take 1.4x to 1.5x the flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own
-/// time at 500^2 (docs/benchmarks.md, ninth session). A head that would move a non-temporal
-/// copy off 16 bytes is not taken. Rows built into a table after its first ([`Above::Slice`],
-/// `Sat::build` below [`WORKING_ROW_MIN_BYTES`]) take no head: with it, a table of rows 16
-/// bytes off 32 (512 x 480) took 1.08x to 1.13x the time. All the row's non-temporal stores
-/// (the kernel's and `copy_run`'s) are followed by one `sfence`.
+/// The builders' working rows are the caller's storage, anywhere on 4 bytes: on a Zen 4
+/// guest, one 16 bytes off 32 made `RowStreamBuilder::push_row_into` take 1.4x to 1.5x the
+/// flat build's time at 4,096^2 (1.0x with the head) and 1.3x its own time at 500^2
+/// (docs/benchmarks.md, ninth session). A head that would move a non-temporal copy off 16
+/// bytes is not taken. Rows built into a table after its first ([`Above::Slice`], `Sat::build`
+/// below [`WORKING_ROW_MIN_BYTES`]) take no head: with it, a table of rows 16 bytes off 32
+/// (512 x 480) took 1.08x to 1.13x the time. All the row's non-temporal stores (the kernel's
+/// and `copy_run`'s) are followed by one `sfence`.
 #[inline]
 fn row_u8_u32(
     kernel: Kernel,
@@ -586,7 +586,7 @@ extern crate std;
 std::thread_local! {
     /// The calling test thread's cap on [`Kernel::best`] ([`Kernel::cap`]).
     static CAP: core::cell::Cell<Option<Kernel>> = const { core::cell::Cell::new(None) };
-    /// The calling test thread's answer for [`aligns_rows`] (`with_heads`).
+    /// The calling test thread's answer for [`aligns_rows`] (`set_heads`).
     static HEADS: core::cell::Cell<Option<bool>> = const { core::cell::Cell::new(None) };
     /// The rows [`modular_row`] streamed on the calling test thread (tests: that the path ran).
     pub(crate) static STREAMED_ROWS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
@@ -890,7 +890,7 @@ fn detect_splits_256() -> bool {
 /// Whether [`row_u8_u32`] takes a head, the entries before a working row reaches 32 bytes, so
 /// that the kernel's 32-byte accesses to the row stay inside cache lines: yes, except on AMD's
 /// family 1Ah (Zen 5) and later ([`aligns_rows_from`]). Detected once, then cached as
-/// [`splits_256`] is; in the crate's unit tests a thread's `with_heads` decides, so that
+/// [`splits_256`] is; in the crate's unit tests a thread's `set_heads` decides, so that
 /// both forms are tested on every CPU.
 #[inline]
 pub(crate) fn aligns_rows() -> bool {
@@ -943,14 +943,11 @@ fn detect_aligns_rows() -> bool {
     true
 }
 
-/// Runs `f` with [`aligns_rows`] answering `heads` on this thread (tests only: the other
-/// test threads keep theirs).
+/// Makes [`aligns_rows`] answer `heads` on this thread, or detect again with `None` (tests
+/// only: the other test threads keep theirs).
 #[cfg(test)]
-pub(crate) fn with_heads<R>(heads: bool, f: impl FnOnce() -> R) -> R {
-    let before = HEADS.with(|c| c.replace(Some(heads)));
-    let r = f();
-    HEADS.with(|c| c.set(before));
-    r
+pub(crate) fn set_heads(heads: Option<bool>) {
+    HEADS.with(|c| c.set(heads));
 }
 
 /// XCR0.
@@ -5656,8 +5653,9 @@ mod tests {
     /// written around the row), and first row, against the reference; each row 0 to 7 entries
     /// past a cache line, so that every head `row_u8_u32` takes before 32 bytes (and a head it
     /// declines for the non-temporal copy) runs. Then the same through the dispatching entry
-    /// points. Under Miri only the ramp and the random texels (117 of the 128 pairings of a
-    /// head with a tail length; the four patterns took each of CI's Miri passes 1.5x as long).
+    /// points. Every case with heads and without ([`aligns_rows`]: a CPU takes one form). Under
+    /// Miri only the ramp and the random texels (117 of the 128 pairings of a head with a tail
+    /// length; the four patterns took each of CI's Miri passes 1.5x as long), with heads.
     #[test]
     fn rows_equal_the_portable_rows() {
         const MAX: usize = 4 * BLOCK + 7;
@@ -5667,186 +5665,148 @@ mod tests {
         struct Line([u32; MAX + 8]);
         let mut seed = 0x9e37_79b9_7f4a_7c15;
         let mut ran = 0;
-        // With and without heads ([`aligns_rows`]); under Miri with them (the unsafe head).
+        // With and without heads ([`aligns_rows`]); under Miri with them (the kernel from a
+        // head's running sum).
         let heads: &[bool] = if cfg!(miri) { &[true] } else { &[true, false] };
-        for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
+        let kernels = Kernel::ALL.into_iter().filter(|k| k.available());
+        for (kernel, heads) in kernels.flat_map(|k| heads.iter().map(move |&h| (k, h))) {
             ran += 1;
-            for &heads in heads {
-                with_heads(heads, || {
-                    for w in 0..=MAX {
-                        for pattern in if cfg!(miri) { 2..4 } else { 0..4 } {
-                            let mut t = [0u8; MAX];
-                            for (i, t) in t.iter_mut().enumerate() {
-                                *t = match pattern {
-                                    0 => 0,
-                                    1 => 255,
-                                    2 => (i % 256) as u8,
-                                    _ => rng(&mut seed),
-                                };
-                            }
-                            let t = &t[..w];
-                            let base = u32::MAX - 255 * 1024;
-                            let mut above = [0u32; MAX];
-                            for (i, a) in above.iter_mut().enumerate() {
-                                *a = base + 255 * i as u32;
-                            }
-                            let above = &above[..w];
-                            // The row `shift` entries past a cache line: over the widths and
-                            // patterns, every head (the entries before 32 bytes, `row_u8_u32`) from 0
-                            // to 7 with every length of the tail after the kernel's blocks (0 to 15).
-                            let shift = (w + pattern + 3 * (w / 16)) % 8;
-                            for a in [None, Some(above)] {
-                                let what = |how: &str| {
-                                    (kernel.name(), heads, w, pattern, a.is_some(), how.len())
-                                };
-                                let mut want = [0u32; MAX];
-                                reference(t, a, &mut want[..w]);
-                                // Separate rows.
-                                let mut got = Line([7u32; MAX + 8]);
-                                let mode = if a.is_some() {
-                                    Above::Slice
-                                } else {
-                                    Above::Zero
-                                };
-                                row_u8_u32(
-                                    kernel,
-                                    t,
-                                    a.unwrap_or(&[]),
-                                    &mut got.0[shift..shift + w],
-                                    mode,
-                                    None,
-                                    false,
-                                );
-                                let row = shift..shift + w;
-                                // Only the row written: 7 before and after it.
-                                let untouched = |l: &Line| {
-                                    l.0[..shift]
-                                        .iter()
-                                        .chain(&l.0[shift + w..])
-                                        .all(|&v| v == 7)
-                                };
-                                assert_eq!(
-                                    got.0[row.clone()],
-                                    want[..w],
-                                    "{:?} {shift}",
-                                    what("separate")
-                                );
-                                assert!(untouched(&got), "wrote around the row");
-                                // In place, without and with a copy (each row on a line, `shift` in).
-                                let mut inplace = Line([7u32; MAX + 8]);
-                                if let Some(a) = a {
-                                    inplace.0[row.clone()].copy_from_slice(a);
-                                }
-                                let mode = if a.is_some() {
-                                    Above::InPlace
-                                } else {
-                                    Above::Zero
-                                };
-                                let mut again = inplace;
-                                row_u8_u32(
-                                    kernel,
-                                    t,
-                                    &[],
-                                    &mut inplace.0[row.clone()],
-                                    mode,
-                                    None,
-                                    false,
-                                );
-                                assert_eq!(
-                                    inplace.0[row.clone()],
-                                    want[..w],
-                                    "{:?}",
-                                    what("in place")
-                                );
-                                assert!(untouched(&inplace), "wrote around the row in place");
-                                let mut copy = [9u32; MAX];
-                                let c = Some(&mut copy[..w]);
-                                let back = again;
-                                row_u8_u32(
-                                    kernel,
-                                    t,
-                                    &[],
-                                    &mut again.0[row.clone()],
-                                    mode,
-                                    c,
-                                    false,
-                                );
-                                assert_eq!(
-                                    again.0[row.clone()],
-                                    want[..w],
-                                    "{:?}",
-                                    what("in place + copy")
-                                );
-                                assert!(untouched(&again), "wrote around the row in place");
-                                assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
-                                assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
-                                // The copy by non-temporal stores: into a copy on 16 bytes (the stores
-                                // stream, the head and the tail's whole 4 entries too; a head that
-                                // would move them off 16 bytes is not taken), 16 bytes past a line,
-                                // and one 4 bytes off (they fall back to plain ones); nothing before
-                                // or past the row written.
-                                for off in [0, 4, 1] {
-                                    let mut again = back;
-                                    let mut line = Line([9; MAX + 8]);
-                                    let c = Some(&mut line.0[off..off + w]);
-                                    row_u8_u32(
-                                        kernel,
-                                        t,
-                                        &[],
-                                        &mut again.0[row.clone()],
-                                        mode,
-                                        c,
-                                        true,
-                                    );
-                                    let copy = &line.0[off..off + w];
-                                    let how = what("streamed");
-                                    assert_eq!(
-                                        again.0[row.clone()],
-                                        want[..w],
-                                        "{how:?} {off} {shift}"
-                                    );
-                                    assert!(untouched(&again), "wrote around the row, streamed");
-                                    assert_eq!(copy, &want[..w], "{how:?} copy {off} {shift}");
-                                    assert!(
-                                        line.0[..off].iter().all(|&v| v == 9),
-                                        "before the row"
-                                    );
-                                    assert!(
-                                        line.0[off + w..].iter().all(|&v| v == 9),
-                                        "past the row"
-                                    );
-                                }
-                                // The dispatching entry points (the best kernel).
-                                let what = |how: &str| {
-                                    (Kernel::best().name(), w, pattern, a.is_some(), how.len())
-                                };
-                                let mut got = [7u32; MAX];
-                                assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
-                                assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
-                                let mut inplace = [7u32; MAX];
-                                if let Some(a) = a {
-                                    inplace[..w].copy_from_slice(a);
-                                }
-                                let first = a.is_none();
-                                assert!(build_row_in_place::<u8, u32, 1>(
-                                    t,
-                                    &mut inplace[..w],
-                                    first,
-                                    None,
-                                    false
-                                ));
-                                assert_eq!(
-                                    inplace[..w],
-                                    want[..w],
-                                    "{:?}",
-                                    what("build_row_in_place")
-                                );
-                            }
-                        }
+            set_heads(Some(heads));
+            for w in 0..=MAX {
+                for pattern in if cfg!(miri) { 2..4 } else { 0..4 } {
+                    let mut t = [0u8; MAX];
+                    for (i, t) in t.iter_mut().enumerate() {
+                        *t = match pattern {
+                            0 => 0,
+                            1 => 255,
+                            2 => (i % 256) as u8,
+                            _ => rng(&mut seed),
+                        };
                     }
-                });
+                    let t = &t[..w];
+                    let base = u32::MAX - 255 * 1024;
+                    let mut above = [0u32; MAX];
+                    for (i, a) in above.iter_mut().enumerate() {
+                        *a = base + 255 * i as u32;
+                    }
+                    let above = &above[..w];
+                    // The row `shift` entries past a cache line: over the widths and
+                    // patterns, every head (the entries before 32 bytes, `row_u8_u32`) from 0
+                    // to 7 with every length of the tail after the kernel's blocks (0 to 15).
+                    let shift = (w + pattern + 3 * (w / 16)) % 8;
+                    for a in [None, Some(above)] {
+                        let what =
+                            |how: &str| (kernel.name(), heads, w, pattern, a.is_some(), how.len());
+                        let mut want = [0u32; MAX];
+                        reference(t, a, &mut want[..w]);
+                        // Separate rows.
+                        let mut got = Line([7u32; MAX + 8]);
+                        let mode = if a.is_some() {
+                            Above::Slice
+                        } else {
+                            Above::Zero
+                        };
+                        row_u8_u32(
+                            kernel,
+                            t,
+                            a.unwrap_or(&[]),
+                            &mut got.0[shift..shift + w],
+                            mode,
+                            None,
+                            false,
+                        );
+                        let row = shift..shift + w;
+                        // Only the row written: 7 before and after it.
+                        let untouched = |l: &Line| {
+                            l.0[..shift]
+                                .iter()
+                                .chain(&l.0[shift + w..])
+                                .all(|&v| v == 7)
+                        };
+                        assert_eq!(
+                            got.0[row.clone()],
+                            want[..w],
+                            "{:?} {shift}",
+                            what("separate")
+                        );
+                        assert!(untouched(&got), "wrote around the row");
+                        // In place, without and with a copy (each row on a line, `shift` in).
+                        let mut inplace = Line([7u32; MAX + 8]);
+                        if let Some(a) = a {
+                            inplace.0[row.clone()].copy_from_slice(a);
+                        }
+                        let mode = if a.is_some() {
+                            Above::InPlace
+                        } else {
+                            Above::Zero
+                        };
+                        let mut again = inplace;
+                        row_u8_u32(
+                            kernel,
+                            t,
+                            &[],
+                            &mut inplace.0[row.clone()],
+                            mode,
+                            None,
+                            false,
+                        );
+                        assert_eq!(inplace.0[row.clone()], want[..w], "{:?}", what("in place"));
+                        assert!(untouched(&inplace), "wrote around the row in place");
+                        let mut copy = [9u32; MAX];
+                        let c = Some(&mut copy[..w]);
+                        let back = again;
+                        row_u8_u32(kernel, t, &[], &mut again.0[row.clone()], mode, c, false);
+                        assert_eq!(
+                            again.0[row.clone()],
+                            want[..w],
+                            "{:?}",
+                            what("in place + copy")
+                        );
+                        assert!(untouched(&again), "wrote around the row in place");
+                        assert_eq!(copy[..w], want[..w], "{:?}", what("the copy"));
+                        assert!(copy[w..].iter().all(|&v| v == 9), "copied past the row");
+                        // The copy by non-temporal stores: into a copy on 16 bytes (the stores
+                        // stream, the head and the tail's whole 4 entries too; a head that
+                        // would move them off 16 bytes is not taken), 16 bytes past a line,
+                        // and one 4 bytes off (they fall back to plain ones); nothing before
+                        // or past the row written.
+                        for off in [0, 4, 1] {
+                            let mut again = back;
+                            let mut line = Line([9; MAX + 8]);
+                            let c = Some(&mut line.0[off..off + w]);
+                            row_u8_u32(kernel, t, &[], &mut again.0[row.clone()], mode, c, true);
+                            let copy = &line.0[off..off + w];
+                            let how = what("streamed");
+                            assert_eq!(again.0[row.clone()], want[..w], "{how:?} {off} {shift}");
+                            assert!(untouched(&again), "wrote around the row, streamed");
+                            assert_eq!(copy, &want[..w], "{how:?} copy {off} {shift}");
+                            assert!(line.0[..off].iter().all(|&v| v == 9), "before the row");
+                            assert!(line.0[off + w..].iter().all(|&v| v == 9), "past the row");
+                        }
+                        // The dispatching entry points (the best kernel).
+                        let what =
+                            |how: &str| (Kernel::best().name(), w, pattern, a.is_some(), how.len());
+                        let mut got = [7u32; MAX];
+                        assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
+                        assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
+                        let mut inplace = [7u32; MAX];
+                        if let Some(a) = a {
+                            inplace[..w].copy_from_slice(a);
+                        }
+                        let first = a.is_none();
+                        assert!(build_row_in_place::<u8, u32, 1>(
+                            t,
+                            &mut inplace[..w],
+                            first,
+                            None,
+                            false
+                        ));
+                        assert_eq!(inplace[..w], want[..w], "{:?}", what("build_row_in_place"));
+                    }
+                }
             }
         }
+        set_heads(None);
         assert!(ran >= 1);
     }
 
