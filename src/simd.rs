@@ -156,20 +156,18 @@
 //!    [`row_u8_u32`] takes slices, `n = min(len)` over all of them; it does the head (the
 //!    `h` entries before `out` reaches 32 bytes: `h < 8`, `h <= n`, and `h = 0` for rows built
 //!    into a table, for rows that end before 32 bytes, where a non-temporal copy would
-//!    leave 16 bytes, and where [`aligns_rows`] says no) with checked indexing and passes the
+//!    leave 16 bytes, and where [`takes_heads`] says no) with checked indexing and passes the
 //!    kernels each slice from `h` on, `n - h` entries. A kernel touches entries `i..i + 16` of
 //!    those slices only while `i + 16 <= n - h`, through unaligned loads and stores
 //!    (`loadu`/`storeu`, or `read_unaligned` for the 4-byte groups), then the tail is finished
 //!    with checked indexing. Every pointer is derived from its slice and stays in bounds. The
-//!    copy's stores are non-temporal
-//!    (`_mm_stream_si128`, which faults on an address off 16 bytes) only when [`row_u8_u32`]
-//!    has checked that the copy starts on 16 bytes, and then `h` is 0 or 4: block `b`'s four
-//!    16-byte stores are at `4 h + 64 b`, `4 h + 64 b + 16`, ... bytes from it, all aligned;
-//!    the head's and the tail's whole 4 entries are stored non-temporally only where
-//!    `copy_run` finds them on 16 bytes. Each row whose
-//!    copy took non-temporal stores ends with an `sfence`, so they are ordered before every
-//!    later store (the
-//!    table is handed out, possibly to another thread, through ordinary release/acquire
+//!    copy's stores are non-temporal (`_mm_stream_si128`, which faults on an address off 16
+//!    bytes) only when [`row_u8_u32`] has checked that the copy starts on 16 bytes, and then
+//!    `h` is 0 or 4: block `b`'s four 16-byte stores are at `4 h + 64 b`, `4 h + 64 b + 16`,
+//!    ... bytes from it, all aligned; the head's and the tail's whole 4 entries are stored
+//!    non-temporally only where `copy_run` finds them on 16 bytes. Each row whose copy took
+//!    non-temporal stores ends with an `sfence`, so they are ordered before every later store
+//!    (the table is handed out, possibly to another thread, through ordinary release/acquire
 //!    synchronization, which does not order weakly ordered stores by itself). Under Miri,
 //!    which cannot run them (inline assembly in stdarch), plain stores stand in.
 //! 3. *Aliasing.* `above` and `out` are separate slices (`&[u32]`, `&mut [u32]`) except in the
@@ -412,7 +410,7 @@ fn as_u32_mut<E: Entry, const C: usize>(s: &mut [E]) -> Option<&mut [u32]> {
 /// stores if `stream` and it starts on 16 bytes ([`STREAM_MIN_BYTES`]).
 ///
 /// A working row (the row above in place, [`Above::InPlace`], or none yet, [`Above::Zero`]),
-/// where [`aligns_rows`] says so (every CPU but AMD's Zen 5 and later): the entries before
+/// where [`takes_heads`] says so (every CPU but AMD's Zen 5 and later): the entries before
 /// `out` reaches 32 bytes (up to 7, the head) go first, and the kernel starts after them with
 /// their running sum, so that its 32-byte loads and stores of the working row never straddle
 /// two cache lines. The head goes the portable way, as the tail after the last block does.
@@ -451,7 +449,7 @@ fn row_u8_u32(
     // the CPU takes no head).
     let to_line = match mode {
         Above::Slice => 0,
-        Above::Zero | Above::InPlace if aligns_rows() => {
+        Above::Zero | Above::InPlace if takes_heads() => {
             (32 - (out.as_ptr() as usize) % 32) % 32 / 4
         }
         Above::Zero | Above::InPlace => 0,
@@ -586,7 +584,7 @@ extern crate std;
 std::thread_local! {
     /// The calling test thread's cap on [`Kernel::best`] ([`Kernel::cap`]).
     static CAP: core::cell::Cell<Option<Kernel>> = const { core::cell::Cell::new(None) };
-    /// The calling test thread's answer for [`aligns_rows`] (`set_heads`).
+    /// The calling test thread's answer for [`takes_heads`] (`set_heads`).
     static HEADS: core::cell::Cell<Option<bool>> = const { core::cell::Cell::new(None) };
     /// The rows [`modular_row`] streamed on the calling test thread (tests: that the path ran).
     pub(crate) static STREAMED_ROWS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
@@ -835,7 +833,10 @@ static SPLITS_256: AtomicU8 = AtomicU8::new(0);
 
 /// CPUID's vendor registers (leaf 0: EBX, EDX, ECX) of AMD and of Hygon (whose Dhyana is a
 /// Zen core), the vendors that define leaf `8000_001A`.
-const SPLIT_VENDORS: [[u32; 3]; 2] = [vendor(b"AuthenticAMD"), vendor(b"HygonGenuine")];
+const SPLIT_VENDORS: [[u32; 3]; 2] = [AMD, vendor(b"HygonGenuine")];
+
+/// CPUID's vendor registers of AMD (`AuthenticAMD`).
+const AMD: [u32; 3] = vendor(b"AuthenticAMD");
 
 /// A 12-byte vendor string as CPUID leaf 0 returns it: EBX, EDX, ECX, 4 bytes each,
 /// little-endian.
@@ -889,27 +890,28 @@ fn detect_splits_256() -> bool {
 
 /// Whether [`row_u8_u32`] takes a head, the entries before a working row reaches 32 bytes, so
 /// that the kernel's 32-byte accesses to the row stay inside cache lines: yes, except on AMD's
-/// family 1Ah (Zen 5) and later ([`aligns_rows_from`]). Detected once, then cached as
+/// family 1Ah (Zen 5) and later ([`takes_heads_from`]). Detected once, then cached as
 /// [`splits_256`] is; in the crate's unit tests a thread's `set_heads` decides, so that
 /// both forms are tested on every CPU.
 #[inline]
-pub(crate) fn aligns_rows() -> bool {
+pub(crate) fn takes_heads() -> bool {
     #[cfg(test)]
     if let Some(heads) = HEADS.with(|c| c.get()) {
         return heads;
     }
-    cached(&ALIGNS_ROWS, detect_aligns_rows)
+    cached(&TAKES_HEADS, detect_takes_heads)
 }
 
-/// [`aligns_rows`]'s answer: 0 before the first detection, 1 no, 2 yes.
-static ALIGNS_ROWS: AtomicU8 = AtomicU8::new(0);
+/// [`takes_heads`]'s answer: 0 before the first detection, 1 no, 2 yes.
+static TAKES_HEADS: AtomicU8 = AtomicU8::new(0);
 
 /// The first AMD family whose working rows take no head: 1Ah (Zen 5).
 const NO_HEAD_FAMILY: u32 = 0x1A;
 
-/// [`aligns_rows`] from CPUID's answers: `vendor` (leaf 0) and `signature` (leaf 1 EAX, whose
-/// family is bits 8..12, plus bits 20..28 where those read 0xF). On AMD from family 1Ah no
-/// head is taken; on every other CPU it is. Both were measured:
+/// [`takes_heads`] from CPUID's answers: `vendor` (leaf 0) and `signature` (leaf 1 EAX, whose
+/// family is bits 8 to 11, plus bits 20 to 27 where those read 0xF). On AMD from family 1Ah
+/// no head is taken; on every other CPU it is. Both were measured, on one CPU each (the
+/// families after 1Ah are taken as 1Ah is, not measured):
 /// * Zen 4 guest: a working row 16 bytes off 32 took `push_row_into` at 4,096^2 to 1.4x to
 ///   1.5x the flat build's time, 1.0x with the head (docs/benchmarks.md, ninth session).
 /// * Zen 5 guest (family 1Ah model 02h): `push_row_into` of 1,024^2 into a cold table,
@@ -917,33 +919,33 @@ const NO_HEAD_FAMILY: u32 = 0x1A;
 ///   row and the table (each 0, 16, 32 or 48 bytes past a line), without a head: 1.00x to
 ///   1.03x. With the head: 1.33x to 1.43x wherever the row was 16 bytes off 32. (A head by
 ///   one AVX2 step with masked stores, tried, still took 1.27x to 1.32x where the table was
-///   off a line.) At 2,048^2 and 4,096^2, and 1,024^2 in cache, without the head it was as
-///   fast or faster. Only 500^2 in L2 took 1.04x to 1.11x without it, against 1.00x to 1.06x
-///   with it (docs/benchmarks.md, twenty-seventh session).
-fn aligns_rows_from(vendor: [u32; 3], signature: u32) -> bool {
+///   off a line.) At 2,048^2 and 4,096^2, and 1,024^2 in cache, without the head it was no
+///   slower beyond the noise. Only 500^2 in L2 took 1.04x to 1.11x without it, against 1.00x
+///   to 1.06x with it (docs/benchmarks.md, twenty-seventh session).
+fn takes_heads_from(vendor: [u32; 3], signature: u32) -> bool {
     let base = (signature >> 8) & 0xF;
     let family = if base == 0xF {
         base + ((signature >> 20) & 0xFF)
     } else {
         base
     };
-    !(vendor == SPLIT_VENDORS[0] && family >= NO_HEAD_FAMILY)
+    !(vendor == AMD && family >= NO_HEAD_FAMILY)
 }
 
-/// CPUID leaves 0 and 1 into [`aligns_rows_from`].
+/// CPUID leaves 0 and 1 into [`takes_heads_from`].
 #[cfg(not(miri))]
-fn detect_aligns_rows() -> bool {
+fn detect_takes_heads() -> bool {
     let v = __cpuid(0);
-    aligns_rows_from([v.ebx, v.edx, v.ecx], __cpuid(1).eax)
+    takes_heads_from([v.ebx, v.edx, v.ecx], __cpuid(1).eax)
 }
 
 /// Under Miri, which cannot run CPUID: the head (the tests take both forms).
 #[cfg(miri)]
-fn detect_aligns_rows() -> bool {
+fn detect_takes_heads() -> bool {
     true
 }
 
-/// Makes [`aligns_rows`] answer `heads` on this thread, or detect again with `None` (tests
+/// Makes [`takes_heads`] answer `heads` on this thread, or detect again with `None` (tests
 /// only: the other test threads keep theirs).
 #[cfg(test)]
 pub(crate) fn set_heads(heads: Option<bool>) {
@@ -5653,7 +5655,7 @@ mod tests {
     /// written around the row), and first row, against the reference; each row 0 to 7 entries
     /// past a cache line, so that every head `row_u8_u32` takes before 32 bytes (and a head it
     /// declines for the non-temporal copy) runs. Then the same through the dispatching entry
-    /// points. Every case with heads and without ([`aligns_rows`]: a CPU takes one form). Under
+    /// points. Every case with heads and without ([`takes_heads`]: a CPU takes one form). Under
     /// Miri only the ramp and the random texels (117 of the 128 pairings of a head with a tail
     /// length; the four patterns took each of CI's Miri passes 1.5x as long), with heads.
     #[test]
@@ -5665,13 +5667,14 @@ mod tests {
         struct Line([u32; MAX + 8]);
         let mut seed = 0x9e37_79b9_7f4a_7c15;
         let mut ran = 0;
-        // With and without heads ([`aligns_rows`]); under Miri with them (the kernel from a
+        // With and without heads ([`takes_heads`]); under Miri with them (the kernel from a
         // head's running sum).
         let heads: &[bool] = if cfg!(miri) { &[true] } else { &[true, false] };
         let kernels = Kernel::ALL.into_iter().filter(|k| k.available());
         for (kernel, heads) in kernels.flat_map(|k| heads.iter().map(move |&h| (k, h))) {
             ran += 1;
             set_heads(Some(heads));
+            assert_eq!(takes_heads(), heads, "the test's form");
             for w in 0..=MAX {
                 for pattern in if cfg!(miri) { 2..4 } else { 0..4 } {
                     let mut t = [0u8; MAX];
@@ -5784,8 +5787,16 @@ mod tests {
                             assert!(line.0[off + w..].iter().all(|&v| v == 9), "past the row");
                         }
                         // The dispatching entry points (the best kernel).
-                        let what =
-                            |how: &str| (Kernel::best().name(), w, pattern, a.is_some(), how.len());
+                        let what = |how: &str| {
+                            (
+                                Kernel::for_rows().name(),
+                                heads,
+                                w,
+                                pattern,
+                                a.is_some(),
+                                how.len(),
+                            )
+                        };
                         let mut got = [7u32; MAX];
                         assert!(build_row::<u8, u32, 1>(t, a, &mut got[..w]));
                         assert_eq!(got[..w], want[..w], "{:?}", what("build_row"));
@@ -6897,25 +6908,27 @@ mod tests {
         );
     }
 
-    /// `aligns_rows_from` on CPUID's answers: no head on AMD from family 1Ah (its family
+    /// `takes_heads_from` on CPUID's answers: no head on AMD from family 1Ah (its family
     /// field 0xF plus the extended family 0Bh), a head on earlier AMD families, on Hygon and
     /// on Intel.
     #[test]
-    fn aligns_rows_reads_amds_family() {
+    fn takes_heads_reads_amds_family() {
         let (amd, hygon) = (vendor(b"AuthenticAMD"), vendor(b"HygonGenuine"));
         let intel = vendor(b"GenuineIntel");
         // This session's Zen 5 guest (family 1Ah model 02h stepping 1), a later family.
-        assert!(!aligns_rows_from(amd, 0x00B0_0F21));
-        assert!(!aligns_rows_from(amd, 0x00C0_0F00));
-        // Zen 4 (19h, the ninth session's), Zen 1 (17h), Hygon's Dhyana (18h).
-        assert!(aligns_rows_from(amd, 0x00A1_0F11));
-        assert!(aligns_rows_from(amd, 0x0080_0F12));
-        assert!(aligns_rows_from(hygon, 0x0090_0F12));
-        // A family field under 0xF ignores the extended family bits.
-        assert!(aligns_rows_from(amd, 0x00B0_0621));
+        assert!(!takes_heads_from(amd, 0x00B0_0F21));
+        assert!(!takes_heads_from(amd, 0x00C0_0F00));
+        // Zen 4 (19h model 11h, the ninth session's), Zen 3 (19h model 01h, the twentieth to
+        // twenty-sixth sessions'), Zen 1 (17h), Hygon's Dhyana (18h).
+        assert!(takes_heads_from(amd, 0x00A1_0F11));
+        assert!(takes_heads_from(amd, 0x00A0_0F11));
+        assert!(takes_heads_from(amd, 0x0080_0F12));
+        assert!(takes_heads_from(hygon, 0x0090_0F12));
+        // A family field under 0xF ignores the extended family bits (6 + 14h would be 1Ah).
+        assert!(takes_heads_from(amd, 0x0140_0621));
         // Intel: Sapphire Rapids (family 6 model 143), and the same bits as Zen 5's.
-        assert!(aligns_rows_from(intel, 0x0008_06F8));
-        assert!(aligns_rows_from(intel, 0x00B0_0F21));
+        assert!(takes_heads_from(intel, 0x0008_06F8));
+        assert!(takes_heads_from(intel, 0x00B0_0F21));
     }
 
     /// Other types and channel counts are left to the portable path, untouched.
