@@ -1,15 +1,14 @@
 //! Slices of the crate's generic texel and entry types seen as the concrete types of the `simd`
 //! feature's row kernels: `u8` texels, `u32` entries (and, on ARMv7E-M, `u16` entries). Shared
-//! by both kernel modules
-//! (`src/simd.rs` on x86-64, `src/dsp.rs` on ARMv7E-M), so that the one cast they need is
-//! written and argued once.
+//! by both kernel modules (`src/simd.rs` on x86-64, `src/dsp.rs` on ARMv7E-M), so that the one
+//! cast they need is written and argued once ([`same`], [`same_mut`]).
 //!
 //! # Safety argument
 //! Each function casts only after `TypeId` equality shows that the element type *is* the
-//! target type (`T = u8`, `E = u32` or `E = u16`): the same type, so the same size, alignment, validity and
-//! length. The new slice covers exactly the old one's elements and takes over its borrow
-//! (shared for shared; for mutable, the `&mut` borrow is moved into the result), so no two live
-//! references alias.
+//! target type (`T = u8`, `E = u32` or `E = u16`): the same type, so the same size, alignment,
+//! validity and length. The new slice covers exactly the old one's elements and takes over its
+//! borrow (shared for shared; for mutable, the `&mut` borrow is moved into the result), so no
+//! two live references alias.
 #![allow(unsafe_code)]
 #![deny(
     clippy::indexing_slicing,
@@ -24,51 +23,49 @@ use core::any::TypeId;
 
 use crate::texel::{Entry, Texel};
 
+/// `s` as `&[B]` when `A` is `B`, else `None`.
+fn same<A: 'static, B: 'static>(s: &[A]) -> Option<&[B]> {
+    (TypeId::of::<A>() == TypeId::of::<B>()).then(|| {
+        // SAFETY: A is B (TypeId equality): the same layout and length; the shared borrow of
+        // `s` carries over.
+        unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<B>(), s.len()) }
+    })
+}
+
+/// `s` as `&mut [B]` when `A` is `B`, else `None`; the borrow is moved into the result.
+fn same_mut<A: 'static, B: 'static>(s: &mut [A]) -> Option<&mut [B]> {
+    (TypeId::of::<A>() == TypeId::of::<B>()).then(|| {
+        // SAFETY: A is B (TypeId equality): the same layout and length; the mutable borrow of
+        // `s` is moved into the result.
+        unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().cast::<B>(), s.len()) }
+    })
+}
+
 /// `s` as `&[u8]` when `T` is `u8`, else `None`.
 pub(crate) fn u8s<T: Texel>(s: &[T]) -> Option<&[u8]> {
-    (TypeId::of::<T>() == TypeId::of::<u8>()).then(|| {
-        // SAFETY: T is u8 (TypeId equality): the same layout and length; the shared borrow of
-        // `s` carries over.
-        unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u8>(), s.len()) }
-    })
+    same(s)
 }
 
 /// `s` as `&[u32]` when `E` is `u32`, else `None`.
 pub(crate) fn u32s<E: Entry>(s: &[E]) -> Option<&[u32]> {
-    (TypeId::of::<E>() == TypeId::of::<u32>()).then(|| {
-        // SAFETY: E is u32 (TypeId equality): the same layout and length; the shared borrow of
-        // `s` carries over.
-        unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u32>(), s.len()) }
-    })
+    same(s)
 }
 
 /// `s` as `&mut [u32]` when `E` is `u32`, else `None`; the borrow is moved into the result.
 pub(crate) fn u32s_mut<E: Entry>(s: &mut [E]) -> Option<&mut [u32]> {
-    (TypeId::of::<E>() == TypeId::of::<u32>()).then(|| {
-        // SAFETY: E is u32 (TypeId equality): the same layout and length; the mutable borrow
-        // of `s` is moved into the result.
-        unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().cast::<u32>(), s.len()) }
-    })
+    same_mut(s)
 }
 
 /// `s` as `&[u16]` when `E` is `u16`, else `None` (the ARMv7E-M row scan's `u16` tables).
 #[cfg_attr(not(any(test, texsat_armv7em)), allow(dead_code))]
 pub(crate) fn u16s<E: Entry>(s: &[E]) -> Option<&[u16]> {
-    (TypeId::of::<E>() == TypeId::of::<u16>()).then(|| {
-        // SAFETY: E is u16 (TypeId equality): the same layout and length; the shared borrow of
-        // `s` carries over.
-        unsafe { core::slice::from_raw_parts(s.as_ptr().cast::<u16>(), s.len()) }
-    })
+    same(s)
 }
 
 /// `s` as `&mut [u16]` when `E` is `u16`, else `None`; the borrow is moved into the result.
 #[cfg_attr(not(any(test, texsat_armv7em)), allow(dead_code))]
 pub(crate) fn u16s_mut<E: Entry>(s: &mut [E]) -> Option<&mut [u16]> {
-    (TypeId::of::<E>() == TypeId::of::<u16>()).then(|| {
-        // SAFETY: E is u16 (TypeId equality): the same layout and length; the mutable borrow
-        // of `s` is moved into the result.
-        unsafe { core::slice::from_raw_parts_mut(s.as_mut_ptr().cast::<u16>(), s.len()) }
-    })
+    same_mut(s)
 }
 
 #[cfg(test)]
